@@ -1,0 +1,204 @@
+//! Three arithmetics for one piece of algebra.
+//!
+//! The coefficients of the rational form of f(λ) (eqs. 16a–16b) are polynomials in the entries
+//! of Q1, Q2 and r12. They are written once, generically, and evaluated in
+//!
+//! - `f64`: the fast path;
+//! - [`Mag`]: the same expression tree with every entry replaced by its absolute value and every
+//!   subtraction by an addition. The result bounds the sum of the absolute values of the terms,
+//!   so `γ · Mag` bounds the rounding error of the `f64` evaluation (the classical running error
+//!   bound);
+//! - [`Dd`]: double-double arithmetic (about 106 bits), used only when the bound says that `f64`
+//!   lost too many digits to cancellation (needles, pancakes, near-singular pencils).
+//!
+//! # References
+//! - T. J. Dekker, "A floating-point technique for extending the available precision",
+//!   Numer. Math. 18 (1971) 224–242.
+//! - N. J. Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., SIAM 2002, §3.3
+//!   (running error analysis).
+
+use core::ops::{Add, Mul, Sub};
+
+/// The operations the coefficient formulas need.
+pub(crate) trait Arith:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
+{
+    /// The value of an input double in this arithmetic.
+    fn lift(x: f64) -> Self;
+    /// Rounded to the nearest double.
+    fn to_f64(self) -> f64;
+    /// Multiplication by two (exact in every arithmetic here).
+    #[inline(always)]
+    fn twice(self) -> Self {
+        self + self
+    }
+}
+
+impl Arith for f64 {
+    #[inline(always)]
+    fn lift(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+/// Magnitude of an expression: evaluates Σ|terms| instead of Σ terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Mag(pub f64);
+
+impl Add for Mag {
+    type Output = Mag;
+    #[inline(always)]
+    fn add(self, o: Mag) -> Mag {
+        Mag(self.0 + o.0)
+    }
+}
+impl Sub for Mag {
+    type Output = Mag;
+    #[inline(always)]
+    fn sub(self, o: Mag) -> Mag {
+        Mag(self.0 + o.0)
+    }
+}
+impl Mul for Mag {
+    type Output = Mag;
+    #[inline(always)]
+    fn mul(self, o: Mag) -> Mag {
+        Mag(self.0 * o.0)
+    }
+}
+impl Arith for Mag {
+    #[inline(always)]
+    fn lift(x: f64) -> Self {
+        Mag(x.abs())
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self.0
+    }
+}
+
+/// An unevaluated sum `hi + lo` with `|lo| ≤ ulp(hi)/2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Dd {
+    pub hi: f64,
+    pub lo: f64,
+}
+
+/// `a + b = s + e` exactly (Knuth).
+#[inline(always)]
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// `a + b = s + e` exactly, valid when |a| ≥ |b| (Dekker).
+#[inline(always)]
+fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    (s, b - (s - a))
+}
+
+/// `a · b = p + e` exactly (barring overflow/underflow).
+#[inline(always)]
+pub(crate) fn two_prod(a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    #[cfg(target_feature = "fma")]
+    {
+        (p, a.mul_add(b, -p))
+    }
+    #[cfg(not(target_feature = "fma"))]
+    {
+        // Without a hardware FMA, `mul_add` is a slow library call: split each factor into
+        // 26-bit halves whose products are exact (Dekker 1971).
+        let (ah, al) = split(a);
+        let (bh, bl) = split(b);
+        (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+    }
+}
+
+#[cfg(not(target_feature = "fma"))]
+#[inline(always)]
+fn split(a: f64) -> (f64, f64) {
+    // 2^27 + 1; inputs beyond ~1e300 would overflow here, far outside any physical scale.
+    const SPLITTER: f64 = 134_217_729.0;
+    let c = SPLITTER * a;
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+
+impl Add for Dd {
+    type Output = Dd;
+    #[inline]
+    fn add(self, o: Dd) -> Dd {
+        let (s, e) = two_sum(self.hi, o.hi);
+        let (t, f) = two_sum(self.lo, o.lo);
+        let (s, e) = fast_two_sum(s, e + t);
+        let (hi, lo) = fast_two_sum(s, e + f);
+        Dd { hi, lo }
+    }
+}
+impl Sub for Dd {
+    type Output = Dd;
+    #[inline]
+    fn sub(self, o: Dd) -> Dd {
+        self + Dd {
+            hi: -o.hi,
+            lo: -o.lo,
+        }
+    }
+}
+impl Mul for Dd {
+    type Output = Dd;
+    #[inline]
+    fn mul(self, o: Dd) -> Dd {
+        let (p, e) = two_prod(self.hi, o.hi);
+        let e = e + (self.hi * o.lo + self.lo * o.hi);
+        let (hi, lo) = fast_two_sum(p, e);
+        Dd { hi, lo }
+    }
+}
+impl Arith for Dd {
+    #[inline(always)]
+    fn lift(x: f64) -> Self {
+        Dd { hi: x, lo: 0.0 }
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self.hi + self.lo
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_prod_is_exact_on_a_known_product() {
+        // (1 + 2^-30)² = 1 + 2^-29 + 2^-60: the last term is lost in f64 and kept in the error.
+        let a = 1.0 + 2f64.powi(-30);
+        let (p, e) = two_prod(a, a);
+        assert_eq!(p, 1.0 + 2f64.powi(-29));
+        assert_eq!(e, 2f64.powi(-60));
+    }
+
+    #[test]
+    fn dd_recovers_cancellation_that_f64_loses() {
+        // (1 + 2^-40)(1 - 2^-40) - 1 = -2^-80: f64 gives 0.
+        let x = 1.0 + 2f64.powi(-40);
+        let y = 1.0 - 2f64.powi(-40);
+        assert_eq!(x * y - 1.0, 0.0);
+        let d = Dd::lift(x) * Dd::lift(y) - Dd::lift(1.0);
+        assert_eq!(d.to_f64(), -(2f64.powi(-80)));
+    }
+
+    #[test]
+    fn mag_turns_differences_into_sums() {
+        let m = Mag::lift(-3.0) * Mag::lift(2.0) - Mag::lift(5.0);
+        assert_eq!(m.to_f64(), 11.0);
+    }
+}

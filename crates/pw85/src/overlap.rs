@@ -1,0 +1,258 @@
+//! The yes/no question — do two ellipsoids overlap? — answered without computing μ² unless the
+//! answer is within rounding error of the tangency.
+//!
+//! μ² < 1 iff the ellipsoids overlap (theory eq. 6). Every λ gives a lower bound f(λ) ≤ μ², and
+//! since f is concave (a minimum of functions affine in λ, eq. 5) every tangent line gives an
+//! upper bound. The verdict therefore stops at the first of:
+//!
+//! 1. the bounding spheres (radius √λmax(Q) ≤ √tr Q) are apart: no overlap;
+//! 2. the inscribed spheres (radius √λmin(Q), λmin ≥ det Q / tr adj Q) overlap: overlap;
+//! 3. some iterate λ of the contact-function iteration has f(λ) > 1: no overlap;
+//! 4. the tangent lines at the iterates bound max f below 1: overlap;
+//!
+//! each test with a margin for the rounding error of f. Pairs still undecided (|μ² − 1| within
+//! that margin, or a badly conditioned pencil) get the full [`crate::contact_function`] with
+//! its double-double refinement, and the verdict μ² < 1.
+
+use crate::arith::{Dd, Mag};
+use crate::contact::{check_finite, check_positive_definite, check_positive_definite_2d, solve_checked};
+use crate::error::{Argument, Error};
+use crate::poly::{Coefficients, RationalForm, coefficients_2d};
+use crate::sym::{
+    Sym2, Sym3, adjugate_generic, det_generic, frobenius_generic, mixed_adjugate_generic,
+    outer_generic, quadratic_form_generic,
+};
+
+/// Relative safety factor on the geometric sphere tests (their square roots and sums round).
+const SPHERE_MARGIN: f64 = 1e-12;
+/// Iterations of the bounded search before handing over to the full contact function.
+const MAX_ITERATIONS: u32 = 12;
+
+/// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
+/// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
+///
+/// Stops as soon as the answer is certain; see the [module documentation](self).
+///
+/// # Errors
+/// As [`crate::contact_function`].
+///
+/// # Example
+/// ```
+/// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
+/// // Side by side, 0.15 apart across their thin direction: they overlap...
+/// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
+/// // ...and 0.25 apart they do not.
+/// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
+    check_finite(Argument::R12, r12)?;
+    check_finite(Argument::Q1, q1)?;
+    check_finite(Argument::Q2, q2)?;
+    let adj1 = adjugate_generic(q1);
+    let adj2 = adjugate_generic(q2);
+    let det1 = det_generic(q1, &adj1);
+    let det2 = det_generic(q2, &adj2);
+    check_positive_definite(Argument::Q1, q1, &adj1, det1)?;
+    check_positive_definite(Argument::Q2, q2, &adj2, det2)?;
+
+    let r2 = r12[0] * r12[0] + r12[1] * r12[1] + r12[2] * r12[2];
+    let spheres = Spheres {
+        outer: (q1[0] + q1[3] + q1[5]).sqrt() + (q2[0] + q2[3] + q2[5]).sqrt(),
+        inner: (det1 / (adj1[0] + adj1[3] + adj1[5])).sqrt()
+            + (det2 / (adj2[0] + adj2[3] + adj2[5])).sqrt(),
+    };
+    if let Some(verdict) = spheres.verdict(r2) {
+        return Ok(verdict);
+    }
+
+    let rr = outer_generic::<f64>(r12);
+    let mixed = mixed_adjugate_generic(q1, q2);
+    let fast = Coefficients {
+        alpha: [
+            quadratic_form_generic(&rr, &adj1),
+            quadratic_form_generic(&rr, &mixed),
+            quadratic_form_generic(&rr, &adj2),
+        ],
+        beta: [
+            det1,
+            frobenius_generic(&adj1, q2),
+            frobenius_generic(&adj2, q1),
+            det2,
+        ],
+    };
+    let bound = CrudeBound {
+        d1: q1[0].max(q1[3]).max(q1[5]),
+        d2: q2[0].max(q2[3]).max(q2[5]),
+        r2,
+        k_b: 18.0,
+        k_a: 6.0,
+        dim: 3,
+    };
+    Ok(bounded_search(&fast.to_f64(), &bound).unwrap_or_else(|| {
+        let (contact, _) = solve_checked(
+            &fast,
+            || crate::poly::coefficients::<Mag>(r12, q1, q2),
+            || crate::poly::coefficients::<Dd>(r12, q1, q2),
+        );
+        contact.mu2 < 1.0
+    }))
+}
+
+/// Whether two ellipses overlap, with the arguments of [`crate::contact_function_2d`].
+///
+/// # Errors
+/// As [`crate::contact_function_2d`].
+pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
+    check_finite(Argument::R12, r12)?;
+    check_finite(Argument::Q1, q1)?;
+    check_finite(Argument::Q2, q2)?;
+    check_positive_definite_2d(Argument::Q1, q1)?;
+    check_positive_definite_2d(Argument::Q2, q2)?;
+    let r2 = r12[0] * r12[0] + r12[1] * r12[1];
+    let (det1, det2) = (q1[0] * q1[2] - q1[1] * q1[1], q2[0] * q2[2] - q2[1] * q2[1]);
+    // In 2D, λmin = det / λmax ≥ det / tr.
+    let spheres = Spheres {
+        outer: (q1[0] + q1[2]).sqrt() + (q2[0] + q2[2]).sqrt(),
+        inner: (det1 / (q1[0] + q1[2])).sqrt() + (det2 / (q2[0] + q2[2])).sqrt(),
+    };
+    if let Some(verdict) = spheres.verdict(r2) {
+        return Ok(verdict);
+    }
+    let fast = coefficients_2d::<f64>(r12, q1, q2);
+    let bound = CrudeBound {
+        d1: q1[0].max(q1[2]),
+        d2: q2[0].max(q2[2]),
+        r2,
+        k_b: 4.0,
+        k_a: 2.0,
+        dim: 2,
+    };
+    Ok(bounded_search(&fast.to_f64(), &bound).unwrap_or_else(|| {
+        let (contact, _) = solve_checked(
+            &fast,
+            || coefficients_2d::<Mag>(r12, q1, q2),
+            || coefficients_2d::<Dd>(r12, q1, q2),
+        );
+        contact.mu2 < 1.0
+    }))
+}
+
+/// Radii sums of the bounding and inscribed spheres.
+struct Spheres {
+    outer: f64,
+    inner: f64,
+}
+
+impl Spheres {
+    fn verdict(&self, r2: f64) -> Option<bool> {
+        if r2 > self.outer * self.outer * (1.0 + SPHERE_MARGIN) {
+            Some(false)
+        } else if r2 < self.inner * self.inner * (1.0 - SPHERE_MARGIN) {
+            Some(true)
+        } else {
+            None
+        }
+    }
+}
+
+/// A cheap bound on the rounding error of the `f64` Bernstein coefficients, from the largest
+/// diagonal entries dᵢ of Qᵢ (every |Qᵢⱼ| ≤ dᵢ for a positive definite matrix): Σ|terms| of
+/// b(λ) is at most k_b D^dim and of a(λ) at most k_a |r|² D^(dim−1), D = (1 − λ) d₁ + λ d₂.
+struct CrudeBound {
+    d1: f64,
+    d2: f64,
+    r2: f64,
+    k_b: f64,
+    k_a: f64,
+    dim: i32,
+}
+
+impl CrudeBound {
+    /// Relative error bound of f(λ) given the unnormalised a(λ) and b(λ).
+    fn relative(&self, lambda: f64, a: f64, b: f64) -> f64 {
+        let d = (1.0 - lambda) * self.d1 + lambda * self.d2;
+        let dn = d.powi(self.dim - 1);
+        const GAMMA: f64 = 10.0 * 0.5 * f64::EPSILON;
+        GAMMA * (self.k_b * dn * d / b + self.k_a * self.r2 * dn / a) + 8.0 * 0.5 * f64::EPSILON
+    }
+}
+
+/// One side of the bracket of λ₀ with the tangent line of f there.
+#[derive(Clone, Copy)]
+struct Tangent {
+    lambda: f64,
+    f: f64,
+    slope: f64,
+}
+
+/// Upper bound of a concave f on [0, 1] from its tangents at the bracket ends: the intersection
+/// of the two lines, or the one line at the far end of the interval.
+fn tangent_bound(lo: Option<Tangent>, hi: Option<Tangent>) -> f64 {
+    match (lo, hi) {
+        (Some(l), Some(h)) => {
+            // f_l + s_l (x − λ_l) = f_h + s_h (x − λ_h), s_l > 0 > s_h.
+            let x = (h.f - l.f + l.slope * l.lambda - h.slope * h.lambda) / (l.slope - h.slope);
+            l.f + l.slope * (x.clamp(l.lambda, h.lambda) - l.lambda)
+        }
+        (Some(l), None) => l.f + l.slope * (1.0 - l.lambda),
+        (None, Some(h)) => h.f - h.slope * h.lambda,
+        (None, None) => f64::INFINITY,
+    }
+}
+
+/// The bracketed Newton iteration of [`RationalForm::maximise`], stopped as soon as a lower
+/// bound f(λ) exceeds 1 or the tangent upper bound falls below 1, beyond the rounding margin.
+/// `None` when neither happens: the caller must compute μ² accurately.
+fn bounded_search(rational: &RationalForm, bound: &CrudeBound) -> Option<bool> {
+    let alpha = rational.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
+    let beta = rational.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
+    if !(alpha > 0.0) {
+        // r12 = 0: μ² = 0.
+        return Some(true);
+    }
+    let n = RationalForm {
+        alpha: rational.alpha.map(|x| (x / alpha).max(0.0)),
+        beta: rational.beta.map(|x| (x / beta).max(0.0)),
+    };
+    let scale = alpha / beta;
+    let (mut lo, mut hi): (Option<Tangent>, Option<Tangent>) = (None, None);
+    let mut t = n.initial_guess();
+    for _ in 0..MAX_ITERATIONS {
+        let d = n.log_derivatives(t);
+        let f = d.f * scale;
+        let err = bound.relative(t, n.a(t) * alpha, n.b(t) * beta);
+        if err > 1e-3 {
+            return None;
+        }
+        if f * (1.0 - err) > 1.0 {
+            return Some(false);
+        }
+        let tangent = Tangent {
+            lambda: t,
+            f,
+            slope: f * d.g1,
+        };
+        if d.g1 > 0.0 {
+            lo = Some(tangent);
+        } else {
+            hi = Some(tangent);
+        }
+        let upper = tangent_bound(lo, hi);
+        // The slope carries a larger relative error than f; 10× the margin of f covers it.
+        if upper + 10.0 * err * (f + upper) < 1.0 {
+            return Some(true);
+        }
+        let (lo_t, hi_t) = (lo.map_or(0.0, |l| l.lambda), hi.map_or(1.0, |h| h.lambda));
+        let ts = t * (1.0 - t);
+        let mut next = t - ts * d.g1 / ((1.0 - 2.0 * t) * d.g1 + ts * d.g2);
+        if !(next > lo_t && next < hi_t) {
+            next = 0.5 * (lo_t + hi_t);
+        }
+        if next == t {
+            return None;
+        }
+        t = next;
+    }
+    None
+}

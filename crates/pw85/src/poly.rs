@@ -1,0 +1,412 @@
+//! The rational form of f(λ): the polynomials a(λ), b(λ), c(λ) of the theory (eqs. 15–20), and
+//! the Bernstein form in which ellipack actually evaluates them.
+//!
+//! With Q(λ) = (1 − λ) Q1 + λ Q2 (eq. 10), eq. 11 reads
+//!
+//! ```text
+//! f(λ) = λ (1 − λ) r12ᵀ Q(λ)⁻¹ r12 = λ (1 − λ) a(λ) / b(λ),          (15)
+//! a(λ) = r12ᵀ adj Q(λ) r12,   b(λ) = det Q(λ).                         (16a, 16b)
+//! ```
+//!
+//! The PW85 library recovers the monomial coefficients of a and b by sampling them at
+//! λ ∈ {−1, 0, ½, 1} (eq. 17) and finds λ₀ as the root of c(λ) = f′(λ) b(λ)² (eqs. 18–20). Both
+//! are provided here as building blocks (and the `baseline` module uses them), but the solver
+//! works with the same polynomials in the Bernstein basis of s = 1 − λ and t = λ:
+//!
+//! ```text
+//! a(λ) = s² α₀ + s t α₁ + t² α₂,             α₀ = rᵀ adj(Q1) r, α₁ = rᵀ M(Q1, Q2) r, α₂ = rᵀ adj(Q2) r
+//! b(λ) = s³ β₀ + s² t β₁ + s t² β₂ + t³ β₃,   β₀ = det Q1, β₁ = tr(adj(Q1) Q2), β₂ = tr(adj(Q2) Q1), β₃ = det Q2
+//! ```
+//!
+//! where M is the mixed adjugate ([`crate::sym::mixed_adjugate`]). For positive definite Q1, Q2
+//! every α and β is non-negative, so on 0 ≤ λ ≤ 1 each of a, b and f is a sum of non-negative
+//! terms: evaluating them loses no digits, whatever the conditioning of Q(λ). All the
+//! cancellation sits in the coefficients themselves, where it can be measured and, when needed,
+//! removed with extra precision (see [`crate::contact`]).
+
+use crate::arith::Arith;
+use crate::sym::{
+    Sym3, adjugate_generic, det_generic, det_sym, frobenius_generic, lift6,
+    mixed_adjugate_generic, outer_generic, quadratic_form_generic, solve_ldlt, xt_adj_x,
+};
+
+/// Q(λ) = (1 − λ) Q1 + λ Q2 (eq. 10).
+pub fn pencil(lambda: f64, q1: &Sym3, q2: &Sym3) -> Sym3 {
+    core::array::from_fn(|k| (1.0 - lambda) * q1[k] + lambda * q2[k])
+}
+
+/// Monomial coefficients [a₀, a₁, a₂] of a(λ) = r12ᵀ adj Q(λ) r12, by sampling a at −1, 0 and 1
+/// (eqs. 17a–17c, as the PW85 library does).
+pub fn a_coefficients(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> [f64; 3] {
+    let a = |lambda: f64| xt_adj_x(r12, &pencil(lambda, q1, q2));
+    let (am1, a0, a1) = (a(-1.0), a(0.0), a(1.0));
+    [a0, 0.5 * (a1 - am1), 0.5 * (a1 + am1) - a0]
+}
+
+/// Monomial coefficients [b₀, b₁, b₂, b₃] of b(λ) = det Q(λ), by sampling b at −1, 0, ½ and 1
+/// (eqs. 17d–17g, as the PW85 library does).
+pub fn b_coefficients(q1: &Sym3, q2: &Sym3) -> [f64; 4] {
+    let b = |lambda: f64| det_sym(&pencil(lambda, q1, q2));
+    let (bm1, b0, bh, b1) = (b(-1.0), b(0.0), b(0.5), b(1.0));
+    [
+        b0,
+        8.0 * bh / 3.0 - 2.0 * b0 - 0.5 * b1 - bm1 / 6.0,
+        0.5 * (b1 + bm1) - b0,
+        -8.0 * bh / 3.0 + 2.0 * b0 + b1 - bm1 / 3.0,
+    ]
+}
+
+/// Coefficients [c₀, …, c₆] of c(λ) = f′(λ) b(λ)² (eqs. 19, 20a–20g).
+pub fn c_coefficients(a: &[f64; 3], b: &[f64; 4]) -> [f64; 7] {
+    let [a0, a1, a2] = *a;
+    let [b0, b1, b2, b3] = *b;
+    [
+        a0 * b0,
+        2.0 * (a1 - a0) * b0,
+        -a0 * (b1 + b2) + 3.0 * b0 * (a2 - a1) + a1 * b1,
+        2.0 * (b1 * (a2 - a1) - a0 * b3) - 4.0 * a2 * b0,
+        (a0 - a1) * b3 + (a2 - a1) * b2 - 3.0 * a2 * b1,
+        -2.0 * a2 * b2,
+        -a2 * b3,
+    ]
+}
+
+/// Evaluates a polynomial given by its monomial coefficients (Horner).
+pub fn polyval(coefficients: &[f64], x: f64) -> f64 {
+    coefficients.iter().rev().fold(0.0, |acc, &c| acc * x + c)
+}
+
+/// f(λ) = λ (1 − λ) r12ᵀ Q(λ)⁻¹ r12 (eq. 11), by an LDLᵀ solve: the straightforward evaluation.
+/// Returns NaN when Q(λ) is not positive definite as computed.
+pub fn f_direct(lambda: f64, r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> f64 {
+    match solve_ldlt(&pencil(lambda, q1, q2), r12) {
+        Some(s) => lambda * (1.0 - lambda) * (r12[0] * s[0] + r12[1] * s[1] + r12[2] * s[2]),
+        None => f64::NAN,
+    }
+}
+
+/// The residual of eq. 13 at λ: with x₀(λ) from eq. 9, the two quadratic forms
+/// u₁ = (x₀ − c₁)ᵀ Q1⁻¹ (x₀ − c₁) = (1 − λ)² sᵀ Q1 s and u₂ = (x₀ − c₂)ᵀ Q2⁻¹ (x₀ − c₂) = λ² sᵀ Q2 s,
+/// s = Q(λ)⁻¹ r12. Returns (u₁, u₂); at the maximiser λ₀ both equal μ².
+pub fn eq13_forms(lambda: f64, r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> (f64, f64) {
+    let Some(s) = solve_ldlt(&pencil(lambda, q1, q2), r12) else {
+        return (f64::NAN, f64::NAN);
+    };
+    let t = lambda;
+    let u = 1.0 - lambda;
+    (
+        u * u * crate::sym::quadratic_form(&s, q1),
+        t * t * crate::sym::quadratic_form(&s, q2),
+    )
+}
+
+/// f(λ) = λ (1 − λ) a(λ) / b(λ) written with its numerator and denominator in Bernstein form
+/// (see the module documentation). `alpha` and `beta` are the Bernstein coefficients without
+/// binomial weights: a = s²α₀ + stα₁ + t²α₂, b = s³β₀ + s²tβ₁ + st²β₂ + t³β₃, s = 1 − λ, t = λ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RationalForm {
+    /// α₀, α₁, α₂.
+    pub alpha: [f64; 3],
+    /// β₀, β₁, β₂, β₃.
+    pub beta: [f64; 4],
+}
+
+/// f and the first two derivatives of ln f at one λ.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LogDerivatives {
+    /// f(λ).
+    pub f: f64,
+    /// d ln f / dλ.
+    pub g1: f64,
+    /// d² ln f / dλ².
+    pub g2: f64,
+}
+
+impl RationalForm {
+    /// The Bernstein coefficients of a pair of ellipsoids (computed in `f64`).
+    pub fn new(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Self {
+        coefficients::<f64>(r12, q1, q2).to_f64()
+    }
+
+    /// a(λ).
+    pub fn a(&self, lambda: f64) -> f64 {
+        let (s, t) = (1.0 - lambda, lambda);
+        let [a0, a1, a2] = self.alpha;
+        s * (s * a0 + t * a1) + t * t * a2
+    }
+
+    /// b(λ).
+    pub fn b(&self, lambda: f64) -> f64 {
+        let (s, t) = (1.0 - lambda, lambda);
+        let [b0, b1, b2, b3] = self.beta;
+        s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3)
+    }
+
+    /// f(λ) = λ (1 − λ) a(λ) / b(λ) (eq. 15).
+    pub fn f(&self, lambda: f64) -> f64 {
+        lambda * (1.0 - lambda) * self.a(lambda) / self.b(lambda)
+    }
+
+    /// The same function of μ = 1 − λ: the coefficient lists reversed (Q1 and Q2 swapped).
+    pub fn reversed(&self) -> Self {
+        let [a0, a1, a2] = self.alpha;
+        let [b0, b1, b2, b3] = self.beta;
+        Self {
+            alpha: [a2, a1, a0],
+            beta: [b3, b2, b1, b0],
+        }
+    }
+
+    /// f, (ln f)′ and (ln f)″ at λ. ln f is concave on (0, 1) because f is (a minimum of
+    /// functions affine in λ, eq. 5), so (ln f)′ decreases from +∞ to −∞.
+    #[inline]
+    pub(crate) fn log_derivatives(&self, lambda: f64) -> LogDerivatives {
+        let (s, t) = (1.0 - lambda, lambda);
+        let [a0, a1, a2] = self.alpha;
+        let [b0, b1, b2, b3] = self.beta;
+        let a = s * (s * a0 + t * a1) + t * t * a2;
+        let da = 2.0 * (t * a2 - s * a0) + (s - t) * a1;
+        let dda = 2.0 * (a0 + a2 - a1);
+        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
+        let db = 3.0 * (t * t * b3 - s * s * b0) + s * (s - 2.0 * t) * b1 + t * (2.0 * s - t) * b2;
+        let ddb = 6.0 * (s * b0 + t * b3) + (2.0 * t - 4.0 * s) * b1 + (2.0 * s - 4.0 * t) * b2;
+        let (it, is, ia, ib) = (1.0 / t, 1.0 / s, 1.0 / a, 1.0 / b);
+        let (la, lb) = (da * ia, db * ib);
+        LogDerivatives {
+            f: t * s * a * ib,
+            g1: it - is + la - lb,
+            g2: -(it * it) - is * is + dda * ia - la * la - ddb * ib + lb * lb,
+        }
+    }
+
+    /// The maximiser of f on [0, 1], from the starting point `t0` ∈ (0, 1): returns (λ₀, f(λ₀),
+    /// iterations).
+    ///
+    /// Newton's method on ψ(λ) = λ (1 − λ) (ln f)′(λ), which has the root of f′ but none of its
+    /// poles at 0 and 1: where f ≈ K λ near λ = 0 (a tiny first ellipsoid), ψ is nearly linear
+    /// and one step lands on λ₀ ≈ 1/K, whereas Newton on f′ itself would overshoot out of
+    /// [0, 1]. The root stays bracketed ((ln f)′ is decreasing), steps leaving the bracket are
+    /// replaced by bisection (geometric when the bracket spans decades), and the iteration
+    /// stops when the predicted gain of another step, (ln f)′² / (2 |(ln f)″|), is below the
+    /// resolution of a double.
+    pub fn maximise(&self, t0: f64) -> (f64, f64, u32) {
+        let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+        let mut t = t0;
+        let mut iterations = 0;
+        loop {
+            iterations += 1;
+            let d = self.log_derivatives(t);
+            let gain = d.g1 * d.g1 / (-2.0 * d.g2);
+            // NaN gain (a degenerate pencil) must stop too, hence the negated comparison.
+            if !(gain > 1e-19) || iterations >= 200 {
+                return (t, d.f, iterations);
+            }
+            if d.g1 > 0.0 {
+                lo = t;
+            } else {
+                hi = t;
+            }
+            let ts = t * (1.0 - t);
+            let mut next = t - ts * d.g1 / ((1.0 - 2.0 * t) * d.g1 + ts * d.g2);
+            if !(next > lo && next < hi) {
+                next = if lo > 0.0 && hi > 16.0 * lo {
+                    (lo * hi).sqrt()
+                } else {
+                    0.5 * (lo + hi)
+                };
+            }
+            if next == t || hi - lo <= 4.0 * f64::EPSILON * t {
+                return (t, d.f, iterations);
+            }
+            t = next;
+        }
+    }
+
+    /// A starting point for [`RationalForm::maximise`]: the exact maximiser for two spheres
+    /// whose radii are the radial extents ρᵢ = (r̂ᵀ Qᵢ⁻¹ r̂)^(−1/2) of the ellipsoids along r12,
+    /// λ = ρ₁ / (ρ₁ + ρ₂), with ρ₂/ρ₁ = sqrt((α₀/β₀)/(α₂/β₃)).
+    pub fn initial_guess(&self) -> f64 {
+        let ratio = (self.alpha[0] * self.beta[3] / (self.alpha[2] * self.beta[0])).sqrt();
+        let t = 1.0 / (1.0 + ratio);
+        if t > 0.0 && t < 1.0 { t } else { 0.5 }
+    }
+}
+
+/// The Bernstein coefficients in a generic arithmetic.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Coefficients<T> {
+    pub alpha: [T; 3],
+    pub beta: [T; 4],
+}
+
+impl<T: Arith> Coefficients<T> {
+    pub fn to_f64(&self) -> RationalForm {
+        RationalForm {
+            alpha: self.alpha.map(T::to_f64),
+            beta: self.beta.map(T::to_f64),
+        }
+    }
+}
+
+/// adj(Q1), adj(Q2), M(Q1, Q2) and the Bernstein coefficients, in arithmetic `T`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pencil3<T> {
+    pub adj1: [T; 6],
+    pub adj2: [T; 6],
+    pub mixed: [T; 6],
+    pub coefficients: Coefficients<T>,
+}
+
+#[inline(always)]
+pub(crate) fn pencil3<T: Arith>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Pencil3<T> {
+    let a: [T; 6] = lift6(q1);
+    let b: [T; 6] = lift6(q2);
+    let rr = outer_generic::<T>(r12);
+    let adj1 = adjugate_generic(&a);
+    let adj2 = adjugate_generic(&b);
+    let mixed = mixed_adjugate_generic(&a, &b);
+    let coefficients = Coefficients {
+        alpha: [
+            quadratic_form_generic(&rr, &adj1),
+            quadratic_form_generic(&rr, &mixed),
+            quadratic_form_generic(&rr, &adj2),
+        ],
+        beta: [
+            det_generic(&a, &adj1),
+            frobenius_generic(&adj1, &b),
+            frobenius_generic(&adj2, &a),
+            det_generic(&b, &adj2),
+        ],
+    };
+    Pencil3 {
+        adj1,
+        adj2,
+        mixed,
+        coefficients,
+    }
+}
+
+#[inline(always)]
+pub(crate) fn coefficients<T: Arith>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Coefficients<T> {
+    pencil3::<T>(r12, q1, q2).coefficients
+}
+
+/// The 2D coefficients, degree-elevated to the 3D Bernstein form so that one solver serves
+/// both: for ellipses a(λ) = s α₀ + t α₂ is linear and b(λ) = s² β₀ + st β₁ + t² β₂ quadratic;
+/// multiplying both by (s + t) = 1 gives a quadratic and a cubic with non-negative
+/// coefficients again.
+#[inline(always)]
+pub(crate) fn coefficients_2d<T: Arith>(
+    r12: &[f64; 2],
+    q1: &[f64; 3],
+    q2: &[f64; 3],
+) -> Coefficients<T> {
+    let [a0, a1, a2] = q1.map(T::lift);
+    let [b0, b1, b2] = q2.map(T::lift);
+    let [x, y] = r12.map(T::lift);
+    let (xx, xy, yy) = (x * x, x * y, y * y);
+    // adj of [[q0, q1], [q1, q2]] is [[q2, −q1], [−q1, q0]].
+    let alpha0 = a2 * xx + a0 * yy - (a1 * xy).twice();
+    let alpha2 = b2 * xx + b0 * yy - (b1 * xy).twice();
+    let beta0 = a0 * a2 - a1 * a1;
+    let beta1 = a2 * b0 + a0 * b2 - (a1 * b1).twice();
+    let beta2 = b0 * b2 - b1 * b1;
+    Coefficients {
+        alpha: [alpha0, alpha0 + alpha2, alpha2],
+        beta: [beta0, beta0 + beta1, beta1 + beta2, beta2],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const R: [f64; 3] = [1.1, -0.4, 2.3];
+    const Q1: Sym3 = [4.0, 1.0, -0.5, 3.0, 0.25, 2.0];
+    const Q2: Sym3 = [1.5, -0.3, 0.2, 2.5, 0.7, 3.5];
+
+    #[test]
+    fn sampled_coefficients_reproduce_a_and_b() {
+        let a = a_coefficients(&R, &Q1, &Q2);
+        let b = b_coefficients(&Q1, &Q2);
+        for lambda in [-0.7, 0.0, 0.3, 0.5, 0.9, 1.4] {
+            let q = pencil(lambda, &Q1, &Q2);
+            let (ea, eb) = (xt_adj_x(&R, &q), det_sym(&q));
+            assert!((polyval(&a, lambda) - ea).abs() <= 1e-13 * ea.abs().max(1.0));
+            assert!((polyval(&b, lambda) - eb).abs() <= 1e-13 * eb.abs().max(1.0));
+        }
+    }
+
+    #[test]
+    fn bernstein_form_equals_monomial_form() {
+        let rf = RationalForm::new(&R, &Q1, &Q2);
+        let a = a_coefficients(&R, &Q1, &Q2);
+        let b = b_coefficients(&Q1, &Q2);
+        for lambda in [0.0, 0.2, 0.5, 0.8, 1.0] {
+            assert!((rf.a(lambda) - polyval(&a, lambda)).abs() <= 1e-12 * rf.a(lambda));
+            assert!((rf.b(lambda) - polyval(&b, lambda)).abs() <= 1e-12 * rf.b(lambda));
+        }
+        assert!(rf.alpha.iter().chain(&rf.beta).all(|&c| c > 0.0));
+    }
+
+    #[test]
+    fn c_is_f_prime_times_b_squared() {
+        let a = a_coefficients(&R, &Q1, &Q2);
+        let b = b_coefficients(&Q1, &Q2);
+        let c = c_coefficients(&a, &b);
+        let f = |l: f64| l * (1.0 - l) * polyval(&a, l) / polyval(&b, l);
+        for lambda in [0.1, 0.35, 0.6, 0.85] {
+            let h = 1e-5;
+            let fd = (f(lambda + h) - f(lambda - h)) / (2.0 * h);
+            let bb = polyval(&b, lambda);
+            let rel = (polyval(&c, lambda) - fd * bb * bb).abs() / (fd * bb * bb).abs().max(1e-3);
+            assert!(rel < 1e-7, "λ = {lambda}: relative mismatch {rel}");
+        }
+    }
+
+    #[test]
+    fn rational_form_matches_direct_evaluation() {
+        let rf = RationalForm::new(&R, &Q1, &Q2);
+        for lambda in [0.05, 0.5, 0.95] {
+            let direct = f_direct(lambda, &R, &Q1, &Q2);
+            assert!((rf.f(lambda) - direct).abs() <= 1e-14 * direct);
+        }
+    }
+
+    #[test]
+    fn log_derivatives_match_finite_differences() {
+        let rf = RationalForm::new(&R, &Q1, &Q2);
+        let g = |l: f64| rf.f(l).ln();
+        for lambda in [0.1, 0.4, 0.7] {
+            let h = 1e-5;
+            let d = rf.log_derivatives(lambda);
+            let g1 = (g(lambda + h) - g(lambda - h)) / (2.0 * h);
+            let g2 = (g(lambda + h) - 2.0 * g(lambda) + g(lambda - h)) / (h * h);
+            assert!((d.g1 - g1).abs() < 1e-7 * g1.abs().max(1.0));
+            assert!((d.g2 - g2).abs() < 1e-4 * g2.abs().max(1.0));
+            assert!(d.g2 < 0.0, "ln f is concave");
+        }
+    }
+
+    #[test]
+    fn maximiser_satisfies_eq13() {
+        let rf = RationalForm::new(&R, &Q1, &Q2);
+        let (lambda, mu2, _) = rf.maximise(rf.initial_guess());
+        let (u1, u2) = eq13_forms(lambda, &R, &Q1, &Q2);
+        assert!((u1 - mu2).abs() < 1e-12 * mu2, "{u1} vs {mu2}");
+        assert!((u2 - mu2).abs() < 1e-12 * mu2, "{u2} vs {mu2}");
+    }
+
+    #[test]
+    fn two_d_coefficients_are_the_elevated_planar_pencil() {
+        let (r, q1, q2) = ([0.7, -1.3], [2.0, 0.3, 1.0], [0.5, -0.1, 3.0]);
+        let c = coefficients_2d::<f64>(&r, &q1, &q2).to_f64();
+        for lambda in [0.1, 0.5, 0.9] {
+            let q: [f64; 3] = core::array::from_fn(|k| (1.0 - lambda) * q1[k] + lambda * q2[k]);
+            let det = q[0] * q[2] - q[1] * q[1];
+            let a = q[2] * r[0] * r[0] - 2.0 * q[1] * r[0] * r[1] + q[0] * r[1] * r[1];
+            assert!((c.a(lambda) - a).abs() < 1e-14 * a);
+            assert!((c.b(lambda) - det).abs() < 1e-14 * det);
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! μ² against the independent 36-digit reference values of `shared/reference/pw85_contact.csv`
+//! (305 cases in 12 categories; see that folder's README).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+struct Case {
+    id: String,
+    category: String,
+    r12: [f64; 3],
+    q1: [f64; 6],
+    q2: [f64; 6],
+    lambda: f64,
+    mu2: f64,
+}
+
+fn reference_dir() -> PathBuf {
+    std::env::var_os("ELLIPACK_REFERENCE_DIR").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/reference"),
+        PathBuf::from,
+    )
+}
+
+fn cases() -> Vec<Case> {
+    let path = reference_dir().join("pw85_contact.csv");
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (r, q1, q2) = (col("r12_x"), col("q1_0"), col("q2_0"));
+    let (lambda, mu2) = (col("lambda_ref"), col("mu2_ref"));
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            let num = |i: usize| f[i].trim().parse::<f64>().unwrap();
+            Case {
+                id: f[col("case_id")].to_string(),
+                category: f[col("category")].to_string(),
+                r12: core::array::from_fn(|k| num(r + k)),
+                q1: core::array::from_fn(|k| num(q1 + k)),
+                q2: core::array::from_fn(|k| num(q2 + k)),
+                lambda: num(lambda),
+                mu2: num(mu2),
+            }
+        })
+        .collect()
+}
+
+fn relative_error(value: f64, reference: f64) -> f64 {
+    if reference == 0.0 {
+        value.abs()
+    } else {
+        ((value - reference) / reference).abs()
+    }
+}
+
+#[test]
+fn mu2_within_1e_13_in_every_category() {
+    let cases = cases();
+    assert_eq!(cases.len(), 305);
+    let mut by_category: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    let mut worst = (0.0, String::new());
+    for c in &cases {
+        let contact = pw85::contact_function(&c.r12, &c.q1, &c.q2)
+            .unwrap_or_else(|e| panic!("case {}: {e}", c.id));
+        let err = relative_error(contact.mu2, c.mu2);
+        if err > worst.0 {
+            worst = (err, c.id.clone());
+        }
+        by_category.entry(&c.category).or_default().push(err);
+        assert!(
+            (0.0..=1.0).contains(&contact.lambda),
+            "case {}: λ = {}",
+            c.id,
+            contact.lambda
+        );
+        if c.lambda.is_finite() && c.mu2 > 0.0 {
+            // λ₀ is a maximiser: it is only as sharp as the curvature of f allows, so it is
+            // checked loosely here; μ² is the quantity with the tight bound.
+            assert!(
+                (contact.lambda - c.lambda).abs() <= 1e-6 * c.lambda.max(1e-300).max(1.0 - c.lambda),
+                "case {} ({}): λ = {} vs {}",
+                c.id,
+                c.category,
+                contact.lambda,
+                c.lambda
+            );
+        }
+    }
+    println!("{:<22} {:>5} {:>12} {:>12}", "category", "cases", "max rel err", "median");
+    for (category, errs) in &mut by_category {
+        errs.sort_by(f64::total_cmp);
+        println!(
+            "{:<22} {:>5} {:>12.3e} {:>12.3e}",
+            category,
+            errs.len(),
+            errs[errs.len() - 1],
+            errs[errs.len() / 2]
+        );
+    }
+    println!("worst case: {} ({:.3e})", worst.1, worst.0);
+    for (category, errs) in &by_category {
+        let max = errs[errs.len() - 1];
+        assert!(max <= 1e-13, "{category}: max relative error {max:e} > 1e-13");
+    }
+}
+
+#[test]
+fn verdict_matches_reference_outside_2e_13_of_tangency() {
+    for c in cases() {
+        if (c.mu2 - 1.0).abs() <= 2e-13 {
+            continue;
+        }
+        let verdict = pw85::overlap(&c.r12, &c.q1, &c.q2).unwrap();
+        assert_eq!(verdict, c.mu2 < 1.0, "case {} ({}): μ²_ref = {}", c.id, c.category, c.mu2);
+    }
+}
