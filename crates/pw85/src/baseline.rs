@@ -190,7 +190,10 @@ mod tests {
             newton(&r, &q1, &q2, 1e-14),
             brent(&r, &q1, &q2, 1e-10),
         ] {
-            assert!((e.mu2 - exact.mu2).abs() < 1e-13 * exact.mu2, "{e:?} vs {exact:?}");
+            assert!(
+                (e.mu2 - exact.mu2).abs() < 1e-13 * exact.mu2,
+                "{e:?} vs {exact:?}"
+            );
             assert!((e.lambda - exact.lambda).abs() < 1e-6);
         }
     }

@@ -59,10 +59,14 @@ pub mod shape;
 pub mod sym;
 
 pub use contact::{
-    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function,
-    contact_function_2d,
+    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function, contact_function_2d,
 };
 pub use error::{Argument, Error};
 pub use overlap::{overlap, overlap_2d};
 pub use shape::spheroid;
 pub use sym::{Sym2, Sym3};
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -14,8 +14,9 @@
 //! that margin, or a badly conditioned pencil) get the full [`crate::contact_function`] with
 //! its double-double refinement, and the verdict μ² < 1.
 
-use crate::arith::{Dd, Mag};
-use crate::contact::{check_finite, check_positive_definite, check_positive_definite_2d, solve_checked};
+use crate::arith::Mag;
+use crate::arith::is_positive;
+use crate::contact::{check_finite, check_positive_definite, check_positive_definite_2d};
 use crate::error::{Argument, Error};
 use crate::poly::{Coefficients, RationalForm, coefficients_2d};
 use crate::sym::{
@@ -53,8 +54,8 @@ pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
     let det2 = det_generic(q2, &adj2);
-    check_positive_definite(Argument::Q1, q1, &adj1, det1)?;
-    check_positive_definite(Argument::Q2, q2, &adj2, det2)?;
+    check_positive_definite(Argument::Q1, q1, &adj1, det1, det_magnitude(q1))?;
+    check_positive_definite(Argument::Q2, q2, &adj2, det2, det_magnitude(q2))?;
 
     let r2 = r12[0] * r12[0] + r12[1] * r12[1] + r12[2] * r12[2];
     let spheres = Spheres {
@@ -89,14 +90,10 @@ pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
         k_a: 6.0,
         dim: 3,
     };
-    Ok(bounded_search(&fast.to_f64(), &bound).unwrap_or_else(|| {
-        let (contact, _) = solve_checked(
-            &fast,
-            || crate::poly::coefficients::<Mag>(r12, q1, q2),
-            || crate::poly::coefficients::<Dd>(r12, q1, q2),
-        );
-        contact.mu2 < 1.0
-    }))
+    match bounded_search(&fast.to_f64(), &bound) {
+        Some(verdict) => Ok(verdict),
+        None => Ok(crate::contact_function(r12, q1, q2)?.mu2 < 1.0),
+    }
 }
 
 /// Whether two ellipses overlap, with the arguments of [`crate::contact_function_2d`].
@@ -128,14 +125,16 @@ pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
         k_a: 2.0,
         dim: 2,
     };
-    Ok(bounded_search(&fast.to_f64(), &bound).unwrap_or_else(|| {
-        let (contact, _) = solve_checked(
-            &fast,
-            || coefficients_2d::<Mag>(r12, q1, q2),
-            || coefficients_2d::<Dd>(r12, q1, q2),
-        );
-        contact.mu2 < 1.0
-    }))
+    match bounded_search(&fast.to_f64(), &bound) {
+        Some(verdict) => Ok(verdict),
+        None => Ok(crate::contact_function_2d(r12, q1, q2)?.mu2 < 1.0),
+    }
+}
+
+/// Σ|terms| of det Q as the cofactor expansion computes it.
+fn det_magnitude(q: &Sym3) -> f64 {
+    let m = crate::sym::lift6::<Mag>(q);
+    det_generic(&m, &adjugate_generic(&m)).0
 }
 
 /// Radii sums of the bounding and inscribed spheres.
@@ -207,7 +206,7 @@ fn tangent_bound(lo: Option<Tangent>, hi: Option<Tangent>) -> f64 {
 fn bounded_search(rational: &RationalForm, bound: &CrudeBound) -> Option<bool> {
     let alpha = rational.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
     let beta = rational.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
-    if !(alpha > 0.0) {
+    if !is_positive(alpha) {
         // r12 = 0: μ² = 0.
         return Some(true);
     }

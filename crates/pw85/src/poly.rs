@@ -25,9 +25,10 @@
 //! removed with extra precision (see [`crate::contact`]).
 
 use crate::arith::Arith;
+use crate::arith::is_positive;
 use crate::sym::{
-    Sym3, adjugate_generic, det_generic, det_sym, frobenius_generic, lift6,
-    mixed_adjugate_generic, outer_generic, quadratic_form_generic, solve_ldlt, xt_adj_x,
+    Sym3, adjugate_generic, det_generic, det_sym, frobenius_generic, lift6, mixed_adjugate_generic,
+    outer_generic, quadratic_form_generic, solve_ldlt, xt_adj_x,
 };
 
 /// Q(λ) = (1 − λ) Q1 + λ Q2 (eq. 10).
@@ -170,13 +171,52 @@ impl RationalForm {
         let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
         let db = 3.0 * (t * t * b3 - s * s * b0) + s * (s - 2.0 * t) * b1 + t * (2.0 * s - t) * b2;
         let ddb = 6.0 * (s * b0 + t * b3) + (2.0 * t - 4.0 * s) * b1 + (2.0 * s - 4.0 * t) * b2;
-        let (it, is, ia, ib) = (1.0 / t, 1.0 / s, 1.0 / a, 1.0 / b);
+        // One division instead of four: 1/(ts), 1/a and 1/b all follow from 1/(ts·a·b). The
+        // coefficients are normalised (largest 1), so the product stays far from underflow
+        // except for pencils spanning hundreds of decades, which take the slow path.
+        let ts = t * s;
+        let inv = 1.0 / (ts * a * b);
+        let (its, ia, ib) = if inv.is_finite() {
+            (a * b * inv, ts * b * inv, ts * a * inv)
+        } else {
+            (1.0 / ts, 1.0 / a, 1.0 / b)
+        };
         let (la, lb) = (da * ia, db * ib);
+        let poles = (s - t) * its;
         LogDerivatives {
-            f: t * s * a * ib,
-            g1: it - is + la - lb,
-            g2: -(it * it) - is * is + dda * ia - la * la - ddb * ib + lb * lb,
+            f: ts * a * ib,
+            g1: poles + la - lb,
+            g2: -(t * t + s * s) * its * its + dda * ia - la * la - ddb * ib + lb * lb,
         }
+    }
+
+    /// The numerator and denominator of a Newton step on ψ = λ(1 − λ)(ln f)′, without
+    /// divisions: with P = λ(1 − λ), (ln f)′ = n₁ / (P a b) and (ln f)″ = n₂ / (P a b)², where
+    ///
+    /// ```text
+    /// n₁ = (1 − 2λ) a b + P (a′ b − a b′)
+    /// n₂ = −(λ² + (1 − λ)²) a² b² + P² [b² (a″ a − a′²) − a² (b″ b − b′²)]
+    /// ```
+    ///
+    /// Returns (n₁, n₂, P a b). The iteration is bound by the latency of its dependency chain,
+    /// so one division per step instead of five matters.
+    #[inline(always)]
+    fn newton_terms(&self, lambda: f64) -> (f64, f64, f64) {
+        let (s, t) = (1.0 - lambda, lambda);
+        let [a0, a1, a2] = self.alpha;
+        let [b0, b1, b2, b3] = self.beta;
+        let a = s * (s * a0 + t * a1) + t * t * a2;
+        let da = 2.0 * (t * a2 - s * a0) + (s - t) * a1;
+        let dda = 2.0 * (a0 + a2 - a1);
+        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
+        let db = 3.0 * (t * t * b3 - s * s * b0) + s * (s - 2.0 * t) * b1 + t * (2.0 * s - t) * b2;
+        let ddb = 6.0 * (s * b0 + t * b3) + (2.0 * t - 4.0 * s) * b1 + (2.0 * s - 4.0 * t) * b2;
+        let p = t * s;
+        let ab = a * b;
+        let n1 = (s - t) * ab + p * (da * b - a * db);
+        let n2 = -(t * t + s * s) * ab * ab
+            + p * p * (b * b * (dda * a - da * da) - a * a * (ddb * b - db * db));
+        (n1, n2, p * ab)
     }
 
     /// The maximiser of f on [0, 1], from the starting point `t0` ∈ (0, 1): returns (λ₀, f(λ₀),
@@ -186,40 +226,68 @@ impl RationalForm {
     /// poles at 0 and 1: where f ≈ K λ near λ = 0 (a tiny first ellipsoid), ψ is nearly linear
     /// and one step lands on λ₀ ≈ 1/K, whereas Newton on f′ itself would overshoot out of
     /// [0, 1]. The root stays bracketed ((ln f)′ is decreasing), steps leaving the bracket are
-    /// replaced by bisection (geometric when the bracket spans decades), and the iteration
-    /// stops when the predicted gain of another step, (ln f)′² / (2 |(ln f)″|), is below the
-    /// resolution of a double.
+    /// replaced by bisection (geometric when the bracket spans decades).
+    ///
+    /// Stopping: the relative gain of a Newton step in f is about G = (ln f)′² / (2 |(ln f)″|).
+    /// Once G < 1e-12 the iteration is in its quadratic regime and the step's own remaining
+    /// gain is of order G² — far below the resolution of a double — so that step is taken and
+    /// only f (not its derivatives) is evaluated at the new point.
     pub fn maximise(&self, t0: f64) -> (f64, f64, u32) {
-        let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
-        let mut t = t0;
-        let mut iterations = 0;
-        loop {
-            iterations += 1;
-            let d = self.log_derivatives(t);
-            let gain = d.g1 * d.g1 / (-2.0 * d.g2);
-            // NaN gain (a degenerate pencil) must stop too, hence the negated comparison.
-            if !(gain > 1e-19) || iterations >= 200 {
-                return (t, d.f, iterations);
-            }
-            if d.g1 > 0.0 {
-                lo = t;
-            } else {
-                hi = t;
-            }
-            let ts = t * (1.0 - t);
-            let mut next = t - ts * d.g1 / ((1.0 - 2.0 * t) * d.g1 + ts * d.g2);
-            if !(next > lo && next < hi) {
-                next = if lo > 0.0 && hi > 16.0 * lo {
-                    (lo * hi).sqrt()
-                } else {
-                    0.5 * (lo + hi)
-                };
-            }
-            if next == t || hi - lo <= 4.0 * f64::EPSILON * t {
-                return (t, d.f, iterations);
-            }
-            t = next;
+        let mut search = Search::new(t0);
+        while !search.done {
+            self.search_step(&mut search);
         }
+        (search.t, search.f, search.iterations)
+    }
+
+    /// One iteration of [`RationalForm::maximise`] on `search`; when it sets `search.done`,
+    /// `search.t` is λ₀ and `search.f` is f(λ₀). Separate so that the batched path can advance
+    /// several independent searches side by side (their dependency chains then overlap).
+    #[inline(always)]
+    pub(crate) fn search_step(&self, search: &mut Search) {
+        let t = search.t;
+        search.iterations += 1;
+        let (mut n1, mut n2, mut pab) = self.newton_terms(t);
+        if !is_positive(pab - 1e-60) {
+            // a and b so small that n₂ ~ (ab)² would underflow: use the divided form, which
+            // is the same formula with P a b = 1.
+            let d = self.log_derivatives(t);
+            (n1, n2, pab) = (d.g1, d.g2, 1.0);
+        }
+        if n1 > 0.0 {
+            search.lo = t;
+        } else {
+            search.hi = t;
+        }
+        let (lo, hi) = (search.lo, search.hi);
+        let p = t * (1.0 - t);
+        let next = t - p * n1 * pab / ((1.0 - 2.0 * t) * n1 * pab + p * n2);
+        let inside = next > lo && next < hi;
+        // G < 1e-12 ⇔ n₁² < −2e-12 n₂; NaN (a degenerate pencil) stops too.
+        let converged = n1 * n1 < -2e-12 * n2;
+        if converged || !is_positive(-n2) || search.iterations >= 200 {
+            search.done = true;
+            search.f = self.f(t);
+            if inside && converged {
+                // f(next) ≥ f(t) unless rounding says otherwise: keep the larger lower bound.
+                search.f = self.f(next).max(search.f);
+                search.t = next;
+            }
+            return;
+        }
+        let next = if inside {
+            next
+        } else if lo > 0.0 && hi > 16.0 * lo {
+            (lo * hi).sqrt()
+        } else {
+            0.5 * (lo + hi)
+        };
+        if next == t || hi - lo <= 4.0 * f64::EPSILON * t {
+            search.done = true;
+            search.f = self.f(t);
+            return;
+        }
+        search.t = next;
     }
 
     /// A starting point for [`RationalForm::maximise`]: the exact maximiser for two spheres
@@ -232,6 +300,33 @@ impl RationalForm {
     }
 }
 
+/// The state of one λ iteration ([`RationalForm::search_step`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Search {
+    /// The current iterate; λ₀ once `done`.
+    pub t: f64,
+    /// The bracket of λ₀.
+    pub lo: f64,
+    pub hi: f64,
+    /// f(t) once `done`.
+    pub f: f64,
+    pub iterations: u32,
+    pub done: bool,
+}
+
+impl Search {
+    pub(crate) fn new(t0: f64) -> Self {
+        Self {
+            t: t0,
+            lo: 0.0,
+            hi: 1.0,
+            f: f64::NAN,
+            iterations: 0,
+            done: false,
+        }
+    }
+}
+
 /// The Bernstein coefficients in a generic arithmetic.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Coefficients<T> {
@@ -240,7 +335,7 @@ pub(crate) struct Coefficients<T> {
 }
 
 impl<T: Arith> Coefficients<T> {
-    pub fn to_f64(&self) -> RationalForm {
+    pub fn to_f64(self) -> RationalForm {
         RationalForm {
             alpha: self.alpha.map(T::to_f64),
             beta: self.beta.map(T::to_f64),

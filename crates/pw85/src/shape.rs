@@ -122,9 +122,21 @@ pub fn rotation_from_quaternion(q: &[f64; 4]) -> Result<Rotation, Error> {
     }
     let s = 2.0 / n;
     Ok([
-        [1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
-        [s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x)],
-        [s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y)],
+        [
+            1.0 - s * (y * y + z * z),
+            s * (x * y - w * z),
+            s * (x * z + w * y),
+        ],
+        [
+            s * (x * y + w * z),
+            1.0 - s * (x * x + z * z),
+            s * (y * z - w * x),
+        ],
+        [
+            s * (x * z - w * y),
+            s * (y * z + w * x),
+            1.0 - s * (x * x + y * y),
+        ],
     ])
 }
 
@@ -191,6 +203,8 @@ fn check_rotation(r: &Rotation) -> Result<(), Error> {
 }
 
 #[cfg(test)]
+// Index loops read like the matrix algebra they check.
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::sym::{det_sym, mat_vec};

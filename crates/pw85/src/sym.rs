@@ -158,6 +158,8 @@ pub(crate) fn quadratic_form_generic<T: Arith>(xx: &[T; 6], a: &[T; 6]) -> T {
 }
 
 #[cfg(test)]
+// Index loops read like the matrix algebra they check.
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

@@ -80,7 +80,8 @@ fn mu2_within_1e_13_in_every_category() {
             // λ₀ is a maximiser: it is only as sharp as the curvature of f allows, so it is
             // checked loosely here; μ² is the quantity with the tight bound.
             assert!(
-                (contact.lambda - c.lambda).abs() <= 1e-6 * c.lambda.max(1e-300).max(1.0 - c.lambda),
+                (contact.lambda - c.lambda).abs()
+                    <= 1e-6 * c.lambda.max(1e-300).max(1.0 - c.lambda),
                 "case {} ({}): λ = {} vs {}",
                 c.id,
                 c.category,
@@ -89,7 +90,10 @@ fn mu2_within_1e_13_in_every_category() {
             );
         }
     }
-    println!("{:<22} {:>5} {:>12} {:>12}", "category", "cases", "max rel err", "median");
+    println!(
+        "{:<22} {:>5} {:>12} {:>12}",
+        "category", "cases", "max rel err", "median"
+    );
     for (category, errs) in &mut by_category {
         errs.sort_by(f64::total_cmp);
         println!(
@@ -103,7 +107,10 @@ fn mu2_within_1e_13_in_every_category() {
     println!("worst case: {} ({:.3e})", worst.1, worst.0);
     for (category, errs) in &by_category {
         let max = errs[errs.len() - 1];
-        assert!(max <= 1e-13, "{category}: max relative error {max:e} > 1e-13");
+        assert!(
+            max <= 1e-13,
+            "{category}: max relative error {max:e} > 1e-13"
+        );
     }
 }
 
@@ -114,6 +121,13 @@ fn verdict_matches_reference_outside_2e_13_of_tangency() {
             continue;
         }
         let verdict = pw85::overlap(&c.r12, &c.q1, &c.q2).unwrap();
-        assert_eq!(verdict, c.mu2 < 1.0, "case {} ({}): μ²_ref = {}", c.id, c.category, c.mu2);
+        assert_eq!(
+            verdict,
+            c.mu2 < 1.0,
+            "case {} ({}): μ²_ref = {}",
+            c.id,
+            c.category,
+            c.mu2
+        );
     }
 }

@@ -1,0 +1,88 @@
+//! What the two inner (bound-constrained) solvers share: the smooth-function interface they
+//! minimise, their settings, and how they report back to the outer loop.
+
+use crate::report::Control;
+
+/// A smooth function on the box, evaluated with its gradient.
+pub(crate) trait Smooth {
+    /// Returns F(x) and overwrites `grad` with ∇F(x). Non-finite results are allowed and mean
+    /// "outside the domain".
+    fn value_grad(&mut self, x: &[f64], grad: &mut [f64]) -> f64;
+    /// Number of evaluations so far (monotone), for the evaluation budget.
+    fn evaluations(&self) -> usize;
+}
+
+/// Settings of one inner solve.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct InnerSettings {
+    /// Stop when ‖P(x − ∇F) − x‖∞ ≤ tolerance.
+    pub tolerance: f64,
+    /// Iteration cap for this solve.
+    pub max_iterations: usize,
+    /// Cap on `Smooth::evaluations()` (absolute, shared with the outer loop).
+    pub max_evaluations: usize,
+}
+
+/// Why an inner solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum InnerStatus {
+    /// Projected gradient below tolerance.
+    Converged,
+    /// Iteration cap.
+    MaxIterations,
+    /// Evaluation budget exhausted.
+    MaxEvaluations,
+    /// The monitor asked to stop.
+    Interrupted,
+    /// The line search could not decrease F (the step shrank to rounding level).
+    Stalled,
+    /// Only non-finite values were found along the search direction, or at the start.
+    NonFinite,
+}
+
+/// The result of an inner solve; the final iterate, its value and gradient are left in the
+/// caller's buffers.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct InnerOutcome {
+    pub status: InnerStatus,
+    pub iterations: usize,
+    pub value: f64,
+    pub projected_gradient: f64,
+}
+
+/// Called once per inner iteration with (iteration, x, F(x), projected-gradient norm,
+/// evaluations so far).
+pub(crate) type Monitor<'m> = dyn FnMut(usize, &[f64], f64, f64, usize) -> Control + 'm;
+
+/// Armijo constant: the fraction of the predicted decrease that a step must achieve.
+pub(crate) const ARMIJO: f64 = 1e-4;
+
+/// How many backtracking steps a line search tries before declaring failure.
+pub(crate) const MAX_BACKTRACKS: usize = 60;
+
+/// Safeguarded minimiser of the quadratic interpolating φ(0), φ'(0) and φ(α), kept in
+/// [lo·α, hi·α] (otherwise α/2) so that backtracking neither stalls nor overshoots.
+pub(crate) fn backtrack(alpha: f64, f0: f64, slope: f64, f_alpha: f64, lo: f64, hi: f64) -> f64 {
+    if !f_alpha.is_finite() {
+        // Outside the model's domain: retreat fast rather than interpolate a meaningless value.
+        return 0.1 * alpha;
+    }
+    let denom = f_alpha - f0 - alpha * slope;
+    let trial = -0.5 * alpha * alpha * slope / denom;
+    if denom > 0.0 && trial >= lo * alpha && trial <= hi * alpha {
+        trial
+    } else {
+        0.5 * alpha
+    }
+}
+
+/// True when F(trial) and F(x) differ by no more than the rounding noise of their evaluation.
+///
+/// Near a solution the decrease a step can achieve falls below what a sum of large terms can
+/// resolve, and an Armijo test then rejects every step although the gradient is still above
+/// tolerance. In that regime the line searches accept a step whose value is equal *within
+/// noise* if it reduces the projected-gradient norm — the same idea as the approximate Wolfe
+/// conditions of Hager & Zhang (SIAM J. Optim. 16(1), 2005).
+pub(crate) fn within_noise(value: f64, trial: f64) -> bool {
+    (trial - value).abs() <= 16.0 * f64::EPSILON * value.abs().max(trial.abs())
+}
