@@ -211,3 +211,43 @@ mod tests {
         assert_eq!(m.to_f64(), 11.0);
     }
 }
+
+/// A value and its magnitude side by side: `[x, Σ|terms of x|]`. One evaluation of the
+/// coefficient formulas in this type gives both the `f64` result and its running error bound;
+/// the two lanes map onto one SSE2 register, so the bound costs little beyond the value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ValMag(pub [f64; 2]);
+
+impl Add for ValMag {
+    type Output = ValMag;
+    #[inline(always)]
+    fn add(self, o: ValMag) -> ValMag {
+        ValMag([self.0[0] + o.0[0], self.0[1] + o.0[1]])
+    }
+}
+impl Sub for ValMag {
+    type Output = ValMag;
+    // Deliberate: the magnitude lane of a − b is |a| + |b|.
+    #[allow(clippy::suspicious_arithmetic_impl)]
+    #[inline(always)]
+    fn sub(self, o: ValMag) -> ValMag {
+        ValMag([self.0[0] - o.0[0], self.0[1] + o.0[1]])
+    }
+}
+impl Mul for ValMag {
+    type Output = ValMag;
+    #[inline(always)]
+    fn mul(self, o: ValMag) -> ValMag {
+        ValMag([self.0[0] * o.0[0], self.0[1] * o.0[1]])
+    }
+}
+impl Arith for ValMag {
+    #[inline(always)]
+    fn lift(x: f64) -> Self {
+        ValMag([x, x.abs()])
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self.0[0]
+    }
+}

@@ -25,9 +25,9 @@
 //! - `pw85-theory.rst` (the PW85 library's theory chapter): equation numbers in this crate.
 
 use crate::arith::is_positive;
-use crate::arith::{Arith, Dd, Mag};
+use crate::arith::{Arith, Dd, Mag, ValMag};
 use crate::error::{Argument, Error};
-use crate::poly::{Coefficients, Pencil3, RationalForm, Search, coefficients_2d, pencil3};
+use crate::poly::{Coefficients, RationalForm, Search, coefficients_2d, pencil3};
 use crate::sym::{Sym2, Sym3, mat_vec};
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
@@ -128,39 +128,24 @@ pub(crate) struct Prepared {
 impl Prepared {
     #[inline(always)]
     pub(crate) fn new(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Self, Error> {
-        Ok(Self::with_pencil(r12, q1, q2)?.0)
-    }
-
-    #[inline(always)]
-    fn with_pencil(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<(Self, Pencil3<f64>), Error> {
-        check_finite(Argument::R12, r12)?;
-        check_finite(Argument::Q1, q1)?;
-        check_finite(Argument::Q2, q2)?;
-        let p = pencil3::<f64>(r12, q1, q2);
-        // Computed next to the f64 coefficients: the two are independent and the processor
-        // overlaps them.
-        let bound = crate::poly::coefficients::<Mag>(r12, q1, q2);
-        check_positive_definite(
-            Argument::Q1,
-            q1,
-            &p.adj1,
-            p.coefficients.beta[0],
-            bound.beta[0].0,
-        )?;
-        check_positive_definite(
-            Argument::Q2,
-            q2,
-            &p.adj2,
-            p.coefficients.beta[3],
-            bound.beta[3].0,
-        )?;
-        Ok((
-            Self {
-                rational: p.coefficients.to_f64(),
-                bound: bound.to_f64(),
+        check_inputs_finite(r12, q1, q2)?;
+        // The coefficients and their error bound in one pass (two SIMD lanes).
+        let c = crate::poly::coefficients::<ValMag>(r12, q1, q2);
+        let value = |x: &ValMag| x.0[0];
+        let magnitude = |x: &ValMag| x.0[1];
+        let (beta, beta_bound) = (c.beta.map(|x| value(&x)), c.beta.map(|x| magnitude(&x)));
+        check_positive_definite(Argument::Q1, q1, beta[0], beta_bound[0])?;
+        check_positive_definite(Argument::Q2, q2, beta[3], beta_bound[3])?;
+        Ok(Self {
+            rational: RationalForm {
+                alpha: c.alpha.map(|x| value(&x)),
+                beta,
             },
-            p,
-        ))
+            bound: RationalForm {
+                alpha: c.alpha.map(|x| magnitude(&x)),
+                beta: beta_bound,
+            },
+        })
     }
 
     #[inline(always)]
@@ -174,6 +159,16 @@ impl Prepared {
             rational: coefficients_2d::<f64>(r12, q1, q2).to_f64(),
             bound: coefficients_2d::<Mag>(r12, q1, q2).to_f64(),
         })
+    }
+
+    /// Solves, checks the error bound and refines when needed: the whole contact function
+    /// after validation.
+    #[inline(always)]
+    pub(crate) fn contact(&self, exact: impl FnOnce() -> Coefficients<Dd>) -> Contact {
+        match self.normalised() {
+            Some((scale, form)) => self.finish(scale, solve(&form), exact),
+            None => Contact::COINCIDENT,
+        }
     }
 
     /// The normalised form to solve, or `None` when r12 = 0 (f ≡ 0).
@@ -191,15 +186,14 @@ impl Prepared {
         solution: Solution,
         exact: impl FnOnce() -> Coefficients<Dd>,
     ) -> Contact {
-        let bound = scale.apply_bound(&self.bound);
-        let estimate = GAMMA_F64 * solution.amplification(&bound) + EVAL;
+        let estimate = GAMMA_F64 * solution.amplification(&self.bound, scale) + EVAL;
         if estimate <= REFINE_ABOVE {
             return scale.contact(&solution, estimate, false);
         }
         let refined = exact().to_f64();
         let scale = Scale::of(&refined).unwrap_or(scale);
         let solution = solve(&scale.apply(&refined));
-        let estimate = GAMMA_DD * solution.amplification(&scale.apply_bound(&self.bound)) + EVAL;
+        let estimate = GAMMA_DD * solution.amplification(&self.bound, scale) + EVAL;
         scale.contact(&solution, estimate, true)
     }
 }
@@ -218,14 +212,7 @@ impl Contact {
 /// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
 /// version).
 pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error> {
-    let prepared = Prepared::new_2d(r12, q1, q2)?;
-    Ok(match prepared.normalised() {
-        Some((scale, form)) => {
-            let solution = solve(&form);
-            prepared.finish(scale, solution, || coefficients_2d::<Dd>(r12, q1, q2))
-        }
-        None => Contact::COINCIDENT,
-    })
+    Ok(Prepared::new_2d(r12, q1, q2)?.contact(|| coefficients_2d::<Dd>(r12, q1, q2)))
 }
 
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
@@ -234,16 +221,8 @@ pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Conta
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDetails, Error> {
-    let (prepared, p) = Prepared::with_pencil(r12, q1, q2)?;
-    let contact = match prepared.normalised() {
-        Some((scale, form)) => {
-            let solution = solve(&form);
-            prepared.finish(scale, solution, || {
-                crate::poly::coefficients::<Dd>(r12, q1, q2)
-            })
-        }
-        None => Contact::COINCIDENT,
-    };
+    let contact = Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2));
+    let p = pencil3::<f64>(r12, q1, q2);
     // adj Q(λ) = s² adj Q1 + st M + t² adj Q2, from the same (possibly refined) arithmetic as
     // the coefficients, so that s = adj Q(λ) r / b(λ) is as accurate as μ².
     let (adj1, mixed, adj2) = if contact.refined {
@@ -311,9 +290,9 @@ pub(crate) struct Solution {
 
 impl Solution {
     /// Σ|terms| / value for a and b at λ₀, added: how much a relative error of the
-    /// coefficients (measured against `bound`, their Σ|terms|) is amplified in f.
-    fn amplification(&self, bound: &RationalForm) -> f64 {
-        bound.a(self.lambda) / self.a + bound.b(self.lambda) / self.b
+    /// coefficients (measured against `bound`, their Σ|terms|, unnormalised) is amplified in f.
+    fn amplification(&self, bound: &RationalForm, scale: Scale) -> f64 {
+        bound.a(self.lambda) / (self.a * scale.alpha) + bound.b(self.lambda) / (self.b * scale.beta)
     }
 }
 
@@ -354,29 +333,30 @@ impl Solution {
 }
 
 impl Scale {
+    /// Powers of two near the largest α and β: multiplying by their reciprocals is exact, so
+    /// normalising changes no digit, and costs no division.
+    #[inline(always)]
     pub(crate) fn of(r: &RationalForm) -> Option<Self> {
         let alpha = r.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
         let beta = r.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
-        (alpha > 0.0 && beta > 0.0).then_some(Self { alpha, beta })
+        (alpha > 0.0 && beta > 0.0).then(|| Self {
+            alpha: power_of_two_below(alpha),
+            beta: power_of_two_below(beta),
+        })
     }
 
-    /// The error bound (Σ|terms| of each coefficient) in the units of the normalised form.
-    fn apply_bound(&self, r: &RationalForm) -> RationalForm {
-        RationalForm {
-            alpha: r.alpha.map(|x| x / self.alpha),
-            beta: r.beta.map(|x| x / self.beta),
-        }
-    }
-
+    #[inline(always)]
     pub(crate) fn apply(&self, r: &RationalForm) -> RationalForm {
         // Mixed coefficients are non-negative in exact arithmetic; rounding may leave a tiny
         // negative value, which the error bound accounts for.
+        let (ia, ib) = (1.0 / self.alpha, 1.0 / self.beta);
         RationalForm {
-            alpha: r.alpha.map(|x| (x / self.alpha).max(0.0)),
-            beta: r.beta.map(|x| (x / self.beta).max(0.0)),
+            alpha: r.alpha.map(|x| (x * ia).max(0.0)),
+            beta: r.beta.map(|x| (x * ib).max(0.0)),
         }
     }
 
+    #[inline(always)]
     fn contact(&self, s: &Solution, error_estimate: f64, refined: bool) -> Contact {
         Contact {
             mu2: s.f * (self.alpha / self.beta),
@@ -385,6 +365,33 @@ impl Scale {
             refined,
         }
     }
+}
+
+/// The largest power of two ≤ x, for positive finite x; x itself for subnormal or huge x (where
+/// the reciprocal of the power would not be representable), which only costs exactness of the
+/// normalisation there.
+#[inline(always)]
+fn power_of_two_below(x: f64) -> f64 {
+    let exponent = (x.to_bits() >> 52) & 0x7ff;
+    if (1..2046).contains(&exponent) {
+        f64::from_bits(exponent << 52)
+    } else {
+        x
+    }
+}
+
+/// All fifteen inputs finite, checked in one pass (x − x is NaN exactly for NaN and ±∞); the
+/// slow search for the culprit runs only when the check fails.
+#[inline(always)]
+fn check_inputs_finite(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<(), Error> {
+    #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
+    let probe = r12.iter().chain(q1).chain(q2).fold(0.0, |acc, &x| acc + (x - x));
+    if probe == 0.0 {
+        return Ok(());
+    }
+    check_finite(Argument::R12, r12)?;
+    check_finite(Argument::Q1, q1)?;
+    check_finite(Argument::Q2, q2)
 }
 
 pub(crate) fn check_finite(argument: Argument, values: &[f64]) -> Result<(), Error> {
@@ -405,7 +412,6 @@ pub(crate) fn check_finite(argument: Argument, values: &[f64]) -> Result<(), Err
 pub(crate) fn check_positive_definite(
     argument: Argument,
     q: &Sym3,
-    adj: &Sym3,
     det: f64,
     det_magnitude: f64,
 ) -> Result<(), Error> {
@@ -419,7 +425,7 @@ pub(crate) fn check_positive_definite(
     if !is_positive(q[0]) {
         return fail(1, q[0]);
     }
-    let m2 = adj[5];
+    let m2 = q[0] * q[3] - q[1] * q[1];
     if m2 <= GAMMA_F64 * (q[0] * q[3] + q[1] * q[1]) {
         let exact = (Dd::lift(q[0]) * Dd::lift(q[3]) - Dd::lift(q[1]) * Dd::lift(q[1])).to_f64();
         if !is_positive(exact) {
@@ -487,8 +493,8 @@ mod calibration {
             let fast = coefficients::<f64>(&r, &q1, &q2).to_f64();
             let scale = Scale::of(&fast).unwrap();
             let s1 = solve(&scale.apply(&fast));
-            let bound = scale.apply(&coefficients::<Mag>(&r, &q1, &q2).to_f64());
-            let est = GAMMA_F64 * s1.amplification(&bound) + EVAL;
+            let bound = coefficients::<Mag>(&r, &q1, &q2).to_f64();
+            let est = GAMMA_F64 * s1.amplification(&bound, scale) + EVAL;
             let exact = coefficients::<Dd>(&r, &q1, &q2).to_f64();
             let scale2 = Scale::of(&exact).unwrap();
             let s2 = solve(&scale2.apply(&exact));

@@ -32,7 +32,11 @@ const MAX_ITERATIONS: u32 = 12;
 /// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
 /// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
 ///
-/// Stops as soon as the answer is certain; see the [module documentation](self).
+/// Stops as soon as the answer is certain: bounding spheres apart (no overlap), inscribed
+/// spheres overlapping (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
+/// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
+/// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
+/// pencil, pay for the full [`crate::contact_function`].
 ///
 /// # Errors
 /// As [`crate::contact_function`].
@@ -54,8 +58,8 @@ pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
     let det2 = det_generic(q2, &adj2);
-    check_positive_definite(Argument::Q1, q1, &adj1, det1, det_magnitude(q1))?;
-    check_positive_definite(Argument::Q2, q2, &adj2, det2, det_magnitude(q2))?;
+    check_positive_definite(Argument::Q1, q1, det1, det_magnitude(q1))?;
+    check_positive_definite(Argument::Q2, q2, det2, det_magnitude(q2))?;
 
     let r2 = r12[0] * r12[0] + r12[1] * r12[1] + r12[2] * r12[2];
     let spheres = Spheres {
