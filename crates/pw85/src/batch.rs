@@ -7,7 +7,12 @@
 //! overlap their chains; the results are identical to the scalar [`crate::contact_function`]
 //! (same arithmetic, same stopping rule), only computed side by side.
 
-use crate::contact::{Prepared, Solution, start};
+use crate::arith::Dd;
+use crate::contact::{Prepared, Solution, check_inputs_finite, check_positive_definite, start};
+use crate::dispatch::multiversion;
+use crate::error::Argument;
+use crate::lanes::{Forms4, LANES, V4, maximise4};
+use crate::poly::{RationalForm, Search, pencil3_lifted};
 use crate::sym::Sym3;
 use crate::{Contact, Error};
 
@@ -29,9 +34,6 @@ pub const EMPTY_CONTACT: Contact = Contact {
     error_estimate: f64::NAN,
     refined: false,
 };
-
-/// How many pairs advance side by side.
-const LANES: usize = 4;
 
 /// [`crate::contact_function`] for every pair, into `out[i]` for `pairs[i]`.
 ///
@@ -112,39 +114,93 @@ pub fn par_overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
         .for_each(|(p, o)| overlaps_into(p, o));
 }
 
-/// Four pairs in lock-step. Lanes with invalid input or coincident centres are answered
-/// directly and sit out the iteration.
-#[inline]
-fn contact_x4(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    let prepared: [Result<Prepared, Error>; LANES] =
-        core::array::from_fn(|k| Prepared::new(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2));
-    let normalised = core::array::from_fn::<_, LANES, _>(|k| {
-        prepared[k].as_ref().ok().and_then(Prepared::normalised)
+multiversion! {
+    /// Four pairs in lock-step (see [`crate::lanes`]). Lanes with invalid input, coincident
+    /// centres or a degenerate pencil are answered by the scalar code and carry a stand-in
+    /// pair through the lane arithmetic.
+    fn contact_x4(pairs: &[Pair], out: &mut [Result<Contact, Error>]) -> () => contact_x4_portable;
+}
+
+/// A pair that is valid and well scaled, to fill the lanes of pairs answered separately.
+const STAND_IN: Pair = Pair {
+    r12: [2.0, 0.0, 0.0],
+    q1: [1.0, 0.0, 0.0, 1.0, 0.0, 1.0],
+    q2: [1.0, 0.0, 0.0, 1.0, 0.0, 1.0],
+};
+
+#[inline(always)]
+fn contact_x4_portable(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
+    let finite: [bool; LANES] = core::array::from_fn(|k| {
+        check_inputs_finite(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2).is_ok()
     });
-    let mut lanes = core::array::from_fn::<_, LANES, _>(|k| normalised[k].map(|(_, f)| start(&f)));
-    loop {
-        let mut busy = false;
-        for lane in lanes.iter_mut().flatten() {
-            let (form, search, _) = lane;
-            if !search.done {
-                form.search_step(search);
-                busy = true;
-            }
+    let lane: [&Pair; LANES] =
+        core::array::from_fn(|k| if finite[k] { &pairs[k] } else { &STAND_IN });
+    let r: [V4; 3] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].r12[i]));
+    let a: [V4; 6] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].q1[i]));
+    let b: [V4; 6] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].q2[i]));
+    let rm = r.map(V4::magnitude);
+    let am = a.map(V4::magnitude);
+    let bm = b.map(V4::magnitude);
+    let c = pencil3_lifted(r, a, b).coefficients;
+    let m = pencil3_lifted(rm, am, bm).coefficients;
+
+    // Per lane: validation, normalisation and orientation, exactly as the scalar path.
+    let mut active = [None; LANES];
+    for k in 0..LANES {
+        let p = &pairs[k];
+        if !finite[k] {
+            out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
+            continue;
         }
-        if !busy {
-            break;
+        let prepared = Prepared {
+            rational: RationalForm {
+                alpha: c.alpha.map(|x| x.0[k]),
+                beta: c.beta.map(|x| x.0[k]),
+            },
+            bound: RationalForm {
+                alpha: m.alpha.map(|x| x.0[k]),
+                beta: m.beta.map(|x| x.0[k]),
+            },
+        };
+        let (beta, bound) = (prepared.rational.beta, prepared.bound.beta);
+        let checked = check_positive_definite(Argument::Q1, &p.q1, beta[0], bound[0])
+            .and_then(|()| check_positive_definite(Argument::Q2, &p.q2, beta[3], bound[3]));
+        if let Err(e) = checked {
+            out[k] = Err(e);
+            continue;
+        }
+        match prepared.normalised() {
+            Some((scale, form)) => active[k] = Some((prepared, scale, start(&form))),
+            None => out[k] = Ok(Contact::COINCIDENT),
         }
     }
+    if active.iter().all(Option::is_none) {
+        return;
+    }
+    let stand_in = active.iter().flatten().map(|x| x.2).next();
+    let forms: [RationalForm; LANES] = core::array::from_fn(|k| {
+        active[k].map_or_else(|| stand_in.map_or(RationalForm::UNIT, |s| s.0), |x| x.2.0)
+    });
+    let t0: [f64; LANES] = core::array::from_fn(|k| {
+        active[k].map_or_else(|| stand_in.map_or(0.5, |s| s.1.t), |x| x.2.1.t)
+    });
+    let results = maximise4(&Forms4::new(&forms), t0);
     for k in 0..LANES {
-        out[k] = match (&prepared[k], normalised[k], lanes[k]) {
-            (Err(e), _, _) => Err(*e),
-            (Ok(p), Some((scale, _)), Some((form, search, reversed))) => {
-                let pair = &pairs[k];
-                Ok(p.finish(scale, Solution::of(&form, &search, reversed), || {
-                    crate::poly::coefficients::<crate::arith::Dd>(&pair.r12, &pair.q1, &pair.q2)
-                }))
-            }
-            _ => Ok(Contact::COINCIDENT),
+        let Some((prepared, scale, (form, _, reversed))) = active[k] else {
+            continue;
+        };
+        let p = &pairs[k];
+        out[k] = if results[k].fallback {
+            crate::contact_function(&p.r12, &p.q1, &p.q2)
+        } else {
+            let mut search = Search::new(results[k].t);
+            search.f = results[k].f;
+            search.done = true;
+            Ok(
+                prepared.finish(scale, Solution::of(&form, &search, reversed), || {
+                    crate::poly::coefficients::<Dd>(&p.r12, &p.q1, &p.q2)
+                }),
+            )
         };
     }
 }

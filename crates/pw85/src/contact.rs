@@ -26,6 +26,7 @@
 
 use crate::arith::is_positive;
 use crate::arith::{Arith, Dd, Mag, ValMag};
+use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
 use crate::poly::{Coefficients, RationalForm, Search, coefficients_2d, pencil3};
 use crate::sym::{Sym2, Sym3, mat_vec};
@@ -85,43 +86,42 @@ pub struct ContactDetails {
     pub grad_q2: [f64; 6],
 }
 
-/// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
-///
-/// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
-/// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
-/// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
-///
-/// # Errors
-/// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
-/// Q2 is not positive definite.
-///
-/// # Example
-/// ```
-/// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
-/// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
-/// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
-/// assert!((c.mu2 - 2.25).abs() < 1e-15);
-/// assert!((c.lambda - 0.5).abs() < 1e-15);
-/// # Ok::<(), pw85::Error>(())
-/// ```
-pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
-    let prepared = Prepared::new(r12, q1, q2)?;
-    Ok(match prepared.normalised() {
-        Some((scale, form)) => {
-            let solution = solve(&form);
-            prepared.finish(scale, solution, || {
-                crate::poly::coefficients::<Dd>(r12, q1, q2)
-            })
-        }
-        None => Contact::COINCIDENT,
-    })
+multiversion! {
+    /// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
+    ///
+    /// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
+    /// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
+    /// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
+    /// Q2 is not positive definite.
+    ///
+    /// # Example
+    /// ```
+    /// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
+    /// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
+    /// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
+    /// assert!((c.mu2 - 2.25).abs() < 1e-15);
+    /// assert!((c.lambda - 0.5).abs() < 1e-15);
+    /// # Ok::<(), pw85::Error>(())
+    /// ```
+    pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error>
+        => contact_function_portable;
+}
+
+#[inline(always)]
+fn contact_function_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
+    Ok(Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2)))
 }
 
 /// A validated pair with its `f64` Bernstein coefficients and their error bound: everything
 /// before the λ iteration, shared by the scalar and the batched paths.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Prepared {
+    /// The Bernstein coefficients, as computed in `f64`.
     pub rational: RationalForm,
+    /// Σ|terms| of each coefficient: γ times this bounds its rounding error.
     pub bound: RationalForm,
 }
 
@@ -190,8 +190,16 @@ impl Prepared {
         if estimate <= REFINE_ABOVE {
             return scale.contact(&solution, estimate, false);
         }
+        self.refine(exact, scale)
+    }
+
+    /// The rare path: re-solve with double-double coefficients. Kept out of line so that the
+    /// common path stays small.
+    #[cold]
+    #[inline(never)]
+    fn refine(&self, exact: impl FnOnce() -> Coefficients<Dd>, fallback: Scale) -> Contact {
         let refined = exact().to_f64();
-        let scale = Scale::of(&refined).unwrap_or(scale);
+        let scale = Scale::of(&refined).unwrap_or(fallback);
         let solution = solve(&scale.apply(&refined));
         let estimate = GAMMA_DD * solution.amplification(&self.bound, scale) + EVAL;
         scale.contact(&solution, estimate, true)
@@ -221,7 +229,8 @@ pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Conta
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDetails, Error> {
-    let contact = Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2));
+    let contact =
+        Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2));
     let p = pencil3::<f64>(r12, q1, q2);
     // adj Q(λ) = s² adj Q1 + st M + t² adj Q2, from the same (possibly refined) arithmetic as
     // the coefficients, so that s = adj Q(λ) r / b(λ) is as accurate as μ².
@@ -297,7 +306,7 @@ impl Solution {
 }
 
 /// The maximiser of a normalised rational form (coefficients non-negative, not all zero).
-#[inline]
+#[inline(always)]
 pub(crate) fn solve(r: &RationalForm) -> Solution {
     let (form, mut search, reversed) = start(r);
     while !search.done {
@@ -383,9 +392,13 @@ fn power_of_two_below(x: f64) -> f64 {
 /// All fifteen inputs finite, checked in one pass (x − x is NaN exactly for NaN and ±∞); the
 /// slow search for the culprit runs only when the check fails.
 #[inline(always)]
-fn check_inputs_finite(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<(), Error> {
+pub(crate) fn check_inputs_finite(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<(), Error> {
     #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
-    let probe = r12.iter().chain(q1).chain(q2).fold(0.0, |acc, &x| acc + (x - x));
+    let probe = r12
+        .iter()
+        .chain(q1)
+        .chain(q2)
+        .fold(0.0, |acc, &x| acc + (x - x));
     if probe == 0.0 {
         return Ok(());
     }
@@ -409,6 +422,7 @@ pub(crate) fn check_finite(argument: Argument, values: &[f64]) -> Result<(), Err
 /// last two decided in double-double when their `f64` value is within its rounding error of 0
 /// (a needle of aspect ratio 1e4 has det Q ≈ 1e-16 from entries of order 1). `det_magnitude`
 /// is Σ|terms| of the determinant, as computed by the `Mag` arithmetic.
+#[inline(always)]
 pub(crate) fn check_positive_definite(
     argument: Argument,
     q: &Sym3,

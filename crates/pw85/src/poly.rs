@@ -22,13 +22,13 @@
 //! every α and β is non-negative, so on 0 ≤ λ ≤ 1 each of a, b and f is a sum of non-negative
 //! terms: evaluating them loses no digits, whatever the conditioning of Q(λ). All the
 //! cancellation sits in the coefficients themselves, where it can be measured and, when needed,
-//! removed with extra precision (see [`crate::contact`]).
+//! removed with extra precision (see [`crate::contact_function`]).
 
 use crate::arith::Arith;
 use crate::arith::is_positive;
 use crate::sym::{
     Sym3, adjugate_generic, det_generic, det_sym, frobenius_generic, lift6, mixed_adjugate_generic,
-    outer_generic, quadratic_form_generic, solve_ldlt, xt_adj_x,
+    quadratic_form_generic, solve_ldlt, xt_adj_x,
 };
 
 /// Q(λ) = (1 − λ) Q1 + λ Q2 (eq. 10).
@@ -124,6 +124,12 @@ pub(crate) struct LogDerivatives {
 }
 
 impl RationalForm {
+    /// Two unit spheres at unit distance: a valid placeholder for lanes that carry no pair.
+    pub(crate) const UNIT: RationalForm = RationalForm {
+        alpha: [1.0, 2.0, 1.0],
+        beta: [1.0, 3.0, 3.0, 1.0],
+    };
+
     /// The Bernstein coefficients of a pair of ellipsoids (computed in `f64`).
     pub fn new(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Self {
         coefficients::<f64>(r12, q1, q2).to_f64()
@@ -201,7 +207,7 @@ impl RationalForm {
     /// Returns (n₁, n₂, P a b). The iteration is bound by the latency of its dependency chain,
     /// so one division per step instead of five matters.
     #[inline(always)]
-    fn newton_terms(&self, lambda: f64) -> (f64, f64, f64) {
+    pub(crate) fn newton_terms(&self, lambda: f64) -> (f64, f64, f64) {
         let (s, t) = (1.0 - lambda, lambda);
         let [a0, a1, a2] = self.alpha;
         let [b0, b1, b2, b3] = self.beta;
@@ -354,9 +360,15 @@ pub(crate) struct Pencil3<T> {
 
 #[inline(always)]
 pub(crate) fn pencil3<T: Arith>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Pencil3<T> {
-    let a: [T; 6] = lift6(q1);
-    let b: [T; 6] = lift6(q2);
-    let rr = outer_generic::<T>(r12);
+    pencil3_lifted(r12.map(T::lift), lift6(q1), lift6(q2))
+}
+
+/// [`pencil3`] on inputs already in arithmetic `T` (the batched path fills each `T` with the
+/// entries of several pairs).
+#[inline(always)]
+pub(crate) fn pencil3_lifted<T: Arith>(r12: [T; 3], a: [T; 6], b: [T; 6]) -> Pencil3<T> {
+    let [x0, x1, x2] = r12;
+    let rr = [x0 * x0, x0 * x1, x0 * x2, x1 * x1, x1 * x2, x2 * x2];
     let adj1 = adjugate_generic(&a);
     let adj2 = adjugate_generic(&b);
     let mixed = mixed_adjugate_generic(&a, &b);
