@@ -216,10 +216,16 @@ impl Contact {
     };
 }
 
-/// The contact function of two ellipses: `r12` ∈ ℝ², `q1`, `q2` stored as Q11, Q12, Q22.
-/// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
-/// version).
-pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error> {
+multiversion! {
+    /// The contact function of two ellipses: `r12` ∈ ℝ², `q1`, `q2` stored as Q11, Q12, Q22.
+    /// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
+    /// version).
+    pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
+        => contact_function_2d_portable;
+}
+
+#[inline(always)]
+fn contact_function_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error> {
     Ok(Prepared::new_2d(r12, q1, q2)?.contact(|| coefficients_2d::<Dd>(r12, q1, q2)))
 }
 

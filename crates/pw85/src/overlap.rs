@@ -17,6 +17,7 @@
 use crate::arith::Mag;
 use crate::arith::is_positive;
 use crate::contact::{check_finite, check_positive_definite, check_positive_definite_2d};
+use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
 use crate::poly::{Coefficients, RationalForm, coefficients_2d};
 use crate::sym::{
@@ -29,28 +30,34 @@ const SPHERE_MARGIN: f64 = 1e-12;
 /// Iterations of the bounded search before handing over to the full contact function.
 const MAX_ITERATIONS: u32 = 12;
 
-/// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
-/// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
-///
-/// Stops as soon as the answer is certain: bounding spheres apart (no overlap), inscribed
-/// spheres overlapping (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
-/// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
-/// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
-/// pencil, pay for the full [`crate::contact_function`].
-///
-/// # Errors
-/// As [`crate::contact_function`].
-///
-/// # Example
-/// ```
-/// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
-/// // Side by side, 0.15 apart across their thin direction: they overlap...
-/// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
-/// // ...and 0.25 apart they do not.
-/// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
-/// # Ok::<(), pw85::Error>(())
-/// ```
-pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
+multiversion! {
+    /// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
+    /// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
+    ///
+    /// Stops as soon as the answer is certain: bounding spheres apart (no overlap), inscribed
+    /// spheres overlapping (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
+    /// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
+    /// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
+    /// pencil, pay for the full [`crate::contact_function`].
+    ///
+    /// # Errors
+    /// As [`crate::contact_function`].
+    ///
+    /// # Example
+    /// ```
+    /// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
+    /// // Side by side, 0.15 apart across their thin direction: they overlap...
+    /// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
+    /// // ...and 0.25 apart they do not.
+    /// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
+    /// # Ok::<(), pw85::Error>(())
+    /// ```
+    pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
+        => overlap_portable;
+}
+
+#[inline(always)]
+fn overlap_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
     check_finite(Argument::R12, r12)?;
     check_finite(Argument::Q1, q1)?;
     check_finite(Argument::Q2, q2)?;
@@ -100,11 +107,17 @@ pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
     }
 }
 
-/// Whether two ellipses overlap, with the arguments of [`crate::contact_function_2d`].
-///
-/// # Errors
-/// As [`crate::contact_function_2d`].
-pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
+multiversion! {
+    /// Whether two ellipses overlap, with the arguments of [`crate::contact_function_2d`].
+    ///
+    /// # Errors
+    /// As [`crate::contact_function_2d`].
+    pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error>
+        => overlap_2d_portable;
+}
+
+#[inline(always)]
+fn overlap_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
     check_finite(Argument::R12, r12)?;
     check_finite(Argument::Q1, q1)?;
     check_finite(Argument::Q2, q2)?;
@@ -207,6 +220,7 @@ fn tangent_bound(lo: Option<Tangent>, hi: Option<Tangent>) -> f64 {
 /// The bracketed Newton iteration of [`RationalForm::maximise`], stopped as soon as a lower
 /// bound f(λ) exceeds 1 or the tangent upper bound falls below 1, beyond the rounding margin.
 /// `None` when neither happens: the caller must compute μ² accurately.
+#[inline(always)]
 fn bounded_search(rational: &RationalForm, bound: &CrudeBound) -> Option<bool> {
     let alpha = rational.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
     let beta = rational.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
