@@ -252,3 +252,34 @@ mod tests {
         }
     }
 }
+
+#[cfg(all(test, feature = "rayon"))]
+mod parallel_tests {
+    use super::*;
+
+    #[test]
+    fn parallel_batches_equal_sequential_ones() {
+        let q = crate::shape::from_axes_angles(&[1.0, 0.75, 0.5], &[0.3, 0.2, 0.1]).unwrap();
+        let pairs: Vec<Pair> = (0..5000)
+            .map(|i| {
+                let x = 0.5 + (i as f64) * 7e-4;
+                Pair {
+                    r12: [x, 0.3 * x, -0.2],
+                    q1: q,
+                    q2: q,
+                }
+            })
+            .collect();
+        let mut seq = vec![Ok(EMPTY_CONTACT); pairs.len()];
+        let mut par = vec![Ok(EMPTY_CONTACT); pairs.len()];
+        contact_functions_into(&pairs, &mut seq);
+        par_contact_functions_into(&pairs, &mut par);
+        assert_eq!(seq, par);
+        let mut vs = vec![Ok(false); pairs.len()];
+        let mut vp = vec![Ok(false); pairs.len()];
+        overlaps_into(&pairs, &mut vs);
+        par_overlaps_into(&pairs, &mut vp);
+        assert_eq!(vs, vp);
+        assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
+    }
+}

@@ -54,6 +54,15 @@ pub enum Error {
         /// Its value.
         value: f64,
     },
+    /// A full matrix given for symmetric storage is not symmetric (feature `nalgebra`).
+    NotSymmetric {
+        /// Which matrix.
+        argument: Argument,
+        /// Row of the first offending entry (0-based).
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
     /// A semi-axis length is not a positive finite number.
     InvalidSemiAxis {
         /// Which semi-axis (0-based).
@@ -85,6 +94,14 @@ impl fmt::Display for Error {
                 f,
                 "{argument} is not positive definite: its leading principal minor of order \
                  {minor} is {value:e}, not > 0"
+            ),
+            Error::NotSymmetric {
+                argument,
+                row,
+                column,
+            } => write!(
+                f,
+                "{argument} is not symmetric: entries ({row}, {column}) and ({column}, {row}) differ"
             ),
             Error::InvalidSemiAxis { index, value } => write!(
                 f,

@@ -24,6 +24,7 @@
 //!   of Birgin–Lobato–Martínez eq. 2) or a spheroid's axis.
 //! - [`sym`], [`poly`] — the building blocks (determinant, adjugate, the polynomials a, b, c of
 //!   eqs. 16–20, f and its derivatives).
+//! - `interop` (feature `nalgebra`) — conversions from and to nalgebra matrices.
 //! - [`baseline`] — the straightforward solvers (bisection on c(λ) as in PW85, Brent on f,
 //!   Newton on f′) for comparisons.
 //!
@@ -54,6 +55,8 @@ pub mod batch;
 mod contact;
 mod dispatch;
 mod error;
+#[cfg(feature = "nalgebra")]
+pub mod interop;
 mod lanes;
 mod overlap;
 pub mod poly;
