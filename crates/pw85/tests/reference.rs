@@ -61,6 +61,7 @@ fn mu2_within_1e_13_in_every_category() {
     let cases = cases();
     assert_eq!(cases.len(), 305);
     let mut by_category: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    let mut lambda_errors: BTreeMap<&str, f64> = BTreeMap::new();
     let mut worst = (0.0, String::new());
     for c in &cases {
         let contact = pw85::contact_function(&c.r12, &c.q1, &c.q2)
@@ -77,11 +78,15 @@ fn mu2_within_1e_13_in_every_category() {
             contact.lambda
         );
         if c.lambda.is_finite() && c.mu2 > 0.0 {
-            // λ₀ is a maximiser: it is only as sharp as the curvature of f allows, so it is
-            // checked loosely here; μ² is the quantity with the tight bound.
+            // Absolute: near λ = 1 a double cannot hold λ₀ to better than 1e-16 absolute,
+            // however precisely 1 − λ₀ is known inside the solver.
+            let e = (contact.lambda - c.lambda).abs();
+            let worst = lambda_errors.entry(&c.category).or_insert(0.0);
+            *worst = worst.max(e);
+            // λ₀ is a maximiser of a function that is flat there, so it is less sharp than μ²
+            // (its rounding noise enters through f′): 1e-12 absolute holds on every case.
             assert!(
-                (contact.lambda - c.lambda).abs()
-                    <= 1e-6 * c.lambda.max(1e-300).max(1.0 - c.lambda),
+                e <= 1e-12,
                 "case {} ({}): λ = {} vs {}",
                 c.id,
                 c.category,
@@ -91,17 +96,18 @@ fn mu2_within_1e_13_in_every_category() {
         }
     }
     println!(
-        "{:<22} {:>5} {:>12} {:>12}",
-        "category", "cases", "max rel err", "median"
+        "{:<22} {:>5} {:>12} {:>12} {:>10}",
+        "category", "cases", "max rel err", "median", "max |Δλ|"
     );
     for (category, errs) in &mut by_category {
         errs.sort_by(f64::total_cmp);
         println!(
-            "{:<22} {:>5} {:>12.3e} {:>12.3e}",
+            "{:<22} {:>5} {:>12.3e} {:>12.3e} {:>14.3e}",
             category,
             errs.len(),
             errs[errs.len() - 1],
-            errs[errs.len() / 2]
+            errs[errs.len() / 2],
+            lambda_errors.get(category).copied().unwrap_or(0.0)
         );
     }
     println!("worst case: {} ({:.3e})", worst.1, worst.0);
