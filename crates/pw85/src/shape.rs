@@ -68,7 +68,7 @@ pub fn from_axes_quaternion(axes: &[f64; 3], quaternion: &[f64; 4]) -> Result<Sy
     ))
 }
 
-/// Q from semi-axes and the rotation angles (θ, φ, ψ) of the packing paper's eq. 2,
+/// Q from semi-axes and the rotation angles `[φ, θ, ψ]` of the packing paper's eq. 2,
 /// R = R_z(ψ) R_y(θ) R_x(φ) (see [`rotation_from_angles`]).
 ///
 /// # Errors
@@ -140,7 +140,8 @@ pub fn rotation_from_quaternion(q: &[f64; 4]) -> Result<Rotation, Error> {
     ])
 }
 
-/// The rotation of the packing paper's eq. 2 for the angles (θ, φ, ψ):
+/// The rotation of the packing paper's eq. 2 for the angles `[φ, θ, ψ]` (in the order they
+/// are applied: about x, then y, then z; the same order as the `implicit-packing` crate):
 ///
 /// ```text
 ///     ⎡ cθ cψ   sφ sθ cψ − cφ sψ   sφ sψ + cφ sθ cψ ⎤
@@ -148,8 +149,8 @@ pub fn rotation_from_quaternion(q: &[f64; 4]) -> Result<Rotation, Error> {
 ///     ⎣ −sθ     sφ cθ              cφ cθ            ⎦
 /// ```
 pub fn rotation_from_angles(angles: &[f64; 3]) -> Rotation {
-    let (st, ct) = angles[0].sin_cos();
-    let (sf, cf) = angles[1].sin_cos();
+    let (sf, cf) = angles[0].sin_cos();
+    let (st, ct) = angles[1].sin_cos();
     let (sp, cp) = angles[2].sin_cos();
     [
         [ct * cp, sf * st * cp - cf * sp, sf * sp + cf * st * cp],
