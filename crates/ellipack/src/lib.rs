@@ -4,8 +4,10 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 pub mod error;
+pub mod measure;
 pub mod output;
 pub mod pairs;
+pub mod table;
 
 pub use error::Error;
 

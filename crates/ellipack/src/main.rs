@@ -36,6 +36,22 @@ enum Command {
         #[arg(long, value_enum, default_value_t = CriterionArg::Contact)]
         criterion: CriterionArg,
     },
+    /// Evaluate the implicit-variable overlap measure of Birgin, Lobato and Martínez (the pair
+    /// term f, the multiplier U, d² and the projection X) for many pairs.
+    ///
+    /// Input in the layout of the reference files: 3D `cix, ciy, ciz, ai, bi, ci_ax, qwi, qxi,
+    /// qyi, qzi` and the same for j (quaternion w, x, y, z; semi-axis k along column k of the
+    /// rotation); 2D `cix, ciy, ai, bi, theta_i, cjx, cjy, aj, bj, theta_j` (detected from the
+    /// header). Output columns: case_id, U, d2, eps, f, overlap, X_1, X_2[, X_3], error; X is
+    /// blank where the projection is not unique.
+    Measure {
+        /// The pairs (CSV).
+        #[arg(long)]
+        input: PathBuf,
+        /// Where to write the results (CSV, written atomically). Default: standard output.
+        #[arg(long)]
+        output: Option<PathBuf>,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -61,7 +77,37 @@ fn run(cli: Cli) -> Result<(), Error> {
             output,
             criterion,
         } => contact(input, output, criterion),
+        Command::Measure { input, output } => measure(input, output),
     }
+}
+
+fn read_input(path: &PathBuf) -> Result<String, Error> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.clone(),
+        source,
+    })
+}
+
+/// Writes a result table to `output` (atomically) or standard output, and says what happened.
+fn deliver(table: &str, rows: usize, failed: usize, output: Option<&PathBuf>) -> Result<(), Error> {
+    match output {
+        Some(path) => ellipack::output::write_atomically(path, table.as_bytes())?,
+        None => print!("{table}"),
+    }
+    if failed > 0 {
+        eprintln!("{failed} of {rows} rows failed: see their `error` column");
+    }
+    if let Some(path) = output {
+        eprintln!("wrote {rows} rows to {}", path.display());
+    }
+    Ok(())
+}
+
+fn measure(input: PathBuf, output: Option<PathBuf>) -> Result<(), Error> {
+    let text = read_input(&input)?;
+    let (table, failed) = ellipack::measure::measure(&text, &input.display().to_string())?;
+    let rows = table.lines().count() - 1;
+    deliver(&table, rows, failed, output.as_ref())
 }
 
 fn contact(
@@ -70,13 +116,7 @@ fn contact(
     criterion: CriterionArg,
 ) -> Result<(), Error> {
     let (text, name) = match &input {
-        Some(path) => (
-            std::fs::read_to_string(path).map_err(|source| Error::Io {
-                path: path.clone(),
-                source,
-            })?,
-            path.display().to_string(),
-        ),
+        Some(path) => (read_input(path)?, path.display().to_string()),
         None => {
             eprintln!("no --input given: evaluating the bundled example pairs");
             (

@@ -10,6 +10,7 @@
 //! alone), numbers with 17 significant digits so that they read back to the same double.
 
 use crate::Error;
+use crate::table::{exact, quote, read_numeric_rows};
 use pw85::batch::Pair;
 
 /// The input columns, in the order they fill a [`Pair`].
@@ -36,64 +37,18 @@ pub struct PairRow {
 /// [`Error::MissingColumn`] when a required column is absent, [`Error::Empty`] without rows. A
 /// cell that is not a number is not an error of the file: that row carries the message.
 pub fn read_pairs(text: &str, source_name: &str) -> Result<Vec<PairRow>, Error> {
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let malformed = |e: csv::Error| Error::MalformedCsv {
-        source_name: source_name.to_string(),
-        line: e.position().map_or(0, csv::Position::line),
-        message: e.to_string(),
-    };
-    let header = reader.headers().map_err(malformed)?.clone();
-    let find = |name: &str| header.iter().position(|h| h == name);
-    let mut columns = [0usize; 15];
-    for (slot, name) in columns.iter_mut().zip(PAIR_COLUMNS) {
-        *slot = find(name).ok_or_else(|| Error::MissingColumn {
-            source_name: source_name.to_string(),
-            column: name.to_string(),
-        })?;
-    }
-    let id_column = find("case_id");
-    let mut rows = Vec::new();
-    for (index, record) in reader.records().enumerate() {
-        let record = record.map_err(malformed)?;
-        let line = record
-            .position()
-            .map_or(index as u64 + 2, csv::Position::line);
-        let case_id = id_column
-            .and_then(|c| record.get(c))
-            .map_or_else(|| (index + 1).to_string(), str::to_string);
-        let mut values = [0.0; 15];
-        let mut pair = Ok(());
-        for (k, (&c, name)) in columns.iter().zip(PAIR_COLUMNS).enumerate() {
-            let cell = record.get(c).unwrap_or("");
-            match cell.parse::<f64>() {
-                Ok(v) => values[k] = v,
-                Err(_) => {
-                    pair = Err(format!(
-                        "line {line}, column {} ({name}): `{cell}` is not a number",
-                        c + 1
-                    ));
-                    break;
-                }
-            }
-        }
-        rows.push(PairRow {
-            case_id,
-            line,
-            pair: pair.map(|()| Pair {
-                r12: [values[0], values[1], values[2]],
-                q1: core::array::from_fn(|k| values[3 + k]),
-                q2: core::array::from_fn(|k| values[9 + k]),
+    Ok(read_numeric_rows(text, source_name, &PAIR_COLUMNS)?
+        .into_iter()
+        .map(|row| PairRow {
+            case_id: row.case_id,
+            line: row.line,
+            pair: row.values.map(|v| Pair {
+                r12: [v[0], v[1], v[2]],
+                q1: core::array::from_fn(|k| v[3 + k]),
+                q2: core::array::from_fn(|k| v[9 + k]),
             }),
-        });
-    }
-    if rows.is_empty() {
-        return Err(Error::Empty {
-            source_name: source_name.to_string(),
-        });
-    }
-    Ok(rows)
+        })
+        .collect())
 }
 
 /// What `ellipack contact` computes.
@@ -129,7 +84,9 @@ pub fn evaluate(rows: &[PairRow], criterion: Criterion) -> (String, usize) {
             (Err(message), Criterion::Contact) => format!("{id},,,,{}", quote(message)),
             (Err(message), Criterion::Overlap) => format!("{id},,{}", quote(message)),
             (Ok(_), Criterion::Contact) => match contacts.next() {
-                Some(Ok(c)) => format!("{id},{:.16e},{:.16e},{},", c.mu2, c.lambda, c.mu2 < 1.0),
+                Some(Ok(c)) => {
+                    format!("{id},{},{},{},", exact(c.mu2), exact(c.lambda), c.mu2 < 1.0)
+                }
                 Some(Err(e)) => format!("{id},,,,{}", quote(&format!("line {}: {e}", row.line))),
                 None => unreachable!("one result per readable row"),
             },
@@ -148,15 +105,6 @@ pub fn evaluate(rows: &[PairRow], criterion: Criterion) -> (String, usize) {
         out.push('\n');
     }
     (out, failed)
-}
-
-/// A CSV field, quoted when it needs to be.
-fn quote(field: &str) -> String {
-    if field.contains([',', '"', '\n']) {
-        format!("\"{}\"", field.replace('"', "\"\""))
-    } else {
-        field.to_string()
-    }
 }
 
 #[cfg(test)]

@@ -96,3 +96,72 @@ fn malformed_file_is_an_error_naming_the_line() {
     assert!(!output.status.success());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Relative error, or absolute error where the reference is below 1e-2 (the bound of the
+/// measure issue: 1e-12 relative, 1e-14 absolute).
+fn within(value: f64, reference: f64) -> bool {
+    if reference.abs() < 1e-2 {
+        (value - reference).abs() <= 1e-14
+    } else {
+        ((value - reference) / reference).abs() <= 1e-12
+    }
+}
+
+#[test]
+fn measure_accepts_both_reference_files_as_they_are() {
+    for (file, x_columns) in [("blm_3d.csv", 3), ("blm_2d.csv", 2)] {
+        let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/reference")
+            .join(file);
+        let output = ellipack()
+            .args(["measure", "--input"])
+            .arg(&reference)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let results = String::from_utf8(output.stdout).unwrap();
+        let reference = std::fs::read_to_string(&reference).unwrap();
+        let mut lines = results.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(header.len(), 7 + x_columns, "{header:?}");
+        let ref_header: Vec<&str> = reference.lines().next().unwrap().split(',').collect();
+        let col = |name: &str| ref_header.iter().position(|h| *h == name).unwrap();
+        let (u, d2, f) = (col("U"), col("d2"), col("f"));
+        let mut n = 0;
+        for (ours, theirs) in lines.zip(reference.lines().skip(1)) {
+            let ours: Vec<&str> = ours.split(',').collect();
+            let theirs: Vec<&str> = theirs.split(',').collect();
+            assert_eq!(ours[0], theirs[0], "{file}: case_id copied through");
+            let num = |s: &str| s.parse::<f64>().unwrap();
+            assert!(
+                within(num(ours[1]), num(theirs[u])),
+                "{file} case {}: U",
+                ours[0]
+            );
+            assert!(
+                within(num(ours[2]), num(theirs[d2])),
+                "{file} case {}: d2",
+                ours[0]
+            );
+            assert_eq!(
+                num(ours[4]) > 0.0,
+                num(theirs[f]) > 0.0,
+                "{file} case {}: verdict",
+                ours[0]
+            );
+            assert_eq!(ours[5], (num(theirs[f]) > 0.0).to_string());
+            assert_eq!(
+                *ours.last().unwrap(),
+                "",
+                "{file} case {}: no error",
+                ours[0]
+            );
+            n += 1;
+        }
+        assert!(n > 100, "{file}: {n} rows");
+    }
+}

@@ -1,0 +1,74 @@
+//! Parallel pair enumeration (feature `rayon`): the non-empty cells are split into
+//! contiguous ranges and each range runs the serial stencil. A pair of cells is visited
+//! from the earlier of the two, so the ranges never visit a pair twice.
+
+use rayon::prelude::*;
+
+use crate::grid::Grid;
+use crate::pairs::Candidates;
+
+impl<const D: usize> Grid<D> {
+    /// Cells per task: enough pairs to amortise a task, enough tasks to balance the load.
+    fn chunk_len(&self) -> usize {
+        let threads = rayon::current_num_threads().max(1);
+        (self.nonempty.len() / (8 * threads)).max(64)
+    }
+
+    /// Parallel [`for_each_candidate_pair`](Self::for_each_candidate_pair): `f(i, j)` for
+    /// every candidate pair `i < j`, exactly once, from several threads in no fixed order.
+    pub fn par_for_each_candidate_pair<F>(&self, f: F)
+    where
+        F: Fn(usize, usize) + Sync,
+    {
+        self.nonempty
+            .par_chunks(self.chunk_len())
+            .for_each(|slots| self.drive(slots, &mut Candidates { f: &f }));
+        (0..self.large_ids.len())
+            .into_par_iter()
+            .for_each(|k| self.large_candidates(k..k + 1, &mut &f));
+    }
+
+    /// Parallel [`for_each_close_pair`](Self::for_each_close_pair): `f(i, j, delta, dist2)`
+    /// for every pair `i < j` closer than the reach, exactly once, in no fixed order.
+    pub fn par_for_each_close_pair<F>(&self, f: F)
+    where
+        F: Fn(usize, usize, [f64; D], f64) + Sync,
+    {
+        self.nonempty
+            .par_chunks(self.chunk_len())
+            .for_each(|slots| self.close_pairs_over(slots, &f));
+        (0..self.large_ids.len())
+            .into_par_iter()
+            .for_each(|k| self.large_close(k..k + 1, &mut &f));
+    }
+
+    /// Folds the close pairs in parallel: each task folds its pairs into its own `init()`
+    /// accumulator, and the accumulators are merged with `reduce`. Use it to collect pairs
+    /// or sum a pair energy without locks.
+    pub fn par_fold_close_pairs<T, I, G, R>(&self, init: I, fold: G, reduce: R) -> T
+    where
+        T: Send,
+        I: Fn() -> T + Sync + Send,
+        G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
+        R: Fn(T, T) -> T + Sync + Send,
+    {
+        let cells = self
+            .nonempty
+            .par_chunks(self.chunk_len())
+            .map(|slots| {
+                let mut acc = init();
+                self.close_pairs_over(slots, |i, j, d, d2| fold(&mut acc, i, j, d, d2));
+                acc
+            })
+            .reduce(&init, &reduce);
+        let large = (0..self.large_ids.len())
+            .into_par_iter()
+            .map(|k| {
+                let mut acc = init();
+                self.large_close(k..k + 1, &mut |i, j, d, d2| fold(&mut acc, i, j, d, d2));
+                acc
+            })
+            .reduce(&init, &reduce);
+        reduce(cells, large)
+    }
+}

@@ -1,0 +1,201 @@
+//! One pair term on the paper's shape (1, 0.75, 0.5) at contact distances, with and without its
+//! gradient, against `pw85::contact_function` on the same pairs in the same run.
+//!
+//! Data: 20 000 pairs from a fixed seed, uniformly random orientations, centre distance along a
+//! random direction scaled so that the PW85 contact function is μ² = 2^W, W uniform in
+//! [−0.5, 0.5]: every pair is within 20% of contact, about half overlap.
+//!
+//! After criterion's report the bench prints ns per pair (best of several passes) and the ratios.
+#![allow(clippy::needless_range_loop)]
+
+use criterion::{Criterion, Throughput};
+use implicit_packing::derivatives::{pair_derivatives, pair_gradient};
+use implicit_packing::{Body, Ellipsoid, overlap_measure};
+use std::hint::black_box;
+use std::time::Instant;
+
+const PAIRS: usize = 20_000;
+
+struct SplitMix(u64);
+impl SplitMix {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn unit(&mut self, n: usize) -> Vec<f64> {
+        loop {
+            let v: Vec<f64> = (0..n).map(|_| 2.0 * self.next() - 1.0).collect();
+            let s = v.iter().map(|x| x * x).sum::<f64>();
+            if s > 1e-4 && s <= 1.0 {
+                return v.iter().map(|x| x / s.sqrt()).collect();
+            }
+        }
+    }
+}
+
+fn sym(m: &[[f64; 3]; 3]) -> [f64; 6] {
+    [m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]]
+}
+
+struct Case {
+    i: Ellipsoid,
+    j: Ellipsoid,
+    r12: [f64; 3],
+    q1: [f64; 6],
+    q2: [f64; 6],
+}
+
+fn cases() -> Vec<Case> {
+    let mut rng = SplitMix(0x00B1_0BA7);
+    let axes = [1.0, 0.75, 0.5];
+    (0..PAIRS)
+        .map(|_| {
+            let qi = rng.unit(4);
+            let qj = rng.unit(4);
+            let dir = rng.unit(3);
+            let i =
+                Body::from_quaternion([0.0; 3], axes, [qi[0], qi[1], qi[2], qi[3]]).expect("valid");
+            let j0 =
+                Body::from_quaternion([dir[0], dir[1], dir[2]], axes, [qj[0], qj[1], qj[2], qj[3]])
+                    .expect("valid");
+            let q1 = sym(&i.shape_matrix());
+            let q2 = sym(&j0.shape_matrix());
+            let mu2 = pw85::contact_function(&[dir[0], dir[1], dir[2]], &q1, &q2)
+                .expect("pw85")
+                .mu2;
+            let target = 2f64.powf(rng.next() - 0.5);
+            let scale = (target / mu2).sqrt();
+            let r12 = [dir[0] * scale, dir[1] * scale, dir[2] * scale];
+            let j = j0.with_centre(r12).expect("valid");
+            Case { i, j, r12, q1, q2 }
+        })
+        .collect()
+}
+
+fn best_ns<F: FnMut() -> f64>(mut f: F) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..7 {
+        let t = Instant::now();
+        black_box(f());
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    best * 1e9 / PAIRS as f64
+}
+
+fn main() {
+    let cases = cases();
+    let mut c = Criterion::default()
+        .sample_size(20)
+        .measurement_time(std::time::Duration::from_secs(3))
+        .configure_from_args();
+    {
+        let mut g = c.benchmark_group("pair_paper_shape_at_contact");
+        g.throughput(Throughput::Elements(PAIRS as u64));
+        g.bench_function("implicit_value", |b| {
+            b.iter(|| {
+                cases
+                    .iter()
+                    .map(|p| overlap_measure(&p.i, &p.j))
+                    .sum::<f64>()
+            })
+        });
+        g.bench_function("implicit_value_and_gradient", |b| {
+            b.iter(|| {
+                cases
+                    .iter()
+                    .map(|p| pair_gradient(&p.i, &p.j).1.centre_i[0])
+                    .sum::<f64>()
+            })
+        });
+        g.bench_function("implicit_full_derivatives", |b| {
+            b.iter(|| {
+                cases
+                    .iter()
+                    .map(|p| pair_derivatives(&p.i, &p.j).grad_f.centre_i[0])
+                    .sum::<f64>()
+            })
+        });
+        g.bench_function("pw85_contact_function", |b| {
+            b.iter(|| {
+                cases
+                    .iter()
+                    .map(|p| {
+                        pw85::contact_function(&p.r12, &p.q1, &p.q2)
+                            .map(|c| c.mu2)
+                            .unwrap_or(0.0)
+                    })
+                    .sum::<f64>()
+            })
+        });
+        g.finish();
+    }
+    let value = best_ns(|| cases.iter().map(|p| overlap_measure(&p.i, &p.j)).sum());
+    let grad = best_ns(|| {
+        cases
+            .iter()
+            .map(|p| pair_gradient(&p.i, &p.j).1.centre_i[0])
+            .sum()
+    });
+    let full = best_ns(|| {
+        cases
+            .iter()
+            .map(|p| pair_derivatives(&p.i, &p.j).grad_f.centre_i[0])
+            .sum()
+    });
+    let pw = best_ns(|| {
+        cases
+            .iter()
+            .map(|p| {
+                pw85::contact_function(&p.r12, &p.q1, &p.q2)
+                    .map(|c| c.mu2)
+                    .unwrap_or(0.0)
+            })
+            .sum()
+    });
+    let overlapping = cases
+        .iter()
+        .filter(|p| overlap_measure(&p.i, &p.j) > 0.0)
+        .count();
+    println!("pairs: {PAIRS}, overlapping: {overlapping}");
+    println!("implicit pair term, value only:            {value:8.1} ns/pair");
+    println!(
+        "implicit pair term, value + gradient:      {grad:8.1} ns/pair (gradient where f > 0)"
+    );
+    println!("implicit pair term, f, d2, U + gradients:  {full:8.1} ns/pair (always)");
+    println!("pw85::contact_function:                    {pw:8.1} ns/pair");
+    println!(
+        "ratio value+gradient / pw85:               {:8.2}",
+        grad / pw
+    );
+    println!(
+        "ratio value / pw85:                        {:8.2}",
+        value / pw
+    );
+    // The overlapping half alone: every pair needs the full solve (no cheap exclusion).
+    let over: Vec<&Case> = cases
+        .iter()
+        .filter(|p| overlap_measure(&p.i, &p.j) > 0.0)
+        .collect();
+    let per = |t: f64| t * PAIRS as f64 / over.len() as f64;
+    let grad_over = per(best_ns(|| {
+        over.iter()
+            .map(|p| pair_gradient(&p.i, &p.j).1.centre_i[0])
+            .sum()
+    }));
+    let pw_over = per(best_ns(|| {
+        over.iter()
+            .map(|p| {
+                pw85::contact_function(&p.r12, &p.q1, &p.q2)
+                    .map(|c| c.mu2)
+                    .unwrap_or(0.0)
+            })
+            .sum()
+    }));
+    println!(
+        "overlapping pairs only: value + gradient {grad_over:8.1} ns/pair, pw85 {pw_over:8.1} ns/pair, ratio {:.2}",
+        grad_over / pw_over
+    );
+}

@@ -1,0 +1,786 @@
+//! Derivatives of the pair term (Appendix A): first derivatives in the envelope-theorem form,
+//! and exact directional derivatives of the gradient (Hessian–vector products).
+//!
+//! Write `Δ = c_i − c_j`, `M = Q_j P_j⁻¹ Q_jᵀ` (so `E_j = {p : (p − c_j)ᵀ M (p − c_j) ≤ 1}`),
+//! and map the projection back to the world frame: the contact point is `p* = c_j + y` with
+//! `y = Q_i P_i^½ X`, and `n = M y` is half the gradient of `E_j`'s quadratic form there. A
+//! rotation angle `α` moves `Q` by `∂Q/∂α = [ω_α]× Q` ([`crate::shape`]).
+//!
+//! **`d²`.** `d²(p) = min {|x − c|² : xᵀ S x = 1}`, so by the envelope theorem its derivative is
+//! that of the Lagrangian `|x − c|² + U (xᵀ S x − 1)` at fixed `(X, U)`; no implicit solve is
+//! needed. Written out, a force and two torques:
+//!
+//! ```text
+//! ∂d²/∂c_i = 2U n = 2 Q_i P_i^−½ (c − X) =: F,      ∂d²/∂c_j = −F,
+//! ∂d²/∂α_i = ω_α · ((p* − c_i) × F),               ∂d²/∂α_j = −ω_α · ((p* − c_j) × F).
+//! ```
+//!
+//! **`U`.** Differentiating `G(U, p) = xᵀ S x − 1` with `x = (I + U S)⁻¹ c` (the implicit-function
+//! step of A.1, reduced to one scalar equation):
+//!
+//! ```text
+//! dU/dp = (2 zᵀ ∂c + xᵀ ∂S x − 2U zᵀ ∂S x) / (2 Σ_k s_k² x̂_k² / t_k),   z = (I + U S)⁻¹ S X.
+//! ```
+//!
+//! In the hard case `U = −1/λ_max(S)` and `dU = v_topᵀ ∂S v_top / λ_max²`.
+//!
+//! **`f`** (eq. 34): `∇f = −2 max{0, 1 − d²} ∇d² − 2 max{0, ε − U} ∇U`.
+//!
+//! [`a1_reference`] solves the `(n+1) × (n+1)` linear system of Appendix A.1 for `dX/dp`, `dU/dp`
+//! parameter by parameter, with `S` formed explicitly: slow and less accurate on stiff pairs, it
+//! is kept as the scalar reference the fast path is tested against.
+//!
+//! **Second derivatives.** [`pair_gradient_derivative`] differentiates the force/torque form of
+//! `∇f` once more along a direction, with `δX`, `δU` from the A.1 system solved in the
+//! eigenbasis: exact Hessian–vector products without forming the 12×12 Hessian of A.2.
+//!
+//! # References
+//! Birgin, Lobato, Martínez (2016), Appendix A.1–A.2, eqs. (38)–(41).
+
+use crate::linalg::torque;
+use crate::pair::{
+    PairSolution, bounding_spheres_apart, separated_along_centre_line, solve_pair, solve_pair_with,
+};
+use crate::shape::{Body, angular_velocities_3d};
+
+/// Gradient of a scalar pair quantity with respect to the placements of `i` and `j`.
+///
+/// Rotational derivatives are given as torques: for any angle `α` of body `i` with world-frame
+/// angular velocity `ω_α` (`∂Q_i/∂α = [ω_α]× Q_i`), the derivative is `ω_α · torque_i`. In 2D only
+/// the third component is non-zero and equals the derivative with respect to `θ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairGradient<const N: usize> {
+    /// Derivative with respect to the centre `c_i`.
+    pub centre_i: [f64; N],
+    /// Derivative with respect to the centre `c_j`.
+    pub centre_j: [f64; N],
+    /// Torque on `i`: `∂/∂α_i = ω_α · torque_i`.
+    pub torque_i: [f64; 3],
+    /// Torque on `j`.
+    pub torque_j: [f64; 3],
+}
+
+impl<const N: usize> PairGradient<N> {
+    /// The zero gradient.
+    pub const ZERO: Self = PairGradient {
+        centre_i: [0.0; N],
+        centre_j: [0.0; N],
+        torque_i: [0.0; 3],
+        torque_j: [0.0; 3],
+    };
+
+    fn axpy(&mut self, a: f64, other: &Self) {
+        for k in 0..N {
+            self.centre_i[k] += a * other.centre_i[k];
+            self.centre_j[k] += a * other.centre_j[k];
+        }
+        for k in 0..3 {
+            self.torque_i[k] += a * other.torque_i[k];
+            self.torque_j[k] += a * other.torque_j[k];
+        }
+    }
+}
+
+/// Derivatives with respect to the angles `[φ, θ, ψ]` of eq. 2 from a torque.
+pub fn angle_gradient_3d(angles: [f64; 3], torque: &[f64; 3]) -> [f64; 3] {
+    let w = angular_velocities_3d(angles);
+    [
+        w[0][0] * torque[0] + w[0][1] * torque[1] + w[0][2] * torque[2],
+        w[1][0] * torque[0] + w[1][1] * torque[1] + w[1][2] * torque[2],
+        w[2][0] * torque[0] + w[2][1] * torque[1] + w[2][2] * torque[2],
+    ]
+}
+
+/// The pair term `f` with its gradient, and `d²`, `U` with theirs.
+#[derive(Debug, Clone, Copy)]
+pub struct PairDerivatives<const N: usize> {
+    /// `f` of eq. 34.
+    pub f: f64,
+    /// `∇f`.
+    pub grad_f: PairGradient<N>,
+    /// `d²`.
+    pub d2: f64,
+    /// `∇d²` (envelope theorem).
+    pub grad_d2: PairGradient<N>,
+    /// `U`.
+    pub u: f64,
+    /// `∇U` (implicit function).
+    pub grad_u: PairGradient<N>,
+}
+
+/// World-frame vectors of a solved pair: `Δ`, `y`, the force `F = ∂d²/∂c_i`.
+struct Frames<const N: usize> {
+    delta: [f64; N],
+    y: [f64; N],
+    force: [f64; N],
+}
+
+/// `Q_i P_i^{±½} V w` for a vector `w` in the eigenbasis.
+#[inline(always)]
+fn to_world<const N: usize>(
+    i: &Body<N>,
+    sol: &PairSolution<N>,
+    w: &[f64; N],
+    power: f64,
+) -> [f64; N] {
+    let q = i.rotation();
+    let l = i.semi_axes();
+    // On the direct route the basis is the i-frame itself (V = I).
+    let mut frame = [0.0; N];
+    if sol.direct {
+        frame = *w;
+    } else {
+        for k in 0..N {
+            for m in 0..N {
+                frame[m] += sol.svd.v[k][m] * w[k];
+            }
+        }
+    }
+    for m in 0..N {
+        frame[m] = if power > 0.0 {
+            frame[m] * l[m]
+        } else {
+            frame[m] / l[m]
+        };
+    }
+    let mut out = [0.0; N];
+    for r in 0..N {
+        for m in 0..N {
+            out[r] += q[r][m] * frame[m];
+        }
+    }
+    out
+}
+
+fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Frames<N> {
+    let ci = i.centre();
+    let cj = j.centre();
+    let mut delta = [0.0; N];
+    for k in 0..N {
+        delta[k] = ci[k] - cj[k];
+    }
+    let y = to_world(i, sol, &sol.proj.xhat, 1.0);
+    // c − X from the projection, where it was computed without cancellation.
+    let mut dhat = [0.0; N];
+    for k in 0..N {
+        dhat[k] = 2.0 * sol.proj.dhat[k];
+    }
+    let force = to_world(i, sol, &dhat, -1.0);
+    Frames { delta, y, force }
+}
+
+fn grad_d2<const N: usize>(fr: &Frames<N>) -> PairGradient<N> {
+    let mut lever_i = [0.0; N];
+    for k in 0..N {
+        lever_i[k] = fr.y[k] - fr.delta[k];
+    }
+    let ti = torque(&lever_i, &fr.force);
+    let tj = torque(&fr.y, &fr.force);
+    let mut g = PairGradient::ZERO;
+    for k in 0..N {
+        g.centre_i[k] = fr.force[k];
+        g.centre_j[k] = -fr.force[k];
+    }
+    for k in 0..3 {
+        g.torque_i[k] = ti[k];
+        g.torque_j[k] = -tj[k];
+    }
+    g
+}
+
+fn grad_u<const N: usize>(i: &Body<N>, sol: &PairSolution<N>, fr: &Frames<N>) -> PairGradient<N> {
+    let mut g = PairGradient::ZERO;
+    let mut s = [0.0; N];
+    for k in 0..N {
+        s[k] = sol.svd.sigma[k] * sol.svd.sigma[k];
+    }
+    if sol.proj.hard {
+        let mut top = 0;
+        for k in 1..N {
+            if s[k] > s[top] {
+                top = k;
+            }
+        }
+        let mut e = [0.0; N];
+        e[top] = 1.0;
+        let yv = to_world(i, sol, &e, 1.0);
+        e[top] = s[top];
+        let nv = to_world(i, sol, &e, -1.0);
+        let t = torque(&yv, &nv);
+        let scale = 2.0 / (s[top] * s[top]);
+        for k in 0..3 {
+            g.torque_i[k] = scale * t[k];
+            g.torque_j[k] = -scale * t[k];
+        }
+        return g;
+    }
+    let u = sol.proj.u;
+    let mut sx = [0.0; N];
+    let mut zhat = [0.0; N];
+    let mut sz = [0.0; N];
+    let mut den = 0.0;
+    for k in 0..N {
+        let xk = sol.proj.xhat[k];
+        sx[k] = s[k] * xk;
+        zhat[k] = sx[k] / sol.proj.t[k];
+        sz[k] = s[k] * zhat[k];
+        den += sx[k] * zhat[k];
+    }
+    let den = 2.0 * den;
+    let n = to_world(i, sol, &sx, -1.0);
+    let uw = to_world(i, sol, &zhat, -1.0);
+    let yz = to_world(i, sol, &zhat, 1.0);
+    let nz = to_world(i, sol, &sz, -1.0);
+    let y = &fr.y;
+    let y_n = torque(y, &n);
+    let uw_delta = torque(&uw, &fr.delta);
+    let yz_n = torque(&yz, &n);
+    let y_nz = torque(y, &nz);
+    for k in 0..N {
+        g.centre_i[k] = 2.0 * uw[k] / den;
+        g.centre_j[k] = -g.centre_i[k];
+    }
+    for k in 0..3 {
+        g.torque_i[k] = (2.0 * uw_delta[k] + 2.0 * y_n[k] - 2.0 * u * (yz_n[k] + y_nz[k])) / den;
+        // n × y_z = −(y_z × n).
+        g.torque_j[k] = (-2.0 * y_n[k] - 2.0 * u * (-yz_n[k] - y_nz[k])) / den;
+    }
+    g
+}
+
+/// `f`, `d²`, `U` of eq. 34 with their gradients with respect to both placements.
+pub fn pair_derivatives<const N: usize>(i: &Body<N>, j: &Body<N>) -> PairDerivatives<N> {
+    let sol = solve_pair_with(i, j, false);
+    let fr = frames(i, j, &sol);
+    let gd = grad_d2(&fr);
+    let gu = grad_u(i, &sol, &fr);
+    let a = (1.0 - sol.proj.d2).max(0.0);
+    let b = (sol.eps - sol.proj.u).max(0.0);
+    let mut gf = PairGradient::ZERO;
+    gf.axpy(-2.0 * a, &gd);
+    gf.axpy(-2.0 * b, &gu);
+    PairDerivatives {
+        f: a * a + b * b,
+        grad_f: gf,
+        d2: sol.proj.d2,
+        grad_d2: gd,
+        u: sol.proj.u,
+        grad_u: gu,
+    }
+}
+
+/// The pair term `f` and its gradient, doing only the work that is needed: nothing when the
+/// bounding spheres are apart or the centre-line plane separates the pair, no `∇U` unless
+/// `U < ε`, no gradient at all when `f = 0`.
+pub fn pair_gradient<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>) {
+    if bounding_spheres_apart(i, j) || separated_along_centre_line(i, j) {
+        return (0.0, PairGradient::ZERO);
+    }
+    let sol = solve_pair(i, j);
+    let a = (1.0 - sol.proj.d2).max(0.0);
+    let b = (sol.eps - sol.proj.u).max(0.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, PairGradient::ZERO);
+    }
+    let fr = frames(i, j, &sol);
+    let mut gf = PairGradient::ZERO;
+    if a > 0.0 {
+        gf.axpy(-2.0 * a, &grad_d2(&fr));
+    }
+    if b > 0.0 {
+        // ∇U works in the eigenbasis, which the direct route does not compute.
+        if sol.direct {
+            let full = solve_pair_with(i, j, false);
+            let fr_full = frames(i, j, &full);
+            gf.axpy(-2.0 * b, &grad_u(i, &full, &fr_full));
+        } else {
+            gf.axpy(-2.0 * b, &grad_u(i, &sol, &fr));
+        }
+    }
+    (a * a + b * b, gf)
+}
+
+/// Scalar reference: `d d²/dp` and `dU/dp` through the linear system of Appendix A.1, for one
+/// parameter `p` given by the derivatives of the placements it moves: `dc_i`, `dc_j` (centre
+/// velocities) and `w_i`, `w_j` (world angular velocities, `dQ = [w]× Q`; in 2D only `w[2]`).
+///
+/// Solves, with `S` formed explicitly,
+///
+/// ```text
+/// [ I + U S   S X ] [dX]     [ U ∂S X − ∂c ]
+/// [ (S X)ᵀ     0  ] [dU] = − [ ½ Xᵀ ∂S X  ]
+/// ```
+///
+/// and returns `(d d²/dp, dU/dp)` with `d d²/dp = 2 (X − c)ᵀ (dX − ∂c)`.
+pub fn a1_reference<const N: usize>(
+    i: &Body<N>,
+    j: &Body<N>,
+    dc_i: &[f64; N],
+    dc_j: &[f64; N],
+    w_i: &[f64; 3],
+    w_j: &[f64; 3],
+) -> (f64, f64) {
+    let sol = solve_pair_with(i, j, false);
+    let (qi, qj, li, lj) = (i.rotation(), j.rotation(), i.semi_axes(), j.semi_axes());
+    let (ci, cj) = (i.centre(), j.centre());
+    // [w]× as an N×N matrix (2D: the rotation generator about e_z).
+    let skew = |w: &[f64; 3]| -> [[f64; N]; N] {
+        let mut k = [[0.0; N]; N];
+        if N == 3 {
+            let full = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]];
+            for r in 0..N {
+                for s in 0..N {
+                    k[r][s] = full[r][s];
+                }
+            }
+        } else {
+            k[0][1] = -w[2];
+            k[1][0] = w[2];
+        }
+        k
+    };
+    let mul = |a: &[[f64; N]; N], b: &[[f64; N]; N]| -> [[f64; N]; N] {
+        let mut c = [[0.0; N]; N];
+        for r in 0..N {
+            for s in 0..N {
+                for m in 0..N {
+                    c[r][s] += a[r][m] * b[m][s];
+                }
+            }
+        }
+        c
+    };
+    let tr = |a: &[[f64; N]; N]| -> [[f64; N]; N] {
+        let mut c = [[0.0; N]; N];
+        for r in 0..N {
+            for s in 0..N {
+                c[r][s] = a[s][r];
+            }
+        }
+        c
+    };
+    let dqi = mul(&skew(w_i), &qi);
+    let dqj = mul(&skew(w_j), &qj);
+    // S = A B Aᵀ with A = P_i^½ Q_iᵀ, B = Q_j P_j⁻¹ Q_jᵀ.
+    let mut pi_half = [[0.0; N]; N];
+    let mut pj_inv = [[0.0; N]; N];
+    let mut pi_mhalf = [[0.0; N]; N];
+    for k in 0..N {
+        pi_half[k][k] = li[k];
+        pi_mhalf[k][k] = 1.0 / li[k];
+        pj_inv[k][k] = 1.0 / (lj[k] * lj[k]);
+    }
+    let a = mul(&pi_half, &tr(&qi));
+    let da = mul(&pi_half, &tr(&dqi));
+    let bm = mul(&mul(&qj, &pj_inv), &tr(&qj));
+    let db = {
+        let x = mul(&mul(&dqj, &pj_inv), &tr(&qj));
+        let mut s = x;
+        let xt = tr(&x);
+        for r in 0..N {
+            for c in 0..N {
+                s[r][c] += xt[r][c];
+            }
+        }
+        s
+    };
+    let s_mat = mul(&mul(&a, &bm), &tr(&a));
+    let mut ds = mul(&mul(&da, &bm), &tr(&a));
+    let ds2 = mul(&mul(&a, &db), &tr(&a));
+    let ds3 = mul(&mul(&a, &bm), &tr(&da));
+    for r in 0..N {
+        for c in 0..N {
+            ds[r][c] += ds2[r][c] + ds3[r][c];
+        }
+    }
+    // c = P_i^−½ Q_iᵀ Δ; ∂c = P_i^−½ (∂Q_iᵀ Δ + Q_iᵀ ∂Δ).
+    let mut delta = [0.0; N];
+    let mut ddelta = [0.0; N];
+    for k in 0..N {
+        delta[k] = ci[k] - cj[k];
+        ddelta[k] = dc_i[k] - dc_j[k];
+    }
+    let mut dc = [0.0; N];
+    for k in 0..N {
+        let mut v = 0.0;
+        for m in 0..N {
+            v += dqi[m][k] * delta[m] + qi[m][k] * ddelta[m];
+        }
+        dc[k] = pi_mhalf[k][k] * v;
+    }
+    let x = sol.x;
+    let u = sol.proj.u;
+    let c = sol.c;
+    let mut sx = [0.0; N];
+    let mut dsx = [0.0; N];
+    for r in 0..N {
+        for m in 0..N {
+            sx[r] += s_mat[r][m] * x[m];
+            dsx[r] += ds[r][m] * x[m];
+        }
+    }
+    // The (N+1)×(N+1) system, solved by Gaussian elimination with partial pivoting.
+    let mut m = [[0.0; 4]; 4];
+    let mut rhs = [0.0; 4];
+    for r in 0..N {
+        for s in 0..N {
+            m[r][s] = u * s_mat[r][s] + if r == s { 1.0 } else { 0.0 };
+        }
+        m[r][N] = sx[r];
+        m[N][r] = sx[r];
+        rhs[r] = -(u * dsx[r] - dc[r]);
+    }
+    rhs[N] = -0.5 * (0..N).map(|k| x[k] * dsx[k]).sum::<f64>();
+    let dim = N + 1;
+    for col in 0..dim {
+        let mut p = col;
+        for r in col + 1..dim {
+            if m[r][col].abs() > m[p][col].abs() {
+                p = r;
+            }
+        }
+        m.swap(col, p);
+        rhs.swap(col, p);
+        for r in col + 1..dim {
+            let factor = m[r][col] / m[col][col];
+            for s in col..dim {
+                m[r][s] -= factor * m[col][s];
+            }
+            rhs[r] -= factor * rhs[col];
+        }
+    }
+    let mut sol_vec = [0.0; 4];
+    for r in (0..dim).rev() {
+        let mut v = rhs[r];
+        for s in r + 1..dim {
+            v -= m[r][s] * sol_vec[s];
+        }
+        sol_vec[r] = v / m[r][r];
+    }
+    let mut dd2 = 0.0;
+    for k in 0..N {
+        dd2 += 2.0 * (x[k] - c[k]) * (sol_vec[k] - dc[k]);
+    }
+    (dd2, sol_vec[N])
+}
+
+// ---------------------------------------------------------------------------------------------
+// Second derivatives: directional derivatives of the gradient (Hessian–vector products).
+// ---------------------------------------------------------------------------------------------
+
+/// A direction in the placement space of a pair: centre velocities and world angular velocities
+/// (`dQ = [w]× Q`; in 2D only `w[2]` is used).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairDirection<const N: usize> {
+    /// `δc_i`.
+    pub centre_i: [f64; N],
+    /// `δc_j`.
+    pub centre_j: [f64; N],
+    /// Angular velocity of `i`.
+    pub spin_i: [f64; 3],
+    /// Angular velocity of `j`.
+    pub spin_j: [f64; 3],
+}
+
+/// `w × v` for a world angular velocity `w` and an `N`-vector `v` (2D: rotation about e_z).
+#[inline(always)]
+fn spin<const N: usize>(w: &[f64; 3], v: &[f64; N]) -> [f64; N] {
+    let mut out = [0.0; N];
+    if N == 3 {
+        out[0] = w[1] * v[2] - w[2] * v[1];
+        out[1] = w[2] * v[0] - w[0] * v[2];
+        out[2] = w[0] * v[1] - w[1] * v[0];
+    } else {
+        out[0] = -w[2] * v[1];
+        out[1] = w[2] * v[0];
+    }
+    out
+}
+
+#[inline(always)]
+fn add<const K: usize>(a: &[f64; K], b: &[f64; K]) -> [f64; K] {
+    let mut o = *a;
+    for k in 0..K {
+        o[k] += b[k];
+    }
+    o
+}
+
+#[inline(always)]
+fn sub<const K: usize>(a: &[f64; K], b: &[f64; K]) -> [f64; K] {
+    let mut o = *a;
+    for k in 0..K {
+        o[k] -= b[k];
+    }
+    o
+}
+
+#[inline(always)]
+fn scale<const K: usize>(a: f64, b: &[f64; K]) -> [f64; K] {
+    let mut o = *b;
+    for v in o.iter_mut() {
+        *v *= a;
+    }
+    o
+}
+
+#[inline(always)]
+fn dotk<const K: usize>(a: &[f64; K], b: &[f64; K]) -> f64 {
+    (0..K).map(|k| a[k] * b[k]).sum()
+}
+
+/// World ↔ frame maps of a solved pair, for the second derivatives.
+struct Maps<'a, const N: usize> {
+    i: &'a Body<N>,
+    sol: &'a PairSolution<N>,
+    /// `M = Q_j P_j⁻¹ Q_jᵀ` (world frame).
+    m: [[f64; N]; N],
+}
+
+impl<const N: usize> Maps<'_, N> {
+    fn m_times(&self, v: &[f64; N]) -> [f64; N] {
+        let mut o = [0.0; N];
+        for r in 0..N {
+            for c in 0..N {
+                o[r] += self.m[r][c] * v[c];
+            }
+        }
+        o
+    }
+    /// Eigen coordinates `Vᵀ P_i^½ Q_iᵀ v` of a world vector `v` (the transpose of `to_world`
+    /// with power +1).
+    fn eig_of_world_scaled(&self, v: &[f64; N]) -> [f64; N] {
+        let q = self.i.rotation();
+        let l = self.i.semi_axes();
+        let mut frame = [0.0; N];
+        for k in 0..N {
+            for r in 0..N {
+                frame[k] += q[r][k] * v[r];
+            }
+            frame[k] *= l[k];
+        }
+        let mut out = [0.0; N];
+        for k in 0..N {
+            for m in 0..N {
+                out[k] += self.sol.svd.v[k][m] * frame[m];
+            }
+        }
+        out
+    }
+    /// Eigen coordinates `Vᵀ P_i^−½ Q_iᵀ v` of a world vector `v`.
+    fn eig_of_world_unscaled(&self, v: &[f64; N]) -> [f64; N] {
+        let q = self.i.rotation();
+        let l = self.i.semi_axes();
+        let mut frame = [0.0; N];
+        for k in 0..N {
+            for r in 0..N {
+                frame[k] += q[r][k] * v[r];
+            }
+            frame[k] /= l[k];
+        }
+        let mut out = [0.0; N];
+        for k in 0..N {
+            for m in 0..N {
+                out[k] += self.sol.svd.v[k][m] * frame[m];
+            }
+        }
+        out
+    }
+    /// `Vᵀ δS v` in eigen coordinates for the i-frame vector `v` with world images
+    /// `y_v = Q_i P_i^½ v`, `n_v = M y_v`: `δS v = P_i^½ Q_iᵀ [M (w × y_v) − w × n_v]`,
+    /// `w = w_i − w_j` (only the relative rotation moves `S`).
+    fn ds_times(&self, w: &[f64; 3], yv: &[f64; N], nv: &[f64; N]) -> [f64; N] {
+        let world = sub(&self.m_times(&spin(w, yv)), &spin(w, nv));
+        self.eig_of_world_scaled(&world)
+    }
+}
+
+/// Gradient of `f` and its derivative along a direction: `∇f` and `(∇²f) · dir`, both in the
+/// force/torque form of [`PairGradient`]. Returns `None` in the hard case, where `U` and `X`
+/// are not differentiable.
+///
+/// The derivative of `∇d² = (F, (p* − c_i) × F, −F, −(p* − c_j) × F)`, `F = 2 Q_i P_i^−½ (c − X)`,
+/// and of `∇U` (see [`pair_derivatives`]) needs `δX`, `δU`: the implicit-function system of
+/// Appendix A.1 solved in the eigenbasis, where `I + U S = V diag(t) Vᵀ`:
+///
+/// ```text
+/// δX̂ = (r̂ − â δU) / t,  δU = (Σ â r̂ / t + ½ Xᵀ δS X) / (Σ â² / t),
+/// r̂ = Vᵀ (δc − U δS X),  â = s ⊙ X̂,  Xᵀ δS X = 2 (w_i − w_j) · (y × n),
+/// ```
+///
+/// then the product rule through every term (`δ(w × v) = w × δv` for the rotating frames).
+/// With `A = max{0, 1 − d²}`, `B = max{0, ε − U}`:
+/// `δ∇f = 2 [A > 0] δd² ∇d² − 2A δ∇d² + 2 [B > 0] δU ∇U − 2B δ∇U`.
+pub fn pair_gradient_derivative<const N: usize>(
+    i: &Body<N>,
+    j: &Body<N>,
+    dir: &PairDirection<N>,
+) -> Option<(f64, PairGradient<N>, PairGradient<N>)> {
+    let sol = solve_pair_with(i, j, false);
+    if sol.proj.hard {
+        return None;
+    }
+    let fr = frames(i, j, &sol);
+    let gd = grad_d2(&fr);
+    let a = (1.0 - sol.proj.d2).max(0.0);
+    let bterm = (sol.eps - sol.proj.u).max(0.0);
+    let f = a * a + bterm * bterm;
+    let mut grad = PairGradient::ZERO;
+    let mut hv = PairGradient::ZERO;
+    if f == 0.0 {
+        return Some((0.0, grad, hv));
+    }
+    let gu = grad_u(i, &sol, &fr);
+    grad.axpy(-2.0 * a, &gd);
+    grad.axpy(-2.0 * bterm, &gu);
+
+    let (qj, lj) = (j.rotation(), j.semi_axes());
+    let mut m = [[0.0; N]; N];
+    for r in 0..N {
+        for c in 0..N {
+            m[r][c] = (0..N).map(|k| qj[r][k] * qj[c][k] / (lj[k] * lj[k])).sum();
+        }
+    }
+    let maps = Maps { i, sol: &sol, m };
+    let u = sol.proj.u;
+    let mut s = [0.0; N];
+    let mut ahat = [0.0; N];
+    let mut zhat = [0.0; N];
+    let mut szhat = [0.0; N];
+    let t = sol.proj.t;
+    for k in 0..N {
+        s[k] = sol.svd.sigma[k] * sol.svd.sigma[k];
+        ahat[k] = s[k] * sol.proj.xhat[k];
+        zhat[k] = ahat[k] / t[k];
+        szhat[k] = s[k] * zhat[k];
+    }
+    let y = fr.y;
+    let delta = fr.delta;
+    let force = fr.force;
+    let n = to_world(i, &sol, &ahat, -1.0);
+    let w = sub(&dir.spin_i, &dir.spin_j);
+    let ddelta = sub(&dir.centre_i, &dir.centre_j);
+
+    // δc (eigen coordinates) = Vᵀ P_i^−½ Q_iᵀ (δΔ − w_i × Δ).
+    let dc_world = sub(&ddelta, &spin(&dir.spin_i, &delta));
+    let dchat = maps.eig_of_world_unscaled(&dc_world);
+    let dsx = maps.ds_times(&w, &y, &n);
+    let xdsx = 2.0 * dotk(&w, &torque(&y, &n));
+    let mut num = 0.5 * xdsx;
+    let mut den_u = 0.0;
+    let mut rhat = [0.0; N];
+    for k in 0..N {
+        rhat[k] = dchat[k] - u * dsx[k];
+        num += ahat[k] * rhat[k] / t[k];
+        den_u += ahat[k] * ahat[k] / t[k];
+    }
+    let du = num / den_u;
+    let mut dxhat = [0.0; N];
+    for k in 0..N {
+        dxhat[k] = (rhat[k] - ahat[k] * du) / t[k];
+    }
+
+    // d² part.
+    let dy = add(&spin(&dir.spin_i, &y), &to_world(i, &sol, &dxhat, 1.0));
+    let mut dcmx = [0.0; N];
+    for k in 0..N {
+        dcmx[k] = 2.0 * (dchat[k] - dxhat[k]);
+    }
+    let dforce = add(&spin(&dir.spin_i, &force), &to_world(i, &sol, &dcmx, -1.0));
+    let lever = sub(&y, &delta);
+    let dlever = sub(&dy, &ddelta);
+    let dti = add(&torque(&dlever, &force), &torque(&lever, &dforce));
+    let dtj = scale(-1.0, &add(&torque(&dy, &force), &torque(&y, &dforce)));
+    let dd2 =
+        dotk(&force, &ddelta) + dotk(&gd.torque_i, &dir.spin_i) + dotk(&gd.torque_j, &dir.spin_j);
+    let dgd = PairGradient {
+        centre_i: dforce,
+        centre_j: scale(-1.0, &dforce),
+        torque_i: dti,
+        torque_j: dtj,
+    };
+    if a > 0.0 {
+        hv.axpy(2.0 * dd2, &gd);
+        hv.axpy(-2.0 * a, &dgd);
+    }
+
+    // U part.
+    if bterm > 0.0 {
+        let uw = to_world(i, &sol, &zhat, -1.0);
+        let yz = to_world(i, &sol, &zhat, 1.0);
+        let nz = to_world(i, &sol, &szhat, -1.0);
+        let den = 2.0 * dotk(&ahat, &zhat);
+        // δ(S X) = δS X + S δX and δz = [δ(SX) − δU S z − U δS z] / t in eigen coordinates.
+        let dszhat = maps.ds_times(&w, &yz, &nz);
+        let mut dsxhat = [0.0; N];
+        let mut dzhat = [0.0; N];
+        for k in 0..N {
+            dsxhat[k] = dsx[k] + s[k] * dxhat[k];
+            dzhat[k] = (dsxhat[k] - du * szhat[k] - u * dszhat[k]) / t[k];
+        }
+        let duw = add(&spin(&dir.spin_i, &uw), &to_world(i, &sol, &dzhat, -1.0));
+        let dyz = add(&spin(&dir.spin_i, &yz), &to_world(i, &sol, &dzhat, 1.0));
+        let dn = add(
+            &sub(
+                &spin(&dir.spin_j, &n),
+                &maps.m_times(&spin(&dir.spin_j, &y)),
+            ),
+            &maps.m_times(&dy),
+        );
+        let dnz = add(
+            &sub(
+                &spin(&dir.spin_j, &nz),
+                &maps.m_times(&spin(&dir.spin_j, &yz)),
+            ),
+            &maps.m_times(&dyz),
+        );
+        let dden = 2.0 * (dotk(&dsxhat, &zhat) + dotk(&ahat, &dzhat));
+        let kk = add(&torque(&yz, &n), &torque(&y, &nz));
+        let dkk = add(
+            &add(&torque(&dyz, &n), &torque(&yz, &dn)),
+            &add(&torque(&dy, &nz), &torque(&y, &dnz)),
+        );
+        let y_n = torque(&y, &n);
+        let dy_n = add(&torque(&dy, &n), &torque(&y, &dn));
+        let ni = add(
+            &scale(2.0, &torque(&uw, &delta)),
+            &sub(&scale(2.0, &y_n), &scale(2.0 * u, &kk)),
+        );
+        let nj = add(&scale(-2.0, &y_n), &scale(2.0 * u, &kk));
+        let dni = add(
+            &scale(2.0, &add(&torque(&duw, &delta), &torque(&uw, &ddelta))),
+            &sub(
+                &scale(2.0, &dy_n),
+                &add(&scale(2.0 * du, &kk), &scale(2.0 * u, &dkk)),
+            ),
+        );
+        let dnj = add(
+            &scale(-2.0, &dy_n),
+            &add(&scale(2.0 * du, &kk), &scale(2.0 * u, &dkk)),
+        );
+        let q = dden / (den * den);
+        let dgu = PairGradient {
+            centre_i: sub(&scale(2.0 / den, &duw), &scale(2.0 * q, &uw)),
+            centre_j: sub(&scale(2.0 * q, &uw), &scale(2.0 / den, &duw)),
+            torque_i: sub(&scale(1.0 / den, &dni), &scale(q, &ni)),
+            torque_j: sub(&scale(1.0 / den, &dnj), &scale(q, &nj)),
+        };
+        hv.axpy(2.0 * du, &gu);
+        hv.axpy(-2.0 * bterm, &dgu);
+    }
+    Some((f, grad, hv))
+}
+
+/// `∂ω_α/∂β` for the angles `[φ, θ, ψ]` of eq. 2: `out[α][β]` is a world vector.
+pub fn angular_velocity_derivatives_3d(angles: [f64; 3]) -> [[[f64; 3]; 3]; 3] {
+    let [_, theta, psi] = angles;
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = psi.sin_cos();
+    let z = [0.0; 3];
+    // ω_φ = (cθ cψ, cθ sψ, −sθ), ω_θ = (−sψ, cψ, 0), ω_ψ = e_z.
+    [
+        [z, [-st * cp, -st * sp, -ct], [-ct * sp, ct * cp, 0.0]],
+        [z, z, [-cp, -sp, 0.0]],
+        [z, z, z],
+    ]
+}

@@ -1,0 +1,41 @@
+//! The implicit-variable non-overlap model of ellipse and ellipsoid packing.
+//!
+//! For every pair of ellipsoids `(i, j)` the model of Birgin, Lobato and Martínez maps `E_i` to a
+//! unit ball and `E_j` to `{x : xᵀ S_ij x ≤ 1}`; the closest point `X` and multiplier `U` of the
+//! projection of the ball's centre onto that surface are *implicit* functions of the centres and
+//! rotations, so the model has a number of variables and constraints linear in the number of
+//! ellipsoids, and a cell grid makes its evaluation linear in time.
+//!
+//! Modules, by equation:
+//!
+//! * [`shape`]: centres, semi-axes, rotations (eqs. 1–2), quaternions;
+//! * [`pair`]: the pair term `f` (eqs. 3, 21–22, 34–36, Prop. 3.3);
+//! * [`projection`]: the secular equation of the projection onto `xᵀ S x = 1`;
+//! * [`derivatives`]: first derivatives of the pair term (Appendix A.1 and the envelope form)
+//!   and exact Hessian–vector products;
+//! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first
+//!   derivatives and exact Hessian–vector products;
+//! * [`model`]: the whole sum over the grid's candidate pairs (Section 5.2), containment and
+//!   objective, with gradients, Hessian–vector products and a PW85 certificate.
+//!
+//! # References
+//! E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
+//! variables for packing ellipsoids*, Journal of Global Optimization 68 (2017) 467–499.
+#![deny(missing_docs)]
+// Index loops mirror the subscripts of the formulas (x_k, S_km, …) over fixed N = 2, 3, and
+// several arrays are indexed together; iterator chains would hide the mathematics.
+#![allow(clippy::needless_range_loop)]
+
+pub mod containment;
+pub mod derivatives;
+pub mod error;
+pub(crate) mod linalg;
+pub mod model;
+pub mod pack;
+pub mod pair;
+pub mod projection;
+pub mod shape;
+
+pub use error::Error;
+pub use pair::{PairTerm, Route, epsilon, overlap_measure, pair_term, pair_term_by};
+pub use shape::{Body, Ellipse, Ellipsoid};

@@ -1,0 +1,839 @@
+//! The whole model: the sum of the pair terms over the grid's candidate pairs (Section 5.2),
+//! the containment residuals and the objective, with gradients, in `O(m)` time and memory.
+//!
+//! Variables, in this order (`q = 1` angle in 2D, `q = 3` in 3D):
+//!
+//! ```text
+//! x = [ c_1, Ω_1, c_2, Ω_2, …, c_m, Ω_m, container dimensions ]
+//! Ω_i = θ_i (eq. 1) or [φ_i, θ_i, ψ_i] (eq. 2); container: [r] or N semi-axes / half-sides.
+//! ```
+//!
+//! Quantities (all ≥ 0):
+//!
+//! ```text
+//! overlap     = Σ_{i<j} f(c_i, c_j, Ω_i, Ω_j; P_i, P_j)      (eq. 19; f of eq. 34)
+//! containment = Σ_i Σ max{0, g}²                             (crate::containment)
+//! objective   = area or volume of the container
+//! ```
+//!
+//! The sum runs over the pairs whose enclosing balls intersect, `|c_i − c_j| < r_i + r_j`
+//! (`r_i = max_k l_ik`), found by a uniform grid of cell edge `2R`, `R = max r_i`
+//! ([`cell_grid`]): a pair outside this set has `f = 0` exactly (eq. 37), so the sum is the full
+//! `O(m²)` sum of eq. 19, computed in `O(m)`.
+//!
+//! Evaluation reuses the workspace of the [`Problem`] (the bodies and the grid): after the first
+//! call no memory is allocated unless `m` grows (serial path; with the `rayon` feature each task
+//! collects its pair gradients in a vector of its own, scattered serially afterwards). A
+//! value-only call does no gradient work. Pairs are skipped at once when their enclosing balls
+//! are apart (the grid) or the plane orthogonal to the centre line separates them; the rest take
+//! the fast direct solve when it applies ([`crate::pair`]).
+//!
+//! # References
+//! Birgin, Lobato, Martínez (2016), eqs. (18)–(19), (33)–(34), (37), Section 5.2.
+
+use crate::containment::{
+    Container, ContainerKind, ContainmentDirection, containment_gradient,
+    containment_gradient_derivative, containment_residual,
+};
+use crate::derivatives::{
+    PairDirection, PairGradient, angle_gradient_3d, angular_velocity_derivatives_3d, pair_gradient,
+    pair_gradient_derivative,
+};
+use crate::error::Error;
+use crate::pair::overlap_measure;
+use crate::shape::{
+    Body, MAX_MAGNITUDE, angles_from_rotation, angular_velocities_3d, check_semi_axes, rotation_2d,
+    rotation_3d,
+};
+
+/// Values of the model at one point.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Evaluation {
+    /// `Σ_{i<j} f_ij` (eq. 19).
+    pub overlap: f64,
+    /// `Σ_i` containment residual.
+    pub containment: f64,
+    /// Container area (2D) or volume (3D).
+    pub objective: f64,
+    /// Number of pairs whose term was evaluated (enclosing balls intersect).
+    pub pairs: usize,
+}
+
+/// Gradients of the three model quantities, each laid out like the variables.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModelGradient {
+    /// `∇ overlap`.
+    pub overlap: Vec<f64>,
+    /// `∇ containment`.
+    pub containment: Vec<f64>,
+    /// `∇ objective` (non-zero only on the container variables).
+    pub objective: Vec<f64>,
+}
+
+impl ModelGradient {
+    fn reset(&mut self, n: usize) {
+        for v in [
+            &mut self.overlap,
+            &mut self.containment,
+            &mut self.objective,
+        ] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+    }
+}
+
+/// The verdict of [`Problem::certify`].
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Certificate {
+    /// Pairs `(i, j)`, `i < j`, that overlap according to PW85 (`μ² < 1`).
+    pub overlapping_pairs: Vec<(usize, usize)>,
+    /// Ellipsoids not inside the container.
+    pub outside: Vec<usize>,
+    /// Number of pairs tested (enclosing balls intersecting).
+    pub pairs_checked: usize,
+}
+
+impl Certificate {
+    /// No overlap and every ellipsoid inside.
+    pub fn is_feasible(&self) -> bool {
+        self.overlapping_pairs.is_empty() && self.outside.is_empty()
+    }
+}
+
+/// `pw85::overlap` in the PW85 storage (upper triangle of the shape matrix, `r12 = c_j − c_i`).
+fn pw85_overlap<const N: usize>(i: &Body<N>, j: &Body<N>) -> Result<bool, String> {
+    let (mi, mj) = (i.shape_matrix(), j.shape_matrix());
+    let (ci, cj) = (i.centre(), j.centre());
+    let at = |m: &[[f64; N]; N], r: usize, c: usize| {
+        m.get(r).and_then(|row| row.get(c)).copied().unwrap_or(0.0)
+    };
+    let d = |k: usize| cj.get(k).copied().unwrap_or(0.0) - ci.get(k).copied().unwrap_or(0.0);
+    let result = if N == 3 {
+        let sym = |m: &[[f64; N]; N]| {
+            [
+                at(m, 0, 0),
+                at(m, 0, 1),
+                at(m, 0, 2),
+                at(m, 1, 1),
+                at(m, 1, 2),
+                at(m, 2, 2),
+            ]
+        };
+        pw85::overlap(&[d(0), d(1), d(2)], &sym(&mi), &sym(&mj))
+    } else {
+        let sym = |m: &[[f64; N]; N]| [at(m, 0, 0), at(m, 0, 1), at(m, 1, 1)];
+        pw85::overlap_2d(&[d(0), d(1)], &sym(&mi), &sym(&mj))
+    };
+    result.map_err(|e| e.to_string())
+}
+
+/// A packing problem: the semi-axes of the `m` ellipsoids and the kind of container, with the
+/// workspace reused by every evaluation.
+#[derive(Debug)]
+pub struct Problem<const N: usize> {
+    semi_axes: Vec<[f64; N]>,
+    radii: Vec<f64>,
+    kind: ContainerKind,
+    bodies: Vec<Body<N>>,
+    centres: Vec<[f64; N]>,
+    grid: Option<cell_grid::Grid<N>>,
+}
+
+/// Number of rotation angles in dimension `n` (1 in 2D, 3 in 3D).
+pub const fn angle_count(n: usize) -> usize {
+    n * (n - 1) / 2
+}
+
+impl<const N: usize> Problem<N> {
+    /// A problem with the given semi-axes (one `[l_1, …, l_N]` per ellipsoid) and container kind.
+    ///
+    /// # Errors
+    /// [`Error::Empty`] without ellipsoids, [`Error::InvalidSemiAxis`] naming the ellipsoid and
+    /// the semi-axis that is not in `[1e-30, 1e30]`.
+    pub fn new(semi_axes: Vec<[f64; N]>, kind: ContainerKind) -> Result<Self, Error> {
+        if semi_axes.is_empty() {
+            return Err(Error::Empty);
+        }
+        for (i, l) in semi_axes.iter().enumerate() {
+            check_semi_axes(Some(i), l)?;
+        }
+        let radii = semi_axes
+            .iter()
+            .map(|l| l.iter().fold(0.0f64, |m, &x| m.max(x)))
+            .collect();
+        Ok(Problem {
+            semi_axes,
+            radii,
+            kind,
+            bodies: Vec::new(),
+            centres: Vec::new(),
+            grid: None,
+        })
+    }
+
+    /// Number of ellipsoids `m`.
+    pub fn len(&self) -> usize {
+        self.semi_axes.len()
+    }
+
+    /// Always false: a problem has at least one ellipsoid.
+    pub fn is_empty(&self) -> bool {
+        self.semi_axes.is_empty()
+    }
+
+    /// Variables per ellipsoid: `N` centre coordinates and the angles.
+    pub const fn vars_per_body() -> usize {
+        N + angle_count(N)
+    }
+
+    /// Total number of variables.
+    pub fn var_count(&self) -> usize {
+        self.len() * Self::vars_per_body() + self.kind.dimension_count(N)
+    }
+
+    /// The container kind.
+    pub fn container_kind(&self) -> ContainerKind {
+        self.kind
+    }
+
+    /// The semi-axes of the ellipsoids.
+    pub fn semi_axes(&self) -> &[[f64; N]] {
+        &self.semi_axes
+    }
+
+    /// Reads the bodies and the container from `x` into the workspace.
+    fn load(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
+        let n = self.var_count();
+        if x.len() != n {
+            return Err(Error::LengthMismatch {
+                what: "variables",
+                expected: n,
+                found: x.len(),
+            });
+        }
+        for (index, &value) in x.iter().enumerate() {
+            let limit = if index < self.len() * Self::vars_per_body()
+                && (index % Self::vars_per_body()) < N
+            {
+                MAX_MAGNITUDE
+            } else {
+                f64::INFINITY
+            };
+            if !(value.is_finite() && value.abs() <= limit) {
+                return Err(Error::NonFiniteVariable { index, value });
+            }
+        }
+        let container =
+            Container::from_dimensions(self.kind, &x[self.len() * Self::vars_per_body()..])?;
+        self.bodies.clear();
+        self.centres.clear();
+        let stride = Self::vars_per_body();
+        for (i, l) in self.semi_axes.iter().enumerate() {
+            let body = make_body(l, &x[i * stride..(i + 1) * stride]);
+            self.centres.push(body.centre());
+            self.bodies.push(body);
+        }
+        match self.grid.as_mut() {
+            Some(g) => g
+                .rebuild(&self.centres)
+                .map_err(|e| Error::Grid(e.to_string()))?,
+            None => {
+                let g = cell_grid::Grid::<N>::with_radii(&self.radii)
+                    .build(&self.centres)
+                    .map_err(|e| Error::Grid(e.to_string()))?;
+                self.grid = Some(g);
+            }
+        }
+        Ok(container)
+    }
+
+    /// Scatters a pair or containment gradient of body `i` into `out`.
+    fn scatter_body(
+        x: &[f64],
+        out: &mut [f64],
+        i: usize,
+        centre: &[f64; N],
+        torque: &[f64; 3],
+        weight: f64,
+    ) {
+        let stride = Self::vars_per_body();
+        let base = i * stride;
+        for k in 0..N {
+            out[base + k] += weight * centre[k];
+        }
+        if N == 2 {
+            out[base + 2] += weight * torque[2];
+        } else {
+            let g = angle_gradient_3d([x[base + 3], x[base + 4], x[base + 5]], torque);
+            for k in 0..3 {
+                out[base + 3 + k] += weight * g[k];
+            }
+        }
+    }
+
+    /// Evaluates the model at `x`; fills `gradient` (resized to the variable count) when given.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `x` has the wrong length, [`Error::NonFiniteVariable`] for a
+    /// NaN or infinite variable (or a centre coordinate beyond `1e30`),
+    /// [`Error::InvalidContainer`] for a non-positive container dimension.
+    pub fn evaluate(
+        &mut self,
+        x: &[f64],
+        gradient: Option<&mut ModelGradient>,
+    ) -> Result<Evaluation, Error> {
+        let container = self.load(x)?;
+        let (objective, dobj) = container.measure();
+        let mut ev = Evaluation {
+            objective,
+            ..Evaluation::default()
+        };
+        let nb = self.len() * Self::vars_per_body();
+        let grid = self.grid.as_ref().ok_or(Error::Empty)?;
+        let bodies = &self.bodies;
+        match gradient {
+            None => {
+                let (sum, count) = pair_sum_value(grid, bodies);
+                ev.overlap = sum;
+                ev.pairs = count;
+                ev.containment = bodies
+                    .iter()
+                    .map(|b| containment_residual(b, &container))
+                    .sum();
+            }
+            Some(g) => {
+                g.reset(x.len());
+                let (sum, count) = pair_sum_gradient(grid, bodies, x, &mut g.overlap);
+                ev.overlap = sum;
+                ev.pairs = count;
+                for (i, b) in bodies.iter().enumerate() {
+                    let (r, cg) = containment_gradient(b, &container);
+                    if r == 0.0 {
+                        continue;
+                    }
+                    ev.containment += r;
+                    Self::scatter_body(x, &mut g.containment, i, &cg.centre, &cg.torque, 1.0);
+                    for k in 0..self.kind.dimension_count(N) {
+                        g.containment[nb + k] += cg.container[k];
+                    }
+                }
+                let nc = self.kind.dimension_count(N);
+                g.objective[nb..nb + nc].copy_from_slice(&dobj[..nc]);
+            }
+        }
+        Ok(ev)
+    }
+
+    /// Hessian–vector products `H v` of the three model quantities.
+    ///
+    /// * Overlap: exact, the sum over the pairs with `f > 0` of the directional derivatives of
+    ///   the pair gradients ([`pair_gradient_derivative`]: Appendix A.1's implicit derivatives
+    ///   differentiated once more, in the form of a product rule through the force/torque
+    ///   expressions), plus the curvature of the angle parametrisation
+    ///   (`Σ_β ∂ω_α/∂β v_β · torque`). A pair exactly in the hard case (no Hessian there) falls
+    ///   back to a central difference of its gradient.
+    /// * Containment: exact, body by body ([`containment_gradient_derivative`]). An ellipsoid in
+    ///   the hard case of its farthest point (no Hessian there) falls back to a central
+    ///   difference of its gradient, `(∇r(x + h v) − ∇r(x − h v)) / 2h`,
+    ///   `h = 6e-6 · max(1, |x|∞) / |v|∞` (≈ ε^⅓).
+    /// * Objective: exact.
+    ///
+    /// Serial (also with the `rayon` feature); no allocation once `out` is sized.
+    ///
+    /// # Errors
+    /// Those of [`Problem::evaluate`], and [`Error::LengthMismatch`] or
+    /// [`Error::NonFiniteVariable`] for a bad direction `v`.
+    pub fn hessian_vector_product(
+        &mut self,
+        x: &[f64],
+        v: &[f64],
+        out: &mut ModelGradient,
+    ) -> Result<(), Error> {
+        let n = self.var_count();
+        if v.len() != n {
+            return Err(Error::LengthMismatch {
+                what: "direction",
+                expected: n,
+                found: v.len(),
+            });
+        }
+        if let Some(index) = v.iter().position(|a| !a.is_finite()) {
+            return Err(Error::NonFiniteVariable {
+                index,
+                value: v[index],
+            });
+        }
+        let container = self.load(x)?;
+        out.reset(n);
+        let stride = Self::vars_per_body();
+        let nb = self.len() * stride;
+        let nc = self.kind.dimension_count(N);
+        let grid = self.grid.as_ref().ok_or(Error::Empty)?;
+        let bodies = &self.bodies;
+        let vmax = v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        if vmax == 0.0 {
+            return Ok(());
+        }
+        let h = 6e-6 * x.iter().fold(1.0f64, |m, a| m.max(a.abs())) / vmax;
+        let semi_axes = &self.semi_axes;
+        let shifted = |i: usize, sign: f64| -> Body<N> {
+            let mut vars = [0.0; 6];
+            for k in 0..stride {
+                vars[k] = x[i * stride + k] + sign * h * v[i * stride + k];
+            }
+            make_body(&semi_axes[i], &vars[..stride])
+        };
+        {
+            let out_overlap = &mut out.overlap;
+            grid.for_each_close_pair(|i, j, _, _| {
+                let dir = direction(x, v, i, j);
+                match pair_gradient_derivative(&bodies[i], &bodies[j], &dir) {
+                    Some((f, grad, hv)) => {
+                        if f > 0.0 {
+                            scatter_second(
+                                x,
+                                v,
+                                out_overlap,
+                                i,
+                                &hv.centre_i,
+                                &hv.torque_i,
+                                &grad.torque_i,
+                            );
+                            scatter_second(
+                                x,
+                                v,
+                                out_overlap,
+                                j,
+                                &hv.centre_j,
+                                &hv.torque_j,
+                                &grad.torque_j,
+                            );
+                        }
+                    }
+                    None => {
+                        let (_, gp) = pair_gradient(&shifted(i, 1.0), &shifted(j, 1.0));
+                        let (_, gm) = pair_gradient(&shifted(i, -1.0), &shifted(j, -1.0));
+                        let xp = shifted_vars(x, v, h);
+                        let xm = shifted_vars(x, v, -h);
+                        let inv = 0.5 / h;
+                        let mut tmp_p = [0.0; 12];
+                        let mut tmp_m = [0.0; 12];
+                        body_gradient_into(
+                            &xp,
+                            i,
+                            &gp.centre_i,
+                            &gp.torque_i,
+                            &mut tmp_p[..stride],
+                        );
+                        body_gradient_into(
+                            &xm,
+                            i,
+                            &gm.centre_i,
+                            &gm.torque_i,
+                            &mut tmp_m[..stride],
+                        );
+                        body_gradient_into(
+                            &xp,
+                            j,
+                            &gp.centre_j,
+                            &gp.torque_j,
+                            &mut tmp_p[6..6 + stride],
+                        );
+                        body_gradient_into(
+                            &xm,
+                            j,
+                            &gm.centre_j,
+                            &gm.torque_j,
+                            &mut tmp_m[6..6 + stride],
+                        );
+                        for k in 0..stride {
+                            out_overlap[i * stride + k] += (tmp_p[k] - tmp_m[k]) * inv;
+                            out_overlap[j * stride + k] += (tmp_p[6 + k] - tmp_m[6 + k]) * inv;
+                        }
+                    }
+                }
+            });
+        }
+        let mut dims_p = [0.0; N];
+        let mut dims_m = [0.0; N];
+        for k in 0..nc {
+            dims_p[k] = x[nb + k] + h * v[nb + k];
+            dims_m[k] = x[nb + k] - h * v[nb + k];
+        }
+        let cont_p = Container::from_dimensions(self.kind, &dims_p[..nc])?;
+        let cont_m = Container::from_dimensions(self.kind, &dims_m[..nc])?;
+        let xp = ShiftedVars { x, v, h };
+        let xm = ShiftedVars { x, v, h: -h };
+        let mut dcont = [0.0; N];
+        dcont[..nc].copy_from_slice(&v[nb..nb + nc]);
+        for i in 0..self.len() {
+            let d = direction(x, v, i, i);
+            let cdir = ContainmentDirection {
+                centre: d.centre_i,
+                spin: d.spin_i,
+                container: dcont,
+            };
+            if let Some((r, grad, hv)) =
+                containment_gradient_derivative(&bodies[i], &container, &cdir)
+            {
+                if r > 0.0 {
+                    scatter_second(
+                        x,
+                        v,
+                        &mut out.containment,
+                        i,
+                        &hv.centre,
+                        &hv.torque,
+                        &grad.torque,
+                    );
+                    for k in 0..nc {
+                        out.containment[nb + k] += hv.container[k];
+                    }
+                }
+                continue;
+            }
+            // Hard case of the farthest point: a central difference of the exact gradient.
+            let (_, gp) = containment_gradient(&shifted(i, 1.0), &cont_p);
+            let (_, gm) = containment_gradient(&shifted(i, -1.0), &cont_m);
+            let inv = 0.5 / h;
+            let mut tp = [0.0; 6];
+            let mut tm = [0.0; 6];
+            body_gradient_into(&xp, i, &gp.centre, &gp.torque, &mut tp[..stride]);
+            body_gradient_into(&xm, i, &gm.centre, &gm.torque, &mut tm[..stride]);
+            for k in 0..stride {
+                out.containment[i * stride + k] += (tp[k] - tm[k]) * inv;
+            }
+            for k in 0..nc {
+                out.containment[nb + k] += (gp.container[k] - gm.container[k]) * inv;
+            }
+        }
+        // Objective: Hessian of the area/volume of the container.
+        let hess = container.measure_hessian();
+        for r in 0..nc {
+            out.objective[nb + r] = (0..nc).map(|c| hess[r][c] * v[nb + c]).sum();
+        }
+        Ok(())
+    }
+
+    /// Certifies a configuration independently of the model: every pair whose enclosing balls
+    /// intersect is tested with `pw85::overlap` (the Perram–Wertheim contact function,
+    /// `μ² < 1`), and every ellipsoid with the exact containment test.
+    ///
+    /// # Errors
+    /// Those of [`Problem::evaluate`], and [`Error::Certification`] if PW85 rejects a pair.
+    pub fn certify(&mut self, x: &[f64]) -> Result<Certificate, Error> {
+        let container = self.load(x)?;
+        let grid = self.grid.as_ref().ok_or(Error::Empty)?;
+        let bodies = &self.bodies;
+        let mut cert = Certificate::default();
+        let mut failure = None;
+        grid.for_each_close_pair(|i, j, _, _| {
+            cert.pairs_checked += 1;
+            match pw85_overlap(&bodies[i], &bodies[j]) {
+                Ok(true) => cert.overlapping_pairs.push((i.min(j), i.max(j))),
+                Ok(false) => {}
+                Err(message) => {
+                    failure.get_or_insert(Error::Certification {
+                        pair: (i, j),
+                        message,
+                    });
+                }
+            }
+        });
+        if let Some(e) = failure {
+            return Err(e);
+        }
+        cert.overlapping_pairs.sort_unstable();
+        for (i, b) in bodies.iter().enumerate() {
+            if containment_residual(b, &container) > 0.0 {
+                cert.outside.push(i);
+            }
+        }
+        Ok(cert)
+    }
+
+    /// Reference: the overlap sum of eq. 19 over **all** `m(m−1)/2` pairs, `O(m²)`.
+    pub fn overlap_all_pairs(&mut self, x: &[f64]) -> Result<f64, Error> {
+        self.load(x)?;
+        let b = &self.bodies;
+        let mut sum = 0.0;
+        for i in 0..b.len() {
+            for j in i + 1..b.len() {
+                sum += overlap_measure(&b[i], &b[j]);
+            }
+        }
+        Ok(sum)
+    }
+
+    /// The bodies of the last evaluation.
+    pub fn bodies(&self) -> &[Body<N>] {
+        &self.bodies
+    }
+
+    /// The bodies (centres and rotations) that the variables `x` stand for.
+    ///
+    /// # Errors
+    /// As [`Problem::evaluate`].
+    pub fn bodies_at(&mut self, x: &[f64]) -> Result<&[Body<N>], Error> {
+        self.load(x)?;
+        Ok(&self.bodies)
+    }
+
+    /// The variable vector of a configuration: each body's centre and angles (eq. 1's `θ`, or
+    /// eq. 2's `[φ, θ, ψ]` recovered from the rotation, e.g. of a quaternion), then the
+    /// container dimensions.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if the number of bodies or dimensions is wrong,
+    /// [`Error::InvalidSemiAxis`] naming the body whose semi-axes differ from the problem's.
+    pub fn pack_variables(&self, bodies: &[Body<N>], container: &[f64]) -> Result<Vec<f64>, Error> {
+        if bodies.len() != self.len() {
+            return Err(Error::LengthMismatch {
+                what: "bodies",
+                expected: self.len(),
+                found: bodies.len(),
+            });
+        }
+        let nc = self.kind.dimension_count(N);
+        if container.len() != nc {
+            return Err(Error::LengthMismatch {
+                what: "container dimensions",
+                expected: nc,
+                found: container.len(),
+            });
+        }
+        let mut x = Vec::with_capacity(self.var_count());
+        for (i, b) in bodies.iter().enumerate() {
+            let l = b.semi_axes();
+            if let Some(axis) = (0..N).find(|&k| l[k] != self.semi_axes[i][k]) {
+                return Err(Error::InvalidSemiAxis {
+                    item: Some(i),
+                    axis,
+                    value: l[axis],
+                });
+            }
+            x.extend_from_slice(&b.centre());
+            let q = b.rotation();
+            if N == 2 {
+                x.push(q[1][0].atan2(q[0][0]));
+            } else {
+                let mut m = [[0.0; 3]; 3];
+                for r in 0..3 {
+                    for c in 0..3 {
+                        m[r][c] = q[r][c];
+                    }
+                }
+                x.extend_from_slice(&angles_from_rotation(&m));
+            }
+        }
+        x.extend_from_slice(container);
+        Ok(x)
+    }
+}
+
+#[cfg(not(feature = "rayon"))]
+fn pair_sum_value<const N: usize>(grid: &cell_grid::Grid<N>, bodies: &[Body<N>]) -> (f64, usize) {
+    let mut sum = 0.0;
+    let mut count = 0;
+    grid.for_each_close_pair(|i, j, _, _| {
+        sum += overlap_measure(&bodies[i], &bodies[j]);
+        count += 1;
+    });
+    (sum, count)
+}
+
+#[cfg(feature = "rayon")]
+fn pair_sum_value<const N: usize>(grid: &cell_grid::Grid<N>, bodies: &[Body<N>]) -> (f64, usize) {
+    grid.par_fold_close_pairs(
+        || (0.0, 0usize),
+        |acc, i, j, _, _| {
+            acc.0 += overlap_measure(&bodies[i], &bodies[j]);
+            acc.1 += 1;
+        },
+        |a, b| (a.0 + b.0, a.1 + b.1),
+    )
+}
+
+fn add_pair<const N: usize>(x: &[f64], out: &mut [f64], i: usize, j: usize, g: &PairGradient<N>) {
+    Problem::<N>::scatter_body(x, out, i, &g.centre_i, &g.torque_i, 1.0);
+    Problem::<N>::scatter_body(x, out, j, &g.centre_j, &g.torque_j, 1.0);
+}
+
+#[cfg(not(feature = "rayon"))]
+fn pair_sum_gradient<const N: usize>(
+    grid: &cell_grid::Grid<N>,
+    bodies: &[Body<N>],
+    x: &[f64],
+    out: &mut [f64],
+) -> (f64, usize) {
+    let mut sum = 0.0;
+    let mut count = 0;
+    grid.for_each_close_pair(|i, j, _, _| {
+        count += 1;
+        let (f, g) = pair_gradient(&bodies[i], &bodies[j]);
+        if f > 0.0 {
+            sum += f;
+            add_pair(x, out, i, j, &g);
+        }
+    });
+    (sum, count)
+}
+
+#[cfg(feature = "rayon")]
+fn pair_sum_gradient<const N: usize>(
+    grid: &cell_grid::Grid<N>,
+    bodies: &[Body<N>],
+    x: &[f64],
+    out: &mut [f64],
+) -> (f64, usize) {
+    // Each task collects its non-zero pair gradients; they are scattered serially, so the
+    // result does not depend on the thread count beyond summation order.
+    let (sum, count, terms) = grid.par_fold_close_pairs(
+        || (0.0, 0usize, Vec::new()),
+        |acc, i, j, _, _| {
+            acc.1 += 1;
+            let (f, g) = pair_gradient(&bodies[i], &bodies[j]);
+            if f > 0.0 {
+                acc.0 += f;
+                acc.2.push((i, j, g));
+            }
+        },
+        |mut a, mut b| {
+            a.0 += b.0;
+            a.1 += b.1;
+            a.2.append(&mut b.2);
+            a
+        },
+    );
+    for (i, j, g) in &terms {
+        add_pair(x, out, *i, *j, g);
+    }
+    (sum, count)
+}
+
+/// A body from its variables `[c, Ω]` (crate-built rotation, orthogonal by construction).
+fn make_body<const N: usize>(l: &[f64; N], vars: &[f64]) -> Body<N> {
+    let mut c = [0.0; N];
+    c.copy_from_slice(&vars[..N]);
+    let mut q = [[0.0; N]; N];
+    if N == 2 {
+        let r = rotation_2d(vars[2]);
+        for a in 0..2 {
+            for b in 0..2 {
+                q[a][b] = r[a][b];
+            }
+        }
+    } else {
+        let r = rotation_3d([vars[3], vars[4], vars[5]]);
+        for a in 0..N {
+            for b in 0..N {
+                q[a][b] = r[a][b];
+            }
+        }
+    }
+    Body::from_parts_unchecked(c, *l, q)
+}
+
+/// The pair direction of `v` for the bodies `i`, `j`: centre velocities and world angular
+/// velocities `w = Σ_α ω_α v_α` (2D: `w = v_θ e_z`).
+fn direction<const N: usize>(x: &[f64], v: &[f64], i: usize, j: usize) -> PairDirection<N> {
+    let stride = Problem::<N>::vars_per_body();
+    let spin = |b: usize| -> [f64; 3] {
+        let base = b * stride;
+        if N == 2 {
+            [0.0, 0.0, v[base + 2]]
+        } else {
+            let w = angular_velocities_3d([x[base + 3], x[base + 4], x[base + 5]]);
+            let mut s = [0.0; 3];
+            for a in 0..3 {
+                for k in 0..3 {
+                    s[k] += w[a][k] * v[base + 3 + a];
+                }
+            }
+            s
+        }
+    };
+    let mut ci = [0.0; N];
+    let mut cj = [0.0; N];
+    ci.copy_from_slice(&v[i * stride..i * stride + N]);
+    cj.copy_from_slice(&v[j * stride..j * stride + N]);
+    PairDirection {
+        centre_i: ci,
+        centre_j: cj,
+        spin_i: spin(i),
+        spin_j: spin(j),
+    }
+}
+
+/// Adds the second-order terms of body `b` to `out`: `δ(force)` on the centre, and on angle `α`
+/// `ω_α · δτ + Σ_β (∂ω_α/∂β v_β) · τ` (the parametrisation's own curvature; zero in 2D).
+fn scatter_second<const N: usize>(
+    x: &[f64],
+    v: &[f64],
+    out: &mut [f64],
+    b: usize,
+    dforce: &[f64; N],
+    dtorque: &[f64; 3],
+    torque: &[f64; 3],
+) {
+    let stride = Problem::<N>::vars_per_body();
+    let base = b * stride;
+    for k in 0..N {
+        out[base + k] += dforce[k];
+    }
+    if N == 2 {
+        out[base + 2] += dtorque[2];
+    } else {
+        let ang = [x[base + 3], x[base + 4], x[base + 5]];
+        let w = angular_velocities_3d(ang);
+        let dw = angular_velocity_derivatives_3d(ang);
+        for a in 0..3 {
+            let mut e = (0..3).map(|k| w[a][k] * dtorque[k]).sum::<f64>();
+            for bb in 0..3 {
+                e += (0..3).map(|k| dw[a][bb][k] * torque[k]).sum::<f64>() * v[base + 3 + bb];
+            }
+            out[base + 3 + a] += e;
+        }
+    }
+}
+
+/// `x + h v`, read lazily (no allocation).
+struct ShiftedVars<'a> {
+    x: &'a [f64],
+    v: &'a [f64],
+    h: f64,
+}
+
+impl ShiftedVars<'_> {
+    fn get(&self, k: usize) -> f64 {
+        self.x[k] + self.h * self.v[k]
+    }
+}
+
+fn shifted_vars<'a>(x: &'a [f64], v: &'a [f64], h: f64) -> ShiftedVars<'a> {
+    ShiftedVars { x, v, h }
+}
+
+/// The variable-space gradient of body `b` (centre, then angles at the shifted point) from a
+/// force and a torque.
+fn body_gradient_into<const N: usize>(
+    xs: &ShiftedVars<'_>,
+    b: usize,
+    force: &[f64; N],
+    torque: &[f64; 3],
+    out: &mut [f64],
+) {
+    let stride = Problem::<N>::vars_per_body();
+    let base = b * stride;
+    out[..N].copy_from_slice(force);
+    if N == 2 {
+        out[2] = torque[2];
+    } else {
+        let g = angle_gradient_3d(
+            [xs.get(base + 3), xs.get(base + 4), xs.get(base + 5)],
+            torque,
+        );
+        out[3..6].copy_from_slice(&g);
+    }
+}

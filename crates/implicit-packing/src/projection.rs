@@ -1,0 +1,481 @@
+//! Projection of `c` onto the surface `{x : xᵀ S x = 1}`: the secular equation (eqs. 21–22, 35).
+//!
+//! In the eigenbasis of `S = V diag(s) Vᵀ` (`s_k = σ_k²` from the SVD of the factor `F`), with
+//! `ĉ = Vᵀ c` and `g_k = σ_k ĉ_k`, the KKT condition `X + U S X − c = 0` (eq. 22) gives
+//!
+//! ```text
+//! x̂_k = ĉ_k / t_k,   t_k = 1 + U s_k,   φ(U) = Σ_k g_k² / t_k² = 1   (X on the surface)
+//! d² = |c − X|² = Σ_k (ĉ_k U s_k / t_k)²
+//! ```
+//!
+//! * `φ(0) = |b|² > 1` (centre of the unit ball outside `E_j^ij`): `U > 0`, unique (Prop. 3.1);
+//!   `U ∈ [(|b|−1)/s_max, (|b|−1)/s_min]`.
+//! * `φ(0) < 1` (centre inside): `U ∈ [−1/s_max, 0)` is unique (Prop. 4.2). We solve for
+//!   `t = 1 + U s_max ∈ [|g_top|, |b|]` instead of `U`, writing `t_k = δ_k + t r_k` with
+//!   `r_k = s_k/s_max`, `δ_k = 1 − r_k`: near the pole `t → 0` (the near-hard case) `t` keeps
+//!   its relative accuracy, which `1 + U s_max` would lose. When the root has `t > ½` the last
+//!   steps are taken in `U` again, so that a small `|U|` keeps its relative accuracy too.
+//! * Hard case (`g_top = 0` and `Σ_{k≠top} g_k²/δ_k² ≤ 1`): `U = −1/s_max`, `t = 0`, and `X`
+//!   is not unique; we return the branch with a non-negative first top component.
+//!
+//! The root is found by safeguarded Newton on `h = 1 − φ^−½`, which is nearly linear in `U`
+//! (exactly linear when one term dominates), inside a bracket that every step shrinks.
+//!
+//! # References
+//! Birgin, Lobato, Martínez (2016), eqs. (21)–(22), (35)–(36), Prop. 3.1, Prop. 4.2, Lemma 4.2.
+
+/// Solution of the secular equation in the eigenbasis of `S`.
+#[derive(Debug, Clone, Copy)]
+pub struct Projection<const N: usize> {
+    /// The multiplier `U` of eq. 22.
+    pub u: f64,
+    /// Components of `X` in the eigenbasis, `x̂_k`.
+    pub xhat: [f64; N],
+    /// `t_k = 1 + U s_k` (computed without cancellation).
+    pub t: [f64; N],
+    /// `c − X` in the eigenbasis, `ĉ_k − x̂_k = ĉ_k U s_k / t_k` (computed without cancellation).
+    pub dhat: [f64; N],
+    /// `d² = |c − X|²`.
+    pub d2: f64,
+    /// `c` lies inside `E_j^ij` (`cᵀ S c < 1`).
+    pub inside: bool,
+    /// Hard case: `U = −1/s_max` and `X` is not unique.
+    pub hard: bool,
+}
+
+/// Data that locates the eigen-structure for the inside parametrisation.
+struct Inside<const N: usize> {
+    r: [f64; N],
+    delta: [f64; N],
+    top: [bool; N],
+    s_top: f64,
+}
+
+#[inline(always)]
+fn phi_u<const N: usize>(s: &[f64; N], g2: &[f64; N], u: f64) -> (f64, f64) {
+    let mut phi = 0.0;
+    let mut dphi = 0.0;
+    for k in 0..N {
+        let inv = 1.0 / (1.0 + u * s[k]);
+        let q = g2[k] * inv * inv;
+        phi += q;
+        dphi -= 2.0 * s[k] * q * inv;
+    }
+    (phi, dphi)
+}
+
+#[inline(always)]
+fn phi_t<const N: usize>(ins: &Inside<N>, g2: &[f64; N], t: f64) -> (f64, f64) {
+    let mut phi = 0.0;
+    let mut dphi = 0.0;
+    for k in 0..N {
+        let inv = 1.0 / (ins.delta[k] + t * ins.r[k]);
+        let q = g2[k] * inv * inv;
+        phi += q;
+        dphi -= 2.0 * ins.r[k] * q * inv;
+    }
+    (phi, dphi)
+}
+
+/// A Newton step below this fraction of the iterate is the last one: convergence is quadratic,
+/// so the step after it would be below an ulp. (Waiting for a step below an ulp instead costs
+/// one or two more iterations spent chasing rounding noise in `φ − 1`.)
+pub(crate) const NEWTON_FINAL: f64 = 1e-9;
+
+/// Safeguarded Newton on `h(z) = 1 − φ(z)^−½` for a decreasing `φ`, root in `[lo, hi]`.
+#[inline(always)]
+pub(crate) fn newton<F: Fn(f64) -> (f64, f64)>(
+    eval: F,
+    mut lo: f64,
+    mut hi: f64,
+    mut z: f64,
+) -> f64 {
+    for _ in 0..100 {
+        let (phi, dphi) = eval(z);
+        if phi == 1.0 {
+            return z;
+        }
+        if phi > 1.0 {
+            lo = lo.max(z);
+        } else {
+            hi = hi.min(z);
+        }
+        // Newton on h = 1 − φ^−½: h/h' = (1 − φ^−½) / (½ φ^−3/2 φ') = 2φ (√φ − 1) / φ'.
+        let step = -2.0 * phi * (phi.sqrt() - 1.0) / dphi;
+        // Converged: the step is small enough that the next one would be below an ulp (it is
+        // taken if it stays in the bracket).
+        if step.abs() <= NEWTON_FINAL * z.abs() {
+            let next = z + step;
+            return if next >= lo && next <= hi { next } else { z };
+        }
+        let mut next = z + step;
+        // h = 1 − φ^−½ is increasing and nearly linear (φ^−½ is exactly linear for one term),
+        // so from the lower end of the bracket Newton converges monotonically in practice; a
+        // step out of the bracket falls back to bisection.
+        if !(next > lo && next < hi && step.is_finite()) {
+            next = 0.5 * (lo + hi);
+        }
+        if hi - lo <= 2.0 * f64::EPSILON * lo.abs().max(hi.abs()) {
+            return next;
+        }
+        z = next;
+    }
+    z
+}
+
+/// Result of [`solve_outside_direct`].
+#[derive(Debug, Clone, Copy)]
+pub struct DirectProjection<const N: usize> {
+    /// The multiplier `U > 0`.
+    pub u: f64,
+    /// `X`.
+    pub x: [f64; N],
+    /// `c − X = U S X`.
+    pub c_minus_x: [f64; N],
+    /// `d² = |c − X|²`.
+    pub d2: f64,
+}
+
+/// Inverse of a symmetric positive definite 2×2 or 3×3 matrix by its adjugate, `adj(A)/det(A)`
+/// (hand-written for speed: one division instead of the chain of three in `LDLᵀ`). Used only on
+/// `I + U S` with `U > 0` and `cond(S) ≤ 64`, whose eigenvalues are ≥ 1 and condition number is
+/// below 64, so the cofactors lose little.
+#[inline(always)]
+fn spd_inverse<const N: usize>(m: &[[f64; N]; N]) -> [[f64; N]; N] {
+    let mut inv = [[0.0; N]; N];
+    if N == 2 {
+        let r = 1.0 / (m[0][0] * m[1][1] - m[0][1] * m[0][1]);
+        inv[0][0] = m[1][1] * r;
+        inv[1][1] = m[0][0] * r;
+        inv[0][1] = -m[0][1] * r;
+        inv[1][0] = inv[0][1];
+    } else {
+        let c00 = m[1][1] * m[2][2] - m[1][2] * m[1][2];
+        let c01 = m[0][2] * m[1][2] - m[0][1] * m[2][2];
+        let c02 = m[0][1] * m[1][2] - m[0][2] * m[1][1];
+        let c11 = m[0][0] * m[2][2] - m[0][2] * m[0][2];
+        let c12 = m[0][1] * m[0][2] - m[0][0] * m[1][2];
+        let c22 = m[0][0] * m[1][1] - m[0][1] * m[0][1];
+        let r = 1.0 / (m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02);
+        inv[0][0] = c00 * r;
+        inv[0][1] = c01 * r;
+        inv[0][2] = c02 * r;
+        inv[1][1] = c11 * r;
+        inv[1][2] = c12 * r;
+        inv[2][2] = c22 * r;
+        inv[1][0] = inv[0][1];
+        inv[2][0] = inv[0][2];
+        inv[2][1] = inv[1][2];
+    }
+    inv
+}
+
+#[inline(always)]
+fn sym_mat_vec<const N: usize>(m: &[[f64; N]; N], v: &[f64; N]) -> [f64; N] {
+    let mut o = [0.0; N];
+    for a in 0..N {
+        for b in 0..N {
+            o[a] += m[a][b] * v[b];
+        }
+    }
+    o
+}
+
+/// The outside case (`|b|² = cᵀSc > 1`, `U > 0`) without an eigen-decomposition, for a
+/// well-conditioned factor `F` (`S = FᵀF` is formed).
+///
+/// Newton on `h(U) = 1 − φ(U)^−½`, `φ(U) = xᵀ S x`, `x(U) = (I + U S)⁻¹ c`,
+/// `φ'(U) = −2 (S x)ᵀ (I + U S)⁻¹ (S x)`, from `U₀ = (|b| − 1)/‖F‖²_F ≤ U` (a lower bound since
+/// `λ_max(S) ≤ ‖F‖²_F`): `h` is increasing and concave, so the iterates increase monotonically
+/// to the root. Returns `None` if the iteration does not settle (the caller then takes the SVD
+/// route).
+pub fn solve_outside_direct<const N: usize>(
+    f: &[[f64; N]; N],
+    c: &[f64; N],
+    b2: f64,
+) -> Option<DirectProjection<N>> {
+    let mut s = [[0.0; N]; N];
+    let mut fro2 = 0.0;
+    for a in 0..N {
+        for b in 0..N {
+            fro2 += f[a][b] * f[a][b];
+        }
+    }
+    for a in 0..N {
+        for b in a..N {
+            let mut v = 0.0;
+            for k in 0..N {
+                v += f[k][a] * f[k][b];
+            }
+            s[a][b] = v;
+            s[b][a] = v;
+        }
+    }
+    // Lower bound from λ_max(S) ≤ ‖F‖²_F; start from the Rayleigh quotient along c instead,
+    // s̄ = cᵀSc/|c|² = |b|²/|c|² (exact when c is an eigenvector): U₀ = (|b| − 1)/s̄.
+    let bn = b2.sqrt();
+    let lo = (bn - 1.0) / fro2;
+    let c2: f64 = c.iter().map(|v| v * v).sum();
+    let mut u = ((bn - 1.0) * (c2 / b2)).max(lo);
+    for _ in 0..60 {
+        let mut m = s;
+        for a in 0..N {
+            for b in 0..N {
+                m[a][b] *= u;
+            }
+            m[a][a] += 1.0;
+        }
+        let inv = spd_inverse(&m);
+        let x = sym_mat_vec(&inv, c);
+        let sx = sym_mat_vec(&s, &x);
+        // φ = xᵀ S x: with cond(S) ≤ 64 the formed S loses little that |F x|² would keep.
+        let mut fx2 = 0.0;
+        for a in 0..N {
+            fx2 += x[a] * sx[a];
+        }
+        let z = sym_mat_vec(&inv, &sx);
+        let mut dphi = 0.0;
+        for a in 0..N {
+            dphi -= 2.0 * sx[a] * z[a];
+        }
+        let step = -2.0 * fx2 * (fx2.sqrt() - 1.0) / dphi;
+        if !step.is_finite() {
+            return None;
+        }
+        if step.abs() <= NEWTON_FINAL * u {
+            // Quadratic convergence: after this step the error is ~(1e-9)², below an ulp. X and
+            // c − X = U S X are recomputed at the final U (one solve, no derivative).
+            let u = u + step;
+            let mut m = s;
+            for a in 0..N {
+                for b in 0..N {
+                    m[a][b] *= u;
+                }
+                m[a][a] += 1.0;
+            }
+            let x = sym_mat_vec(&spd_inverse(&m), c);
+            let mut cmx = [0.0; N];
+            let mut d2 = 0.0;
+            for a in 0..N {
+                let mut sxa = 0.0;
+                for b in 0..N {
+                    sxa += s[a][b] * x[b];
+                }
+                cmx[a] = u * sxa;
+                d2 += cmx[a] * cmx[a];
+            }
+            return Some(DirectProjection {
+                u,
+                x,
+                c_minus_x: cmx,
+                d2,
+            });
+        }
+        // From the right of the root a step of the concave h lands left of it, possibly below
+        // the lower bound: then restart from the bound, whence the iterates increase.
+        u = (u + step).max(lo);
+    }
+    None
+}
+
+/// Solves the secular equation for eigenvalues `s`, `ĉ = Vᵀc` and `g_k = σ_k ĉ_k`.
+pub fn solve<const N: usize>(s: &[f64; N], chat: &[f64; N], g: &[f64; N]) -> Projection<N> {
+    let mut g2 = [0.0; N];
+    for k in 0..N {
+        g2[k] = g[k] * g[k];
+    }
+    let b2: f64 = g2.iter().sum();
+    let mut s_max = 0.0f64;
+    let mut s_min = f64::INFINITY;
+    for &sk in s.iter() {
+        s_max = s_max.max(sk);
+        s_min = s_min.min(sk);
+    }
+    if b2 == 1.0 {
+        return Projection {
+            u: 0.0,
+            xhat: *chat,
+            t: [1.0; N],
+            dhat: [0.0; N],
+            d2: 0.0,
+            inside: false,
+            hard: false,
+        };
+    }
+    if b2 > 1.0 {
+        let bn = b2.sqrt();
+        let lo = (bn - 1.0) / s_max;
+        let hi = (bn - 1.0) / s_min;
+        let u = if lo == hi {
+            lo
+        } else {
+            newton(|u| phi_u(s, &g2, u), lo, hi, lo)
+        };
+        return finish_u(s, chat, g, u, false);
+    }
+
+    // Inside: parametrise by t = 1 + U s_max.
+    let mut ins = Inside {
+        r: [0.0; N],
+        delta: [0.0; N],
+        top: [false; N],
+        s_top: s_max,
+    };
+    let mut g2_top = 0.0;
+    for k in 0..N {
+        let gap = (s_max - s[k]) / s_max;
+        if gap <= 8.0 * f64::EPSILON {
+            ins.top[k] = true;
+            ins.r[k] = 1.0;
+            ins.delta[k] = 0.0;
+            g2_top += g2[k];
+        } else {
+            ins.r[k] = s[k] / s_max;
+            ins.delta[k] = gap;
+        }
+    }
+    if g2_top == 0.0 {
+        let mut rest = 0.0;
+        for k in 0..N {
+            if !ins.top[k] {
+                rest += g2[k] / (ins.delta[k] * ins.delta[k]);
+            }
+        }
+        if rest <= 1.0 {
+            return finish_hard(s, chat, &ins);
+        }
+    }
+    let lo = g2_top.sqrt();
+    let hi = b2.sqrt().min(1.0);
+    let start = if lo > 0.0 { lo } else { 0.5 * hi };
+    let t = if lo >= hi {
+        lo
+    } else {
+        newton(|t| phi_t(&ins, &g2, t), lo, hi, start)
+    };
+    if t > 0.5 {
+        let ulo = -(1.0 - lo) / s_max;
+        let uhi = -(1.0 - hi) / s_max;
+        let u0 = -(1.0 - t) / s_max;
+        let u = newton(|u| phi_u(s, &g2, u), ulo, uhi.min(0.0), u0);
+        return finish_u(s, chat, g, u, true);
+    }
+    let mut p = Projection {
+        u: -(1.0 - t) / s_max,
+        xhat: [0.0; N],
+        t: [0.0; N],
+        dhat: [0.0; N],
+        d2: 0.0,
+        inside: true,
+        hard: false,
+    };
+    let one_minus_t = 1.0 - t;
+    for k in 0..N {
+        let tk = ins.delta[k] + t * ins.r[k];
+        p.t[k] = tk;
+        p.xhat[k] = chat[k] / tk;
+        let dk = -chat[k] * one_minus_t * ins.r[k] / tk;
+        p.dhat[k] = dk;
+        p.d2 += dk * dk;
+    }
+    p
+}
+
+fn finish_u<const N: usize>(
+    s: &[f64; N],
+    chat: &[f64; N],
+    _g: &[f64; N],
+    u: f64,
+    inside: bool,
+) -> Projection<N> {
+    let mut p = Projection {
+        u,
+        xhat: [0.0; N],
+        t: [0.0; N],
+        dhat: [0.0; N],
+        d2: 0.0,
+        inside,
+        hard: false,
+    };
+    for k in 0..N {
+        let us = u * s[k];
+        let tk = 1.0 + us;
+        p.t[k] = tk;
+        p.xhat[k] = chat[k] / tk;
+        let dk = chat[k] * us / tk;
+        p.dhat[k] = dk;
+        p.d2 += dk * dk;
+    }
+    p
+}
+
+fn finish_hard<const N: usize>(s: &[f64; N], chat: &[f64; N], ins: &Inside<N>) -> Projection<N> {
+    let mut p = Projection {
+        u: -1.0 / ins.s_top,
+        xhat: [0.0; N],
+        t: [0.0; N],
+        dhat: [0.0; N],
+        d2: 0.0,
+        inside: true,
+        hard: true,
+    };
+    let mut used = 0.0;
+    let mut first_top = None;
+    for k in 0..N {
+        if ins.top[k] {
+            if first_top.is_none() {
+                first_top = Some(k);
+            }
+            continue;
+        }
+        let tk = ins.delta[k];
+        p.t[k] = tk;
+        p.xhat[k] = chat[k] / tk;
+        used += s[k] * p.xhat[k] * p.xhat[k];
+        let dk = -chat[k] * ins.r[k] / tk;
+        p.dhat[k] = dk;
+        p.d2 += dk * dk;
+    }
+    if let Some(k) = first_top {
+        let x = ((1.0 - used).max(0.0) / ins.s_top).sqrt();
+        p.xhat[k] = x;
+        p.dhat[k] = -x;
+        p.d2 += x * x;
+    }
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_kkt<const N: usize>(s: &[f64; N], chat: &[f64; N], p: &Projection<N>) {
+        let mut cons = 0.0;
+        for k in 0..N {
+            cons += s[k] * p.xhat[k] * p.xhat[k];
+            let res = p.xhat[k] + p.u * s[k] * p.xhat[k] - chat[k];
+            assert!(
+                res.abs() <= 1e-13 * (1.0 + chat[k].abs() + p.xhat[k].abs()),
+                "k={k} res={res}"
+            );
+        }
+        assert!((cons - 1.0).abs() < 1e-13, "constraint {cons}");
+    }
+
+    #[test]
+    fn outside_inside_and_hard_cases_satisfy_kkt() {
+        let s: [f64; 3] = [4.0, 1.0, 0.25];
+        for chat in [
+            [1.0, 2.0, 3.0],
+            [0.1, 0.2, 0.1],
+            [1e-9, 0.1, 0.3],
+            [0.0, 0.1, 0.3],
+            [0.0, 0.0, 0.0],
+        ] {
+            let g: Vec<f64> = (0..3).map(|k| s[k].sqrt() * chat[k]).collect();
+            let p = solve(&s, &chat, &[g[0], g[1], g[2]]);
+            check_kkt(&s, &chat, &p);
+            assert!(p.u >= -1.0 / 4.0);
+        }
+    }
+}

@@ -1,0 +1,398 @@
+//! Derivatives of the pair term against central finite differences, and the envelope-theorem
+//! gradient of d² against the implicit-function system of Appendix A.1.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::Rng;
+use implicit_packing::derivatives::{a1_reference, angle_gradient_3d, pair_derivatives};
+use implicit_packing::pair::pair_term;
+use implicit_packing::shape::angular_velocities_3d;
+use implicit_packing::{Body, Ellipse, Ellipsoid};
+
+/// Variables of a 3D pair: [c_i, angles_i, c_j, angles_j].
+fn bodies3(v: &[f64; 12], li: [f64; 3], lj: [f64; 3]) -> (Ellipsoid, Ellipsoid) {
+    let i = Body::from_angles([v[0], v[1], v[2]], li, [v[3], v[4], v[5]]).unwrap();
+    let j = Body::from_angles([v[6], v[7], v[8]], lj, [v[9], v[10], v[11]]).unwrap();
+    (i, j)
+}
+
+fn bodies2(v: &[f64; 6], li: [f64; 2], lj: [f64; 2]) -> (Ellipse, Ellipse) {
+    let i = Body::ellipse([v[0], v[1]], li, v[2]).unwrap();
+    let j = Body::ellipse([v[3], v[4]], lj, v[5]).unwrap();
+    (i, j)
+}
+
+fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
+    let li = [
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+    ];
+    let lj = [
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+    ];
+    let ri = li.iter().cloned().fold(0.0, f64::max);
+    let rj = lj.iter().cloned().fold(0.0, f64::max);
+    let dir = rng.unit3();
+    let dist = rng.range(0.0, 1.1) * (ri + rj);
+    let mut v = [0.0; 12];
+    for k in 0..3 {
+        v[k] = rng.range(-1.0, 1.0);
+        v[6 + k] = v[k] + dist * dir[k];
+        v[3 + k] = rng.range(-3.0, 3.0);
+        v[9 + k] = rng.range(-3.0, 3.0);
+    }
+    v[4] = rng.range(-1.4, 1.4);
+    v[10] = rng.range(-1.4, 1.4);
+    (v, li, lj)
+}
+
+/// Away from the kinks of max{0, ·}² and from the hard case, where f is smooth.
+fn smooth(a: f64, b: f64, inside_t: bool) -> bool {
+    a.abs() > 1e-3 && b.abs() > 1e-3 && inside_t
+}
+
+fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
+    let scale = g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let worst = g
+        .iter()
+        .zip(fd)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    if scale == 0.0 { worst } else { worst / scale }
+}
+
+#[test]
+fn gradient_of_f_matches_finite_differences_3d() {
+    let mut rng = Rng(7);
+    let mut checked = 0;
+    let mut worst = 0.0f64;
+    let (mut worst_u, mut n_u) = (0.0f64, 0);
+    while checked < 1000 {
+        let (v, li, lj) = random_pair3(&mut rng);
+        let (i, j) = bodies3(&v, li, lj);
+        let p = pair_term(&i, &j);
+        // The hard case (X not unique) is the one non-smooth point of U and d² besides the
+        // kinks of max{0, ·}²; random pairs never hit it exactly, but skip it if they do.
+        let far_from_hard = p.x_unique;
+        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, far_from_hard) {
+            continue;
+        }
+        let d = pair_derivatives(&i, &j);
+        let mut g = [0.0; 12];
+        g[0..3].copy_from_slice(&d.grad_f.centre_i);
+        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
+        g[6..9].copy_from_slice(&d.grad_f.centre_j);
+        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
+        let mut gu = [0.0; 12];
+        gu[0..3].copy_from_slice(&d.grad_u.centre_i);
+        gu[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.torque_i));
+        gu[6..9].copy_from_slice(&d.grad_u.centre_j);
+        gu[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.torque_j));
+        let mut fd = [0.0; 12];
+        let mut fdu = [0.0; 12];
+        let h = 1e-6;
+        for k in 0..12 {
+            let mut vp = v;
+            vp[k] += h;
+            let mut vm = v;
+            vm[k] -= h;
+            let (ip, jp) = bodies3(&vp, li, lj);
+            let (im, jm) = bodies3(&vm, li, lj);
+            let pp = pair_term(&ip, &jp);
+            let pm = pair_term(&im, &jm);
+            fd[k] = (pp.f - pm.f) / (2.0 * h);
+            fdu[k] = (pp.u - pm.u) / (2.0 * h);
+        }
+        let e = rel_err(&g, &fd);
+        assert!(
+            e <= 1e-6,
+            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}\n v = {v:?} li {li:?} lj {lj:?} d2 {} u {}",
+            p.d2,
+            p.u
+        );
+        worst = worst.max(e);
+        if p.centre_inside || p.u < 1.0 {
+            let eu = rel_err(&gu, &fdu);
+            assert!(
+                eu <= 1e-6,
+                "pair {checked}: ∇U rel err {eu:e}\n g = {gu:?}\nfd = {fdu:?}"
+            );
+            worst_u = worst_u.max(eu);
+            n_u += 1;
+        }
+        checked += 1;
+    }
+    println!(
+        "3D: {checked} pairs, worst relative error of ∇f {worst:.2e}; ∇U on {n_u} pairs: {worst_u:.2e}"
+    );
+}
+
+#[test]
+fn gradient_of_f_matches_finite_differences_2d() {
+    let mut rng = Rng(11);
+    let mut checked = 0;
+    let mut worst = 0.0f64;
+    while checked < 1000 {
+        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
+        let a = rng.range(0.0, std::f64::consts::TAU);
+        let dist = rng.range(0.0, 1.1) * r;
+        let v = [
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-3.0, 3.0),
+            0.0,
+            0.0,
+            rng.range(-3.0, 3.0),
+        ];
+        let v = [
+            v[0],
+            v[1],
+            v[2],
+            v[0] + dist * a.cos(),
+            v[1] + dist * a.sin(),
+            v[5],
+        ];
+        let (i, j) = bodies2(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+            continue;
+        }
+        let d = pair_derivatives(&i, &j);
+        let g = [
+            d.grad_f.centre_i[0],
+            d.grad_f.centre_i[1],
+            d.grad_f.torque_i[2],
+            d.grad_f.centre_j[0],
+            d.grad_f.centre_j[1],
+            d.grad_f.torque_j[2],
+        ];
+        let h = 1e-6;
+        let mut fd = [0.0; 6];
+        for k in 0..6 {
+            let mut vp = v;
+            vp[k] += h;
+            let mut vm = v;
+            vm[k] -= h;
+            let (ip, jp) = bodies2(&vp, li, lj);
+            let (im, jm) = bodies2(&vm, li, lj);
+            fd[k] = (pair_term(&ip, &jp).f - pair_term(&im, &jm).f) / (2.0 * h);
+        }
+        let e = rel_err(&g, &fd);
+        assert!(
+            e <= 1e-6,
+            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}"
+        );
+        worst = worst.max(e);
+        checked += 1;
+    }
+    println!("2D: {checked} pairs, worst relative error of ∇f {worst:.2e}");
+}
+
+/// The envelope-theorem gradient of d² and the implicit gradient of U agree with the solution of
+/// the (n+1)×(n+1) system of Appendix A.1, parameter by parameter.
+#[test]
+fn envelope_form_equals_appendix_a1() {
+    let mut rng = Rng(3);
+    let mut worst_d2 = 0.0f64;
+    let mut worst_u = 0.0f64;
+    let mut n = 0;
+    while n < 300 {
+        let (v, li, lj) = random_pair3(&mut rng);
+        let (i, j) = bodies3(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if !p.x_unique {
+            continue;
+        }
+        let d = pair_derivatives(&i, &j);
+        let wi = angular_velocities_3d([v[3], v[4], v[5]]);
+        let wj = angular_velocities_3d([v[9], v[10], v[11]]);
+        let gi = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_d2.torque_i);
+        let gj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_d2.torque_j);
+        let gui = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.torque_i);
+        let guj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.torque_j);
+        let mut env_d2 = Vec::new();
+        let mut env_u = Vec::new();
+        let mut a1_d2 = Vec::new();
+        let mut a1_u = Vec::new();
+        for k in 0..12 {
+            let (mut dci, mut dcj, mut w_i, mut w_j) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+            match k {
+                0..=2 => dci[k] = 1.0,
+                3..=5 => w_i = wi[k - 3],
+                6..=8 => dcj[k - 6] = 1.0,
+                _ => w_j = wj[k - 9],
+            }
+            let (dd2, du) = a1_reference(&i, &j, &dci, &dcj, &w_i, &w_j);
+            a1_d2.push(dd2);
+            a1_u.push(du);
+            let (e2, eu) = match k {
+                0..=2 => (d.grad_d2.centre_i[k], d.grad_u.centre_i[k]),
+                3..=5 => (gi[k - 3], gui[k - 3]),
+                6..=8 => (d.grad_d2.centre_j[k - 6], d.grad_u.centre_j[k - 6]),
+                _ => (gj[k - 9], guj[k - 9]),
+            };
+            env_d2.push(e2);
+            env_u.push(eu);
+        }
+        let e2 = rel_err(&env_d2, &a1_d2);
+        let eu = rel_err(&env_u, &a1_u);
+        assert!(
+            e2 <= 1e-9 && eu <= 1e-9,
+            "pair {n}: d2 {e2:e} U {eu:e}\n{env_d2:?}\n{a1_d2:?}\n{env_u:?}\n{a1_u:?}"
+        );
+        worst_d2 = worst_d2.max(e2);
+        worst_u = worst_u.max(eu);
+        n += 1;
+    }
+    println!("envelope vs A.1 on {n} pairs: worst rel diff ∇d² {worst_d2:.2e}, ∇U {worst_u:.2e}");
+}
+
+/// Exact directional derivatives of ∇f (Hessian–vector products) against central finite
+/// differences of the analytic gradient, 3D (12 variables) and 2D (6 variables).
+#[test]
+fn hessian_vector_products_match_finite_differences() {
+    use implicit_packing::derivatives::{
+        PairDirection, angular_velocity_derivatives_3d, pair_gradient_derivative,
+    };
+    let grad12 = |v: &[f64; 12], li: [f64; 3], lj: [f64; 3]| -> [f64; 12] {
+        let (i, j) = bodies3(v, li, lj);
+        let d = pair_derivatives(&i, &j);
+        let mut g = [0.0; 12];
+        g[0..3].copy_from_slice(&d.grad_f.centre_i);
+        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
+        g[6..9].copy_from_slice(&d.grad_f.centre_j);
+        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
+        g
+    };
+    let mut rng = Rng(99);
+    let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
+    while checked < 1000 {
+        let (v, li, lj) = random_pair3(&mut rng);
+        let (i, j) = bodies3(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+            continue;
+        }
+        let dv: [f64; 12] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let ai = [v[3], v[4], v[5]];
+        let aj = [v[9], v[10], v[11]];
+        let wi = angular_velocities_3d(ai);
+        let wj = angular_velocities_3d(aj);
+        let mut dir = PairDirection {
+            centre_i: [dv[0], dv[1], dv[2]],
+            centre_j: [dv[6], dv[7], dv[8]],
+            spin_i: [0.0; 3],
+            spin_j: [0.0; 3],
+        };
+        for a in 0..3 {
+            for k in 0..3 {
+                dir.spin_i[k] += wi[a][k] * dv[3 + a];
+                dir.spin_j[k] += wj[a][k] * dv[9 + a];
+            }
+        }
+        let (_, grad, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
+        let dwi = angular_velocity_derivatives_3d(ai);
+        let dwj = angular_velocity_derivatives_3d(aj);
+        let mut exact = [0.0; 12];
+        exact[0..3].copy_from_slice(&hv.centre_i);
+        exact[6..9].copy_from_slice(&hv.centre_j);
+        for a in 0..3 {
+            let mut e_i = (0..3).map(|k| wi[a][k] * hv.torque_i[k]).sum::<f64>();
+            let mut e_j = (0..3).map(|k| wj[a][k] * hv.torque_j[k]).sum::<f64>();
+            for b in 0..3 {
+                e_i += (0..3).map(|k| dwi[a][b][k] * grad.torque_i[k]).sum::<f64>() * dv[3 + b];
+                e_j += (0..3).map(|k| dwj[a][b][k] * grad.torque_j[k]).sum::<f64>() * dv[9 + b];
+            }
+            exact[3 + a] = e_i;
+            exact[9 + a] = e_j;
+        }
+        let h = 1e-6;
+        let vp: [f64; 12] = std::array::from_fn(|k| v[k] + h * dv[k]);
+        let vm: [f64; 12] = std::array::from_fn(|k| v[k] - h * dv[k]);
+        let (gp, gm) = (grad12(&vp, li, lj), grad12(&vm, li, lj));
+        let fd: [f64; 12] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
+        let e = rel_err(&exact, &fd);
+        assert!(
+            e <= 1e-6,
+            "pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}\n u {} eps {} d2 {}",
+            p.u,
+            p.eps,
+            p.d2
+        );
+        worst = worst.max(e);
+        with_u += usize::from(p.u < p.eps);
+        checked += 1;
+    }
+    println!(
+        "3D Hessian-vector products: {checked} pairs ({with_u} with U < ε), worst relative error {worst:.2e}"
+    );
+
+    let grad6 = |v: &[f64; 6], li: [f64; 2], lj: [f64; 2]| -> [f64; 6] {
+        let (i, j) = bodies2(v, li, lj);
+        let d = pair_derivatives(&i, &j);
+        [
+            d.grad_f.centre_i[0],
+            d.grad_f.centre_i[1],
+            d.grad_f.torque_i[2],
+            d.grad_f.centre_j[0],
+            d.grad_f.centre_j[1],
+            d.grad_f.torque_j[2],
+        ]
+    };
+    let (mut checked, mut worst) = (0, 0.0f64);
+    while checked < 1000 {
+        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
+        let ang = rng.range(0.0, std::f64::consts::TAU);
+        let dist = rng.range(0.0, 1.1) * r;
+        let c = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+        let v = [
+            c[0],
+            c[1],
+            rng.range(-3.0, 3.0),
+            c[0] + dist * ang.cos(),
+            c[1] + dist * ang.sin(),
+            rng.range(-3.0, 3.0),
+        ];
+        let (i, j) = bodies2(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+            continue;
+        }
+        let dv: [f64; 6] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let dir = PairDirection {
+            centre_i: [dv[0], dv[1]],
+            centre_j: [dv[3], dv[4]],
+            spin_i: [0.0, 0.0, dv[2]],
+            spin_j: [0.0, 0.0, dv[5]],
+        };
+        let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
+        let exact = [
+            hv.centre_i[0],
+            hv.centre_i[1],
+            hv.torque_i[2],
+            hv.centre_j[0],
+            hv.centre_j[1],
+            hv.torque_j[2],
+        ];
+        let h = 1e-6;
+        let vp: [f64; 6] = std::array::from_fn(|k| v[k] + h * dv[k]);
+        let vm: [f64; 6] = std::array::from_fn(|k| v[k] - h * dv[k]);
+        let (gp, gm) = (grad6(&vp, li, lj), grad6(&vm, li, lj));
+        let fd: [f64; 6] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
+        let e = rel_err(&exact, &fd);
+        assert!(
+            e <= 1e-6,
+            "2D pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}"
+        );
+        worst = worst.max(e);
+        checked += 1;
+    }
+    println!("2D Hessian-vector products: {checked} pairs, worst relative error {worst:.2e}");
+}

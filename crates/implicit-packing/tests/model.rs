@@ -1,0 +1,380 @@
+//! The whole model: grid sum equals the all-pairs sum, gradients against finite differences,
+//! value-only calls agree with gradient calls, bad variables are named.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::Rng;
+use implicit_packing::Error;
+use implicit_packing::containment::ContainerKind;
+use implicit_packing::model::{ModelGradient, Problem};
+
+/// m ellipsoids on a jittered cubic lattice at about the given volume fraction, random angles;
+/// container dimensions last.
+fn config3(
+    rng: &mut Rng,
+    m: usize,
+    density: f64,
+    kind: ContainerKind,
+) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let axes: Vec<[f64; 3]> = (0..m)
+        .map(|_| {
+            [
+                rng.range(0.8, 1.2),
+                rng.range(0.6, 0.9),
+                rng.range(0.4, 0.6),
+            ]
+        })
+        .collect();
+    let vol: f64 = axes
+        .iter()
+        .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
+        .sum();
+    let side = (vol / density).cbrt();
+    let per = (m as f64).cbrt().ceil() as usize;
+    let h = side / per as f64;
+    let mut x = Vec::new();
+    for i in 0..m {
+        let (a, b, c) = (i % per, (i / per) % per, i / (per * per));
+        for (k, idx) in [a, b, c].into_iter().enumerate() {
+            let _ = k;
+            x.push((idx as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        }
+        x.push(rng.range(-3.0, 3.0));
+        x.push(rng.range(-1.4, 1.4));
+        x.push(rng.range(-3.0, 3.0));
+    }
+    match kind {
+        ContainerKind::Ball => x.push(0.45 * side * 3f64.sqrt()),
+        _ => x.extend_from_slice(&[0.45 * side, 0.5 * side, 0.55 * side]),
+    }
+    (axes, x)
+}
+
+fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
+    let axes: Vec<[f64; 2]> = (0..m)
+        .map(|_| [rng.range(0.8, 1.2), rng.range(0.4, 0.7)])
+        .collect();
+    let area: f64 = axes
+        .iter()
+        .map(|l| std::f64::consts::PI * l[0] * l[1])
+        .sum();
+    let side = (area / density).sqrt();
+    let per = (m as f64).sqrt().ceil() as usize;
+    let h = side / per as f64;
+    let mut x = Vec::new();
+    for i in 0..m {
+        x.push(((i % per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        x.push(((i / per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        x.push(rng.range(-3.0, 3.0));
+    }
+    x.extend_from_slice(&[0.45 * side, 0.48 * side]);
+    (axes, x)
+}
+
+#[test]
+fn grid_sum_equals_all_pairs_sum() {
+    let mut rng = Rng(21);
+    for &(m, density) in &[(200usize, 0.6), (343, 0.3), (50, 0.7)] {
+        let (axes, x) = config3(&mut rng, m, density, ContainerKind::Box);
+        let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
+        let ev = p.evaluate(&x, None).unwrap();
+        let all = p.overlap_all_pairs(&x).unwrap();
+        assert!(ev.overlap > 0.0);
+        assert!(
+            (ev.overlap - all).abs() <= 1e-12 * all,
+            "{} {}",
+            ev.overlap,
+            all
+        );
+        assert!(ev.pairs < m * (m - 1) / 2);
+    }
+    let (axes, x) = config2(&mut rng, 400, 0.6);
+    let mut p = Problem::<2>::new(axes, ContainerKind::Ellipsoid).unwrap();
+    let ev = p.evaluate(&x, None).unwrap();
+    let all = p.overlap_all_pairs(&x).unwrap();
+    assert!(
+        (ev.overlap - all).abs() <= 1e-12 * all,
+        "{} {}",
+        ev.overlap,
+        all
+    );
+}
+
+fn fd_check(
+    p_eval: &mut dyn FnMut(
+        &[f64],
+        Option<&mut ModelGradient>,
+    ) -> implicit_packing::model::Evaluation,
+    x: &[f64],
+) {
+    let mut g = ModelGradient::default();
+    let ev = p_eval(x, Some(&mut g));
+    let ev0 = p_eval(x, None);
+    assert_eq!(ev.overlap, ev0.overlap);
+    assert_eq!(ev.containment, ev0.containment);
+    assert_eq!(ev.objective, ev0.objective);
+    assert!(ev.overlap > 0.0 && ev.containment > 0.0);
+    let h = 1e-6;
+    let mut worst = [0.0f64; 3];
+    let scales = [
+        g.overlap.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+        g.containment.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+        g.objective.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+    ];
+    for k in 0..x.len() {
+        let mut xp = x.to_vec();
+        xp[k] += h;
+        let mut xm = x.to_vec();
+        xm[k] -= h;
+        let ep = p_eval(&xp, None);
+        let em = p_eval(&xm, None);
+        let fd = [
+            (ep.overlap - em.overlap) / (2.0 * h),
+            (ep.containment - em.containment) / (2.0 * h),
+            (ep.objective - em.objective) / (2.0 * h),
+        ];
+        let an = [g.overlap[k], g.containment[k], g.objective[k]];
+        for q in 0..3 {
+            worst[q] = worst[q].max((fd[q] - an[q]).abs() / scales[q]);
+        }
+    }
+    println!(
+        "model gradient vs FD: overlap {:.2e}, containment {:.2e}, objective {:.2e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(worst.iter().all(|&w| w <= 1e-6), "{worst:?}");
+}
+
+#[test]
+fn model_gradient_matches_finite_differences() {
+    let mut rng = Rng(33);
+    for kind in [
+        ContainerKind::Ball,
+        ContainerKind::Ellipsoid,
+        ContainerKind::Box,
+    ] {
+        let (axes, x) = config3(&mut rng, 27, 0.55, kind);
+        let mut p = Problem::<3>::new(axes, kind).unwrap();
+        fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
+    }
+    let (axes, x) = config2(&mut rng, 25, 0.6);
+    let mut p = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+    fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
+}
+
+#[test]
+fn bad_variables_are_reported_by_index() {
+    let mut p = Problem::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerKind::Ball).unwrap();
+    let mut x = vec![0.0; p.var_count()];
+    x[0] = 3.0;
+    x[6] = -3.0;
+    x[18] = 10.0;
+    assert!(p.evaluate(&x, None).is_ok());
+    x[7] = f64::NAN;
+    assert!(matches!(
+        p.evaluate(&x, None),
+        Err(Error::NonFiniteVariable { index: 7, .. })
+    ));
+    x[7] = 0.0;
+    x[18] = -1.0;
+    assert!(matches!(
+        p.evaluate(&x, None),
+        Err(Error::InvalidContainer { dimension: 0, .. })
+    ));
+    assert!(matches!(
+        p.evaluate(&x[..5], None),
+        Err(Error::LengthMismatch { .. })
+    ));
+    assert!(matches!(
+        Problem::<2>::new(vec![[1.0, 1.0], [1.0, 0.0]], ContainerKind::Box),
+        Err(Error::InvalidSemiAxis {
+            item: Some(1),
+            axis: 1,
+            ..
+        })
+    ));
+}
+
+/// `(x, v, out)`: a Hessian–vector product.
+type Hvp<'a> = &'a mut dyn FnMut(&[f64], &[f64], &mut ModelGradient);
+/// `(x, out)`: a gradient.
+type Grad<'a> = &'a mut dyn FnMut(&[f64], &mut ModelGradient);
+
+/// Hessian–vector products of the model against central differences of its exact gradient,
+/// and symmetric (uᵀHv = vᵀHu), for the three containers in 3D and a box in 2D.
+#[test]
+fn hessian_vector_products_match_finite_differences() {
+    let mut rng = Rng(55);
+    let check = |p: Hvp<'_>, grad: Grad<'_>, x: &[f64], rng: &mut Rng| {
+        let n = x.len();
+        let (mut hu, mut hv) = (ModelGradient::default(), ModelGradient::default());
+        let (mut gp, mut gm) = (ModelGradient::default(), ModelGradient::default());
+        let mut worst = [0.0f64; 3];
+        let mut worst_sym = 0.0f64;
+        for _ in 0..5 {
+            let u: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+            let v: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+            p(x, &u, &mut hu);
+            p(x, &v, &mut hv);
+            let h = 1e-6;
+            let xp: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + h * b).collect();
+            let xm: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a - h * b).collect();
+            grad(&xp, &mut gp);
+            grad(&xm, &mut gm);
+            for (q, (an, (pp, mm))) in [
+                (&hv.overlap, (&gp.overlap, &gm.overlap)),
+                (&hv.containment, (&gp.containment, &gm.containment)),
+                (&hv.objective, (&gp.objective, &gm.objective)),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let scale = an.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+                for k in 0..n {
+                    let fd = (pp[k] - mm[k]) / (2.0 * h);
+                    worst[q] = worst[q].max((fd - an[k]).abs() / scale.max(1e-300));
+                }
+            }
+            let uhv: f64 = u.iter().zip(&hv.overlap).map(|(a, b)| a * b).sum();
+            let vhu: f64 = v.iter().zip(&hu.overlap).map(|(a, b)| a * b).sum();
+            worst_sym = worst_sym.max((uhv - vhu).abs() / uhv.abs().max(vhu.abs()));
+        }
+        println!(
+            "model HVP vs FD of the gradient: overlap {:.2e}, containment {:.2e}, objective {:.2e}; asymmetry {worst_sym:.2e}",
+            worst[0], worst[1], worst[2]
+        );
+        assert!(
+            worst.iter().all(|&w| w <= 1e-6) && worst_sym <= 1e-9,
+            "{worst:?} {worst_sym}"
+        );
+    };
+    for kind in [
+        ContainerKind::Ball,
+        ContainerKind::Ellipsoid,
+        ContainerKind::Box,
+    ] {
+        let (axes, x) = config3(&mut rng, 27, 0.55, kind);
+        let mut p = Problem::<3>::new(axes.clone(), kind).unwrap();
+        let mut q = Problem::<3>::new(axes, kind).unwrap();
+        check(
+            &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
+            &mut |x, g| {
+                q.evaluate(x, Some(g)).unwrap();
+            },
+            &x,
+            &mut rng,
+        );
+    }
+    let (axes, x) = config2(&mut rng, 25, 0.6);
+    let mut p = Problem::<2>::new(axes.clone(), ContainerKind::Box).unwrap();
+    let mut q = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+    check(
+        &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
+        &mut |x, g| {
+            q.evaluate(x, Some(g)).unwrap();
+        },
+        &x,
+        &mut rng,
+    );
+}
+
+/// Certification by PW85 agrees with the model: a pair has f > 0 exactly when PW85 says it
+/// overlaps, and an ellipsoid is reported outside exactly when its residual is positive.
+#[test]
+fn certification_agrees_with_the_model() {
+    let mut rng = Rng(66);
+    for &density in &[0.3, 0.6] {
+        let (axes, x) = config3(&mut rng, 125, density, ContainerKind::Box);
+        let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
+        let cert = p.certify(&x).unwrap();
+        let b = p.bodies().to_vec();
+        let mut expect = Vec::new();
+        for i in 0..b.len() {
+            for j in i + 1..b.len() {
+                if implicit_packing::overlap_measure(&b[i], &b[j]) > 0.0 {
+                    expect.push((i, j));
+                }
+            }
+        }
+        assert_eq!(cert.overlapping_pairs, expect);
+        assert!(!cert.is_feasible());
+    }
+    // Two separated ellipses well inside a disc: feasible.
+    let mut p = Problem::<2>::new(vec![[1.0, 0.5], [1.0, 0.5]], ContainerKind::Ball).unwrap();
+    let cert = p.certify(&[-1.5, 0.0, 0.0, 1.5, 0.0, 0.3, 4.0]).unwrap();
+    assert!(cert.is_feasible(), "{cert:?}");
+    let cert = p.certify(&[-0.5, 0.0, 0.0, 0.5, 0.0, 0.3, 1.2]).unwrap();
+    assert_eq!(cert.overlapping_pairs, vec![(0, 1)]);
+    assert_eq!(cert.outside, vec![0, 1]);
+}
+
+/// Coincident centres put the pair in the hard case (no Hessian): the Hessian–vector product
+/// falls back to a difference of gradients and stays finite.
+#[test]
+fn hessian_vector_product_in_the_hard_case_is_finite() {
+    let mut p =
+        Problem::<3>::new(vec![[1.0, 0.5, 0.25], [0.8, 0.6, 0.3]], ContainerKind::Ball).unwrap();
+    let x = [
+        0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0, -0.3, 0.1, 0.2, 3.0,
+    ];
+    let v: Vec<f64> = (0..x.len()).map(|k| 0.1 * (k as f64 + 1.0)).collect();
+    let mut out = ModelGradient::default();
+    p.hessian_vector_product(&x, &v, &mut out).unwrap();
+    assert!(
+        out.overlap
+            .iter()
+            .chain(&out.containment)
+            .chain(&out.objective)
+            .all(|a| a.is_finite())
+    );
+    assert!(out.overlap.iter().any(|&a| a != 0.0));
+}
+
+/// Bodies → variables → bodies is the identity (up to rounding of the angle recovery).
+#[test]
+fn pack_variables_round_trips() {
+    let mut rng = Rng(77);
+    let (axes, x) = config3(&mut rng, 8, 0.4, ContainerKind::Ball);
+    let mut p = Problem::<3>::new(axes, ContainerKind::Ball).unwrap();
+    let bodies = p.bodies_at(&x).unwrap().to_vec();
+    let y = p.pack_variables(&bodies, &x[x.len() - 1..]).unwrap();
+    let again = p.bodies_at(&y).unwrap().to_vec();
+    for (a, b) in bodies.iter().zip(&again) {
+        let (qa, qb) = (a.rotation(), b.rotation());
+        for r in 0..3 {
+            assert!((a.centre()[r] - b.centre()[r]).abs() == 0.0);
+            for c in 0..3 {
+                assert!((qa[r][c] - qb[r][c]).abs() < 1e-13);
+            }
+        }
+    }
+    let q = Problem::<2>::new(vec![[1.0, 0.5]], ContainerKind::Box).unwrap();
+    let e = implicit_packing::Ellipse::ellipse([0.3, -0.2], [1.0, 0.5], 2.5).unwrap();
+    let y = q.pack_variables(&[e], &[2.0, 3.0]).unwrap();
+    assert_eq!((y[0], y[1], y[3], y[4]), (0.3, -0.2, 2.0, 3.0));
+    assert!((y[2] - 2.5).abs() < 1e-14);
+    let wrong = implicit_packing::Ellipse::ellipse([0.3, -0.2], [1.0, 0.6], 2.5).unwrap();
+    assert!(matches!(
+        q.pack_variables(&[wrong], &[2.0, 3.0]),
+        Err(Error::InvalidSemiAxis {
+            item: Some(0),
+            axis: 1,
+            ..
+        })
+    ));
+}
+
+/// A spheroid centred on the container's centre and sticking out has a circle of farthest
+/// points (hard case, no Hessian): the Hessian–vector product falls back to a difference of
+/// gradients and stays finite.
+#[test]
+fn containment_hessian_in_the_hard_case_is_finite() {
+    let mut p = Problem::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerKind::Ball).unwrap();
+    let x = [0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.8];
+    let v = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6, 0.7];
+    let mut out = ModelGradient::default();
+    p.hessian_vector_product(&x, &v, &mut out).unwrap();
+    assert!(out.containment.iter().all(|a| a.is_finite()));
+    assert!(out.containment.iter().any(|&a| a != 0.0));
+}
