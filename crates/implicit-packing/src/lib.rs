@@ -31,6 +31,7 @@ pub mod derivatives;
 pub mod error;
 pub(crate) mod linalg;
 pub mod model;
+pub mod multistart;
 pub mod pack;
 pub mod pair;
 pub mod projection;

@@ -1,0 +1,52 @@
+//! A multi-start run on one of the paper's instances:
+//! `cargo run --release -p implicit-packing --example multistart -- 3 ball 100 60 2`
+//! (dimension, container, items, seconds, threads).
+
+use implicit_packing::containment::ContainerKind;
+use implicit_packing::multistart::{MultiStartSettings, multistart, paper_start};
+use std::time::Duration;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |k: usize, default: &str| args.get(k).cloned().unwrap_or_else(|| default.into());
+    let dim: usize = arg(1, "3").parse()?;
+    let kind = match arg(2, "ball").as_str() {
+        "ball" => ContainerKind::Ball,
+        "ellipsoid" => ContainerKind::Ellipsoid,
+        "box" => ContainerKind::Box,
+        other => return Err(format!("unknown container `{other}`").into()),
+    };
+    let m: usize = arg(3, "100").parse()?;
+    let seconds: f64 = arg(4, "60").parse()?;
+    let threads: usize = arg(5, "2").parse()?;
+    let mut settings = MultiStartSettings::paper(dim, 1);
+    settings.threads = threads;
+    settings.max_local_minimisations = usize::MAX;
+    settings.time_limit = Some(Duration::from_secs_f64(seconds));
+    let mut report = |p: &implicit_packing::multistart::MultiStartProgress| {
+        eprintln!(
+            "{:4} local minimisations, {:7.1} s: last {:.5}, best {:.5}",
+            p.local_minimisations,
+            p.elapsed.as_secs_f64(),
+            p.last_density,
+            p.best_density
+        );
+    };
+    let r = if dim == 2 {
+        let axes = vec![[2.0, 1.0]; m];
+        let x0 = paper_start(&axes, kind)?;
+        multistart(&axes, kind, &x0, &settings, &mut report, &|| false)?
+    } else {
+        let axes = vec![[1.0, 0.75, 0.5]; m];
+        let x0 = paper_start(&axes, kind)?;
+        multistart(&axes, kind, &x0, &settings, &mut report, &|| false)?
+    };
+    println!(
+        "{dim}D m = {m} {kind:?}: best density {:.5} after {:.1} s ({} local minimisations in {:.1} s, {threads} threads)",
+        r.best.density,
+        r.time_to_best.as_secs_f64(),
+        r.local_minimisations,
+        r.wall_time.as_secs_f64()
+    );
+    Ok(())
+}
