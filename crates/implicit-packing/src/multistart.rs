@@ -70,7 +70,8 @@ pub struct MultiStartProgress {
 pub struct MultiStartResult {
     /// The best certified packing.
     pub best: LocalResult,
-    /// Local minimisations performed.
+    /// Local minimisations completed (a start cut off by the time limit or an interrupt is
+    /// not counted, except the first, whose packing is returned if nothing better exists).
     pub local_minimisations: usize,
     /// When the best packing was found, from the start of the run.
     pub time_to_best: Duration,
@@ -143,6 +144,11 @@ pub fn multistart<const N: usize>(
         let mut round_best: Option<LocalResult> = None;
         for result in results {
             let result = result?;
+            if result.report.stop_reason == auglag::StopReason::Interrupted {
+                // Cut off by the time limit or an interrupt, usually still at its perturbed
+                // (infeasible) start: repaired, but not a result of the method.
+                continue;
+            }
             done += 1;
             if result.density > best.density {
                 best = result.clone();
