@@ -4,9 +4,14 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 pub mod error;
+pub mod instances;
 pub mod measure;
 pub mod output;
+pub mod pack;
+pub mod packing;
 pub mod pairs;
+pub mod render;
+pub mod scene;
 pub mod table;
 
 pub use error::Error;

@@ -6,6 +6,8 @@ use ellipack::pairs::{Criterion, evaluate, read_pairs};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod commands;
+
 /// Decide whether ellipsoids overlap, and measure by how much.
 #[derive(Parser)]
 #[command(name = "ellipack", version, about)]
@@ -16,6 +18,47 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Pack ellipses or ellipsoids into the smallest container: multi-start local
+    /// minimisations of the implicit-variable model, each certified by PW85 verdicts and exact
+    /// containment. Without a scene file or --instance, packs a built-in scene (30 ellipses
+    /// (2, 1) in a minimum-area ellipse, 45 s).
+    ///
+    /// Writes packing.csv, summary.json, packing.xyz, packing.svg and packing.png in the
+    /// output folder. Ctrl-C stops and writes the best certified packing found so far; with
+    /// --resume, a run starts from the packing already in the folder.
+    Pack {
+        /// The scene (TOML): dimension, container, shape groups, solver settings, seed.
+        scene: Option<PathBuf>,
+        /// One of the paper's instances instead of a scene (see `ellipack instances`).
+        #[arg(long, conflicts_with = "scene")]
+        instance: Option<String>,
+        /// Output folder (created if needed). Default: the scene's, else `out`.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Wall-clock limit in seconds (overrides the scene's).
+        #[arg(long)]
+        time_limit: Option<f64>,
+        /// Seed of the multi-start perturbations (overrides the scene's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Parallel starts (overrides the scene's; 0: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Start from the packing already in the output folder.
+        #[arg(long)]
+        resume: bool,
+    },
+    /// Re-check a packing independently (PW85 verdicts on every close pair, exact
+    /// containment) and print its certificate. Exits with failure if any pair overlaps or any
+    /// item sticks out.
+    Verify {
+        /// A folder with packing.csv and summary.json, or the path of packing.csv.
+        packing: PathBuf,
+        /// summary.json, when the first argument is packing.csv.
+        summary: Option<PathBuf>,
+    },
+    /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
+    Instances,
     /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids (μ² < 1:
     /// they overlap).
     ///
@@ -62,7 +105,7 @@ enum CriterionArg {
 
 fn main() -> ExitCode {
     match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
@@ -70,14 +113,46 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<(), Error> {
-    match cli.command {
+fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    Ok(match cli.command {
+        Command::Pack {
+            scene,
+            instance,
+            out,
+            time_limit,
+            seed,
+            threads,
+            resume,
+        } => commands::pack(commands::PackArgs {
+            scene,
+            instance,
+            out,
+            time_limit,
+            seed,
+            threads,
+            resume,
+        })?,
+        Command::Verify { packing, summary } => commands::verify(&packing, summary.as_deref())?,
+        Command::Instances => {
+            print!("{}", ellipack::instances::listing());
+            ExitCode::SUCCESS
+        }
+        other => {
+            run_table(other)?;
+            ExitCode::SUCCESS
+        }
+    })
+}
+
+fn run_table(command: Command) -> Result<(), Error> {
+    match command {
         Command::Contact {
             input,
             output,
             criterion,
         } => contact(input, output, criterion),
         Command::Measure { input, output } => measure(input, output),
+        Command::Pack { .. } | Command::Verify { .. } | Command::Instances => Ok(()),
     }
 }
 

@@ -351,8 +351,9 @@ fn dilate<const N: usize>(problem: &Problem<N>, x: &[f64], s: f64) -> Vec<f64> {
         .collect()
 }
 
-/// μ² of two bodies by PW85 (`None` if PW85 refuses them).
-fn contact_mu2<const N: usize>(i: &Body<N>, j: &Body<N>) -> Option<f64> {
+/// μ² of two bodies by PW85 (`None` if PW85 refuses them): the PW85 contact function of the
+/// pair in PW85's storage (upper triangle of each shape matrix, r12 = c_j − c_i).
+pub fn contact_mu2<const N: usize>(i: &Body<N>, j: &Body<N>) -> Option<f64> {
     let (mi, mj) = (i.shape_matrix(), j.shape_matrix());
     let (ci, cj) = (i.centre(), j.centre());
     let r: Vec<f64> = (0..N).map(|k| cj[k] - ci[k]).collect();

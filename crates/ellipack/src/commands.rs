@@ -1,0 +1,189 @@
+//! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
+
+use ellipack::pack::{RunOptions, run, verify as check};
+use ellipack::packing::{read_packing_dir, read_packing_files, write_files};
+use ellipack::render::{RenderOptions, write_pictures};
+use ellipack::scene::Scene;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::error::Error;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// The arguments of `ellipack pack`.
+pub struct PackArgs {
+    pub scene: Option<PathBuf>,
+    pub instance: Option<String>,
+    pub out: Option<PathBuf>,
+    pub time_limit: Option<f64>,
+    pub seed: Option<u64>,
+    pub threads: Option<usize>,
+    pub resume: bool,
+}
+
+pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
+    let scene = match (&args.scene, &args.instance) {
+        (Some(path), _) => Scene::from_file(path)?,
+        (None, Some(name)) => ellipack::instances::by_name(name)
+            .ok_or_else(|| {
+                format!(
+                    "unknown instance `{name}`; the instances are: {}",
+                    ellipack::instances::names()
+                )
+            })?
+            .scene(),
+        (None, None) => {
+            eprintln!(
+                "no scene given: packing the built-in scene ({})",
+                Scene::default_scene().title()
+            );
+            Scene::default_scene()
+        }
+    };
+    let out = args
+        .out
+        .clone()
+        .or_else(|| scene.output.directory.clone())
+        .unwrap_or_else(|| PathBuf::from("out"));
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let time_limit = match args.time_limit {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(
+                format!("--time-limit must be a positive number of seconds, got {t}").into(),
+            );
+        }
+        Some(t) => Some(Duration::from_secs_f64(t)),
+        None => None,
+    };
+    let resume_from = if args.resume {
+        Some(read_packing_dir(&out)?.0)
+    } else {
+        None
+    };
+    let options = RunOptions {
+        time_limit,
+        seed: args.seed,
+        threads: args.threads,
+        resume_from,
+    };
+
+    let interrupted = Arc::new(AtomicBool::new(false));
+    {
+        let flag = Arc::clone(&interrupted);
+        // Without a handler (another one already installed) Ctrl-C simply ends the process.
+        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    }
+    // indicatif draws nothing when stderr is not a terminal.
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar.set_message(format!("{}: first local minimisation", scene.title()));
+    let stop = {
+        let flag = Arc::clone(&interrupted);
+        move || flag.load(Ordering::SeqCst)
+    };
+    let outcome = run(
+        &scene,
+        &options,
+        &mut |p| {
+            bar.set_message(format!(
+                "{} local minimisations, last density {:.5}, best certified density {:.5}",
+                p.local_minimisations, p.last_density, p.best_density
+            ));
+        },
+        &stop,
+    )?;
+    bar.finish_and_clear();
+
+    write_files(&out, &outcome.packing, &outcome.summary, scene.output.xyz)?;
+    if scene.output.pictures {
+        let options = RenderOptions {
+            width: scene.output.image_width,
+            label: Some(scene.title()),
+        };
+        write_pictures(&out, &outcome.packing, &options)?;
+    }
+    let s = &outcome.summary;
+    println!("{}", scene.title());
+    println!(
+        "density {:.5} ({} {}), found after {:.1} s of {:.1} s, {} local minimisations{}",
+        s.density,
+        s.container.size_name(),
+        s.container
+            .size()
+            .iter()
+            .map(|v| format!("{v:.6}"))
+            .collect::<Vec<_>>()
+            .join(" × "),
+        outcome.seconds_to_best,
+        s.wall_seconds,
+        s.local_minimisations,
+        if outcome.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "certificate: {} overlapping pairs, {} containment violations, min μ² = {}; repair \
+         dilation {:.2e} (density {:.5} before)",
+        s.certificate.overlapping_pairs,
+        s.certificate.containment_violations,
+        s.certificate
+            .min_mu2
+            .map_or("—".into(), |m| format!("{m:.9}")),
+        outcome.repair_factor - 1.0,
+        outcome.density_before_repair
+    );
+    println!("wrote {}", out.display());
+    Ok(if s.certificate.is_certified() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+pub fn verify(packing: &Path, summary: Option<&Path>) -> Result<ExitCode, Box<dyn Error>> {
+    let (packing, stated) = match summary {
+        Some(summary) => read_packing_files(packing, summary)?,
+        None if packing.is_dir() => read_packing_dir(packing)?,
+        None => {
+            let dir = packing.parent().unwrap_or(Path::new("."));
+            read_packing_files(packing, &dir.join("summary.json"))?
+        }
+    };
+    let certificate = check(&packing)?;
+    println!(
+        "{} {}, container: {}, density {:.5}",
+        packing.items.len(),
+        packing.items.noun(),
+        packing.container.kind().name(),
+        packing.density()
+    );
+    println!(
+        "certificate: {} overlapping pairs, {} containment violations, min μ² = {}",
+        certificate.overlapping_pairs,
+        certificate.containment_violations,
+        certificate
+            .min_mu2
+            .map_or("—".into(), |m| format!("{m:.12}"))
+    );
+    if stated.certificate != certificate {
+        println!(
+            "note: summary.json states {} overlapping pairs, {} containment violations",
+            stated.certificate.overlapping_pairs, stated.certificate.containment_violations
+        );
+    }
+    Ok(if certificate.is_certified() {
+        println!("certified");
+        ExitCode::SUCCESS
+    } else {
+        println!("NOT certified");
+        ExitCode::FAILURE
+    })
+}

@@ -1,0 +1,407 @@
+//! A packing run: scene → model → multi-start → certified packing and its summary; and the
+//! independent check of a packing read back from files.
+//!
+//! The numerical work lives in `implicit-packing` (the model, the augmented-Lagrangian local
+//! minimisation, the repair and the multi-start); this module translates between the scene and
+//! file formats of the command line and the model's variables `[c_1, Ω_1, …, c_m, Ω_m, dims]`
+//! (Ω = θ in 2D, the angles [φ, θ, ψ] of eq. 2 in 3D), with containers centred at the origin.
+
+use crate::packing::{
+    Certificate, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
+    PackingError, Summary,
+};
+use crate::scene::Scene;
+use implicit_packing::containment::ContainerKind as ModelContainer;
+use implicit_packing::model::Problem;
+use implicit_packing::multistart::{MultiStartProgress, MultiStartSettings, multistart};
+use implicit_packing::pack::{LocalSettings, contact_mu2, lattice_start};
+use implicit_packing::shape::{Body, angles_from_rotation, rotation_from_quaternion};
+use std::time::Duration;
+
+/// Why a run or a check failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PackError {
+    /// The model or the solver refused the problem.
+    #[error("{0}")]
+    Model(#[from] implicit_packing::Error),
+    /// A packing file could not be read or written.
+    #[error("{0}")]
+    Packing(#[from] PackingError),
+    /// A packing given to resume from does not match the scene.
+    #[error("cannot resume: {0}")]
+    Mismatch(String),
+}
+
+/// Command-line overrides of the scene's settings.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Wall-clock limit (else the scene's).
+    pub time_limit: Option<Duration>,
+    /// Seed of the multi-start (else the scene's).
+    pub seed: Option<u64>,
+    /// Threads (else the scene's; 0 means every core).
+    pub threads: Option<usize>,
+    /// A packing of the same items to start from (resuming a run).
+    pub resume_from: Option<Packing>,
+}
+
+/// The outcome of [`run`].
+#[derive(Clone, Debug)]
+pub struct RunOutcome {
+    /// The best certified packing.
+    pub packing: Packing,
+    /// Its summary (density, objective, wall time, local minimisations, certificate).
+    pub summary: Summary,
+    /// Density of the solver's point before the repair dilation.
+    pub density_before_repair: f64,
+    /// The repair's dilation factor (1: none needed).
+    pub repair_factor: f64,
+    /// Seconds from the start to the best packing.
+    pub seconds_to_best: f64,
+    /// Whether the run was interrupted (Ctrl-C).
+    pub interrupted: bool,
+}
+
+/// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
+/// multi-start until the time limit or the cap on local minimisations, then the certificate.
+///
+/// # Errors
+/// [`PackError`] when the model refuses the items or the resume packing does not match.
+pub fn run(
+    scene: &Scene,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&MultiStartProgress),
+    interrupt: &(dyn Fn() -> bool + Sync),
+) -> Result<RunOutcome, PackError> {
+    match (scene.ellipse_axes(), scene.ellipsoid_axes()) {
+        (Some(axes), _) => run_n::<2>(scene, &axes, options, progress, interrupt),
+        (_, Some(axes)) => run_n::<3>(scene, &axes, options, progress, interrupt),
+        _ => Err(PackError::Mismatch("the scene has no items".into())),
+    }
+}
+
+fn run_n<const N: usize>(
+    scene: &Scene,
+    axes: &[[f64; N]],
+    options: &RunOptions,
+    progress: &mut dyn FnMut(&MultiStartProgress),
+    interrupt: &(dyn Fn() -> bool + Sync),
+) -> Result<RunOutcome, PackError> {
+    let kind = model_container(scene.container);
+    let problem = Problem::<N>::new(axes.to_vec(), kind)?;
+    let x0 = match &options.resume_from {
+        Some(packing) => variables_of::<N>(packing, axes, kind)?,
+        None => lattice_start(&problem),
+    };
+    let threads = match options.threads.unwrap_or(scene.solver.threads) {
+        0 => std::thread::available_parallelism().map_or(1, usize::from),
+        n => n,
+    };
+    let settings = MultiStartSettings {
+        local: LocalSettings {
+            feasibility_tolerance: scene.solver.feasibility_tolerance,
+            optimality_tolerance: scene.solver.optimality_tolerance,
+            inner_solver: match scene.solver.inner_solver {
+                crate::scene::InnerSolver::Spg => auglag::InnerSolver::Spg,
+                crate::scene::InnerSolver::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
+            },
+            ..LocalSettings::default()
+        },
+        perturbation: scene.solver.perturbation,
+        seed: options.seed.unwrap_or(scene.seed),
+        threads,
+        max_local_minimisations: scene
+            .solver
+            .local_minimisations
+            .map_or(usize::MAX, |n| usize::try_from(n).unwrap_or(usize::MAX)),
+        time_limit: Some(options.time_limit.unwrap_or(scene.solver.time_limit)),
+    };
+    let result = multistart(axes, kind, &x0, &settings, progress, interrupt)?;
+    let mut problem = problem;
+    let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
+    let certificate = certificate_of(
+        &packing,
+        &result.best.certificate,
+        &mut problem,
+        &result.best.x,
+    )?;
+    let summary = Summary::new(
+        &packing,
+        result.best.objective,
+        result.wall_time.as_secs_f64(),
+        result.local_minimisations as u64,
+        certificate,
+    );
+    Ok(RunOutcome {
+        packing,
+        summary,
+        density_before_repair: result.best.density_before_repair,
+        repair_factor: result.best.repair_factor,
+        seconds_to_best: result.time_to_best.as_secs_f64(),
+        interrupted: result.interrupted,
+    })
+}
+
+/// Re-checks a packing from its files, independently of how it was made: PW85 verdicts on every
+/// pair whose enclosing balls meet and exact containment (the model's certificate), and the
+/// smallest μ² over those pairs.
+///
+/// # Errors
+/// [`PackError`] when the items do not form a valid model (a zero semi-axis, NaN).
+pub fn verify(packing: &Packing) -> Result<Certificate, PackError> {
+    match &packing.items {
+        Items::Ellipses(v) => {
+            let axes: Vec<[f64; 2]> = v.iter().map(|e| e.semi_axes).collect();
+            verify_n::<2>(packing, &axes)
+        }
+        Items::Ellipsoids(v) => {
+            let axes: Vec<[f64; 3]> = v.iter().map(|e| e.semi_axes).collect();
+            verify_n::<3>(packing, &axes)
+        }
+    }
+}
+
+fn verify_n<const N: usize>(
+    packing: &Packing,
+    axes: &[[f64; N]],
+) -> Result<Certificate, PackError> {
+    let kind = model_container(packing.container.kind());
+    let mut problem = Problem::<N>::new(axes.to_vec(), kind)?;
+    let x = variables_of::<N>(packing, axes, kind)?;
+    let model = problem.certify(&x)?;
+    certificate_of(packing, &model, &mut problem, &x)
+}
+
+/// The summary's certificate: the model's verdicts and the smallest μ² over the pairs whose
+/// enclosing balls meet.
+fn certificate_of<const N: usize>(
+    packing: &Packing,
+    model: &implicit_packing::model::Certificate,
+    problem: &mut Problem<N>,
+    x: &[f64],
+) -> Result<Certificate, PackError> {
+    let _ = packing;
+    let bodies = problem.bodies_at(x)?.to_vec();
+    let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
+    let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
+    let mut min_mu2: Option<f64> = None;
+    if bodies.len() > 1 {
+        let grid_error = |e: cell_grid::Error| PackError::Mismatch(format!("neighbour grid: {e}"));
+        let grid = cell_grid::Grid::<N>::with_radii(&radii)
+            .build(&centres)
+            .map_err(grid_error)?;
+        grid.for_each_pair_within(&centres, |i, j, _| {
+            if let Some(mu2) = contact_mu2(&bodies[i], &bodies[j]) {
+                min_mu2 = Some(min_mu2.map_or(mu2, |m: f64| m.min(mu2)));
+            }
+        })
+        .map_err(grid_error)?;
+    }
+    Ok(Certificate {
+        overlapping_pairs: model.overlapping_pairs.len() as u64,
+        containment_violations: model.outside.len() as u64,
+        min_mu2,
+    })
+}
+
+/// The model's container for a container kind of the files.
+pub fn model_container(kind: ContainerKind) -> ModelContainer {
+    match kind {
+        ContainerKind::Circle | ContainerKind::Ball => ModelContainer::Ball,
+        ContainerKind::Ellipse | ContainerKind::Ellipsoid => ModelContainer::Ellipsoid,
+        ContainerKind::Rectangle | ContainerKind::Cuboid => ModelContainer::Box,
+    }
+}
+
+/// The packing of the model's variables `x`.
+fn packing_of<const N: usize>(
+    problem: &mut Problem<N>,
+    x: &[f64],
+    kind: ContainerKind,
+) -> Result<Packing, PackError> {
+    let dims = x[problem.len() * Problem::<N>::vars_per_body()..].to_vec();
+    let bodies = problem.bodies_at(x)?;
+    let items = if N == 2 {
+        Items::Ellipses(
+            bodies
+                .iter()
+                .map(|b| {
+                    let (c, l, r) = (b.centre(), b.semi_axes(), b.rotation());
+                    EllipseItem {
+                        center: [c[0], c[1]],
+                        semi_axes: [l[0], l[1]],
+                        theta: r[1][0].atan2(r[0][0]),
+                    }
+                })
+                .collect(),
+        )
+    } else {
+        Items::Ellipsoids(
+            bodies
+                .iter()
+                .map(|b| {
+                    let (c, l) = (b.centre(), b.semi_axes());
+                    let r = b.rotation();
+                    let rot3 = [
+                        [r[0][0], r[0][1], r[0][2]],
+                        [r[1][0], r[1][1], r[1][2]],
+                        [r[2][0], r[2][1], r[2][2]],
+                    ];
+                    EllipsoidItem {
+                        center: [c[0], c[1], c[2]],
+                        semi_axes: [l[0], l[1], l[2]],
+                        quaternion: implicit_packing::shape::quaternion_from_rotation(&rot3),
+                    }
+                })
+                .collect(),
+        )
+    };
+    let d = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(0.0);
+    let container = match kind {
+        ContainerKind::Circle => Container::Circle {
+            center: [0.0; 2],
+            radius: d(0),
+        },
+        ContainerKind::Ellipse => Container::Ellipse {
+            center: [0.0; 2],
+            semi_axes: [d(0), d(1)],
+        },
+        ContainerKind::Rectangle => Container::Rectangle {
+            center: [0.0; 2],
+            half_sides: [d(0), d(1)],
+        },
+        ContainerKind::Ball => Container::Ball {
+            center: [0.0; 3],
+            radius: d(0),
+        },
+        ContainerKind::Ellipsoid => Container::Ellipsoid {
+            center: [0.0; 3],
+            semi_axes: [d(0), d(1), d(2)],
+        },
+        ContainerKind::Cuboid => Container::Cuboid {
+            center: [0.0; 3],
+            half_sides: [d(0), d(1), d(2)],
+        },
+    };
+    Ok(Packing::new(container, items)?)
+}
+
+/// The model's variables of a packing (centres relative to the container's centre), checking
+/// that its items have the semi-axes `axes`, in order.
+fn variables_of<const N: usize>(
+    packing: &Packing,
+    axes: &[[f64; N]],
+    kind: ModelContainer,
+) -> Result<Vec<f64>, PackError> {
+    if packing.items.len() != axes.len() {
+        return Err(PackError::Mismatch(format!(
+            "the packing has {} items, the scene {}",
+            packing.items.len(),
+            axes.len()
+        )));
+    }
+    let centre = packing.container.center().to_vec();
+    let mut x = Vec::with_capacity(axes.len() * Problem::<N>::vars_per_body() + N);
+    let same = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .all(|(p, q)| (p - q).abs() <= 1e-12 * q.abs())
+    };
+    match &packing.items {
+        Items::Ellipses(v) if N == 2 => {
+            for (i, e) in v.iter().enumerate() {
+                if !same(&e.semi_axes, &axes[i]) {
+                    return Err(PackError::Mismatch(format!("item {i} has other semi-axes")));
+                }
+                x.extend([e.center[0] - centre[0], e.center[1] - centre[1], e.theta]);
+            }
+        }
+        Items::Ellipsoids(v) if N == 3 => {
+            for (i, e) in v.iter().enumerate() {
+                if !same(&e.semi_axes, &axes[i]) {
+                    return Err(PackError::Mismatch(format!("item {i} has other semi-axes")));
+                }
+                let r = rotation_from_quaternion(e.quaternion)?;
+                let angles = angles_from_rotation(&r);
+                x.extend([
+                    e.center[0] - centre[0],
+                    e.center[1] - centre[1],
+                    e.center[2] - centre[2],
+                ]);
+                x.extend(angles);
+            }
+        }
+        _ => {
+            return Err(PackError::Mismatch(
+                "the packing has the other dimension".into(),
+            ));
+        }
+    }
+    let size = packing.container.size();
+    let dims: Vec<f64> = match kind {
+        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
+        _ => size,
+    };
+    x.extend(dims);
+    Ok(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_small_scene_packs_certified_and_verify_agrees() {
+        let scene = Scene::from_toml_str(
+            "dimension = 2\nseed = 3\n[container]\nkind = \"circle\"\n[[shapes]]\ncount = 5\n\
+             semi_axes = [1.5, 1.0]\n[solver]\ntime_limit = 20.0\nlocal_minimisations = 2\n\
+             threads = 1\n",
+            "t.toml",
+        )
+        .unwrap();
+        let out = run(&scene, &RunOptions::default(), &mut |_| {}, &|| false).unwrap();
+        assert!(out.summary.certificate.is_certified());
+        assert!(out.summary.certificate.min_mu2.is_some_and(|m| m >= 1.0));
+        assert_eq!(out.summary.local_minimisations, 2);
+        let again = verify(&out.packing).unwrap();
+        assert!(again.is_certified(), "{again:?}");
+        // Resuming from the packing reproduces it as the start.
+        let resumed = RunOptions {
+            resume_from: Some(out.packing.clone()),
+            ..RunOptions::default()
+        };
+        let out2 = run(&scene, &resumed, &mut |_| {}, &|| false).unwrap();
+        assert!(out2.summary.density >= out.summary.density * (1.0 - 1e-6));
+    }
+
+    #[test]
+    fn verify_rejects_an_overlapping_pair_and_an_item_outside() {
+        let items = Items::Ellipses(vec![
+            EllipseItem {
+                center: [0.0, 0.0],
+                semi_axes: [1.0, 1.0],
+                theta: 0.0,
+            },
+            EllipseItem {
+                center: [1.5, 0.0],
+                semi_axes: [1.0, 1.0],
+                theta: 0.0,
+            },
+        ]);
+        let packing = Packing::new(
+            Container::Circle {
+                center: [0.0, 0.0],
+                radius: 2.4,
+            },
+            items,
+        )
+        .unwrap();
+        let c = verify(&packing).unwrap();
+        assert_eq!(c.overlapping_pairs, 1);
+        assert_eq!(
+            c.containment_violations, 1,
+            "the second item reaches 2.5 > 2.4"
+        );
+        assert!(c.min_mu2.is_some_and(|m| m < 1.0));
+    }
+}

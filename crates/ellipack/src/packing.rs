@@ -1,0 +1,1241 @@
+//! A packing as `ellipack pack` writes it and `ellipack verify` reads it: the container, the
+//! items (centre, semi-axes, orientation) and a summary with the certificate.
+//!
+//! Conventions (`shared/reference/README.md`, packing paper eqs. 1–2): semi-axis k lies along
+//! column k of the rotation R, so the item is {x : (x − c)ᵀ M⁻¹ (x − c) ≤ 1} with
+//! M = R diag(l²) Rᵀ. In 2D, R = [[cos θ, −sin θ], [sin θ, cos θ]] (eq. 1): θ is the angle of
+//! the first semi-axis `a` with the x axis, in radians. In 3D the orientation is a quaternion
+//! (w, x, y, z), the Hamilton active rotation v ↦ q v q*, normalised by w² + x² + y² + z².
+//! Containers are axis-aligned.
+//!
+//! Files (all written atomically, numbers with 17 significant digits so that they read back to
+//! the same double):
+//!
+//! * [`CSV_FILE`]: one row per item, `id,x,y,a,b,theta` (2D) or `id,x,y,z,a,b,c,qw,qx,qy,qz`
+//!   (3D); `id` counts from 0;
+//! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
+//! * [`XYZ_FILE`]: extended XYZ for OVITO, see [`xyz_string`].
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The file name of the items table.
+pub const CSV_FILE: &str = "packing.csv";
+/// The file name of the summary.
+pub const SUMMARY_FILE: &str = "summary.json";
+/// The file name of the extended XYZ file.
+pub const XYZ_FILE: &str = "packing.xyz";
+
+/// The columns of [`CSV_FILE`] for ellipses.
+pub const CSV_COLUMNS_2D: [&str; 6] = ["id", "x", "y", "a", "b", "theta"];
+/// The columns of [`CSV_FILE`] for ellipsoids.
+pub const CSV_COLUMNS_3D: [&str; 11] = ["id", "x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"];
+
+/// The `Properties` of [`XYZ_FILE`]: OVITO maps `aspherical_shape` to *Aspherical Shape* and
+/// `orientation` to *Orientation*, a quaternion in OVITO's order (x, y, z, w).
+pub const XYZ_PROPERTIES: &str = "species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4";
+
+/// Why a packing file could not be read or written. Messages name the file and, for what is
+/// wrong inside it, the line and column (both 1-based).
+#[derive(Debug, thiserror::Error)]
+pub enum PackingError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::Error),
+    /// The structure of the file is broken (CSV quoting, a row with the wrong number of
+    /// fields, invalid JSON, an XYZ header that is not ours).
+    #[error("{source_name}: line {line}: {message}")]
+    Malformed {
+        /// The file.
+        source_name: String,
+        /// 1-based line.
+        line: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// One value is unreadable or impossible (not a number, a negative semi-axis, a zero
+    /// quaternion).
+    #[error("{source_name}: line {line}, column {column} (`{name}`): {message}")]
+    BadValue {
+        /// The file.
+        source_name: String,
+        /// 1-based line.
+        line: u64,
+        /// 1-based column: the field's position in a CSV or XYZ row, the character in JSON.
+        column: u64,
+        /// The column or key.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The CSV header lacks a column.
+    #[error("{source_name}: line 1: missing column `{column}` (the header must be {expected})")]
+    MissingColumn {
+        /// The file.
+        source_name: String,
+        /// The missing column.
+        column: &'static str,
+        /// The expected header.
+        expected: String,
+    },
+    /// The files contradict each other or the data model (a 2D table with a 3D container, a
+    /// different item count).
+    #[error("{source_name}: {message}")]
+    Inconsistent {
+        /// The file that disagrees.
+        source_name: String,
+        /// What disagrees.
+        message: String,
+    },
+    /// A summary value is NaN or infinite: JSON has no way to store it, so nothing is written.
+    #[error("summary: `{field}` is {value}, which JSON cannot store")]
+    NonFinite {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+}
+
+/// The shape of a container, as `summary.json` and scene files name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContainerKind {
+    /// A disc (2D).
+    Circle,
+    /// An axis-aligned ellipse (2D).
+    Ellipse,
+    /// An axis-aligned rectangle (2D).
+    Rectangle,
+    /// A ball (3D).
+    Ball,
+    /// An axis-aligned ellipsoid (3D).
+    Ellipsoid,
+    /// An axis-aligned cuboid (3D).
+    Cuboid,
+}
+
+impl ContainerKind {
+    /// Every kind, 2D first.
+    pub const ALL: [ContainerKind; 6] = [
+        ContainerKind::Circle,
+        ContainerKind::Ellipse,
+        ContainerKind::Rectangle,
+        ContainerKind::Ball,
+        ContainerKind::Ellipsoid,
+        ContainerKind::Cuboid,
+    ];
+
+    /// The name in files: `circle`, `ellipse`, `rectangle`, `ball`, `ellipsoid`, `cuboid`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ContainerKind::Circle => "circle",
+            ContainerKind::Ellipse => "ellipse",
+            ContainerKind::Rectangle => "rectangle",
+            ContainerKind::Ball => "ball",
+            ContainerKind::Ellipsoid => "ellipsoid",
+            ContainerKind::Cuboid => "cuboid",
+        }
+    }
+
+    /// The kind of a name, or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// 2 or 3.
+    pub fn dimension(self) -> usize {
+        match self {
+            ContainerKind::Circle | ContainerKind::Ellipse | ContainerKind::Rectangle => 2,
+            ContainerKind::Ball | ContainerKind::Ellipsoid | ContainerKind::Cuboid => 3,
+        }
+    }
+
+    /// What the paper minimises: "area" in 2D, "volume" in 3D.
+    pub fn measure_name(self) -> &'static str {
+        if self.dimension() == 2 {
+            "area"
+        } else {
+            "volume"
+        }
+    }
+}
+
+impl fmt::Display for ContainerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An axis-aligned container with its size. In JSON: `{"kind": "ball", "center": [..],
+/// "radius": r}`, with `half_sides` for a rectangle or cuboid and `semi_axes` for an ellipse or
+/// ellipsoid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Container {
+    /// The disc |x − center| ≤ radius.
+    Circle {
+        /// Its centre.
+        center: [f64; 2],
+        /// Its radius.
+        radius: f64,
+    },
+    /// The ellipse Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
+    Ellipse {
+        /// Its centre.
+        center: [f64; 2],
+        /// Its semi-axes along x and y.
+        semi_axes: [f64; 2],
+    },
+    /// The rectangle |xₖ − centerₖ| ≤ half_sidesₖ.
+    Rectangle {
+        /// Its centre.
+        center: [f64; 2],
+        /// Half its width and half its height.
+        half_sides: [f64; 2],
+    },
+    /// The ball |x − center| ≤ radius.
+    Ball {
+        /// Its centre.
+        center: [f64; 3],
+        /// Its radius.
+        radius: f64,
+    },
+    /// The ellipsoid Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
+    Ellipsoid {
+        /// Its centre.
+        center: [f64; 3],
+        /// Its semi-axes along x, y and z.
+        semi_axes: [f64; 3],
+    },
+    /// The cuboid |xₖ − centerₖ| ≤ half_sidesₖ.
+    Cuboid {
+        /// Its centre.
+        center: [f64; 3],
+        /// Its half sides along x, y and z.
+        half_sides: [f64; 3],
+    },
+}
+
+impl Container {
+    /// The container of a kind from its centre and its size (`[r]`, the semi-axes or the half
+    /// sides: the container variables of the solver, in that order).
+    ///
+    /// # Errors
+    /// [`PackingError::Inconsistent`] when the lengths do not fit the kind, or the size is not
+    /// positive and finite, or the centre not finite.
+    pub fn from_parts(
+        kind: ContainerKind,
+        center: &[f64],
+        size: &[f64],
+    ) -> Result<Container, PackingError> {
+        let wrong = |what: &str, expected: usize, found: usize| PackingError::Inconsistent {
+            source_name: "container".to_string(),
+            message: format!("a {kind} needs {expected} {what} values, not {found}"),
+        };
+        let n = kind.dimension();
+        if center.len() != n {
+            return Err(wrong("centre", n, center.len()));
+        }
+        let size_len = if matches!(kind, ContainerKind::Circle | ContainerKind::Ball) {
+            1
+        } else {
+            n
+        };
+        if size.len() != size_len {
+            return Err(wrong("size", size_len, size.len()));
+        }
+        let c2 = || [center[0], center[1]];
+        let c3 = || [center[0], center[1], center[2]];
+        let container = match kind {
+            ContainerKind::Circle => Container::Circle {
+                center: c2(),
+                radius: size[0],
+            },
+            ContainerKind::Ellipse => Container::Ellipse {
+                center: c2(),
+                semi_axes: [size[0], size[1]],
+            },
+            ContainerKind::Rectangle => Container::Rectangle {
+                center: c2(),
+                half_sides: [size[0], size[1]],
+            },
+            ContainerKind::Ball => Container::Ball {
+                center: c3(),
+                radius: size[0],
+            },
+            ContainerKind::Ellipsoid => Container::Ellipsoid {
+                center: c3(),
+                semi_axes: [size[0], size[1], size[2]],
+            },
+            ContainerKind::Cuboid => Container::Cuboid {
+                center: c3(),
+                half_sides: [size[0], size[1], size[2]],
+            },
+        };
+        match container.problem() {
+            None => Ok(container),
+            Some((_, message)) => Err(PackingError::Inconsistent {
+                source_name: "container".to_string(),
+                message,
+            }),
+        }
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> ContainerKind {
+        match self {
+            Container::Circle { .. } => ContainerKind::Circle,
+            Container::Ellipse { .. } => ContainerKind::Ellipse,
+            Container::Rectangle { .. } => ContainerKind::Rectangle,
+            Container::Ball { .. } => ContainerKind::Ball,
+            Container::Ellipsoid { .. } => ContainerKind::Ellipsoid,
+            Container::Cuboid { .. } => ContainerKind::Cuboid,
+        }
+    }
+
+    /// 2 or 3.
+    pub fn dimension(&self) -> usize {
+        self.kind().dimension()
+    }
+
+    /// Its centre (2 or 3 coordinates).
+    pub fn center(&self) -> &[f64] {
+        match self {
+            Container::Circle { center, .. }
+            | Container::Ellipse { center, .. }
+            | Container::Rectangle { center, .. } => center,
+            Container::Ball { center, .. }
+            | Container::Ellipsoid { center, .. }
+            | Container::Cuboid { center, .. } => center,
+        }
+    }
+
+    /// Its size: `[radius]`, the semi-axes or the half sides.
+    pub fn size(&self) -> Vec<f64> {
+        match self {
+            Container::Circle { radius, .. } | Container::Ball { radius, .. } => vec![*radius],
+            Container::Ellipse { semi_axes, .. } => semi_axes.to_vec(),
+            Container::Rectangle { half_sides, .. } => half_sides.to_vec(),
+            Container::Ellipsoid { semi_axes, .. } => semi_axes.to_vec(),
+            Container::Cuboid { half_sides, .. } => half_sides.to_vec(),
+        }
+    }
+
+    /// The name of [`Container::size`] in `summary.json`: `radius`, `semi_axes` or
+    /// `half_sides`.
+    pub fn size_name(&self) -> &'static str {
+        match self.kind() {
+            ContainerKind::Circle | ContainerKind::Ball => "radius",
+            ContainerKind::Ellipse | ContainerKind::Ellipsoid => "semi_axes",
+            ContainerKind::Rectangle | ContainerKind::Cuboid => "half_sides",
+        }
+    }
+
+    /// Half the extent of its bounding box along each axis.
+    pub fn half_extents(&self) -> Vec<f64> {
+        match self {
+            Container::Circle { radius, .. } => vec![*radius; 2],
+            Container::Ball { radius, .. } => vec![*radius; 3],
+            _ => self.size(),
+        }
+    }
+
+    /// Its area (2D) or volume (3D): πr², πab, 4ab; 4/3 πr³, 4/3 πabc, 8abc.
+    pub fn measure(&self) -> f64 {
+        match self {
+            Container::Circle { radius, .. } => PI * radius * radius,
+            Container::Ellipse {
+                semi_axes: [a, b], ..
+            } => PI * a * b,
+            Container::Rectangle {
+                half_sides: [a, b], ..
+            } => 4.0 * a * b,
+            Container::Ball { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
+            Container::Ellipsoid {
+                semi_axes: [a, b, c],
+                ..
+            } => 4.0 / 3.0 * PI * a * b * c,
+            Container::Cuboid {
+                half_sides: [a, b, c],
+                ..
+            } => 8.0 * a * b * c,
+        }
+    }
+
+    /// `None` when the container is usable, else what is wrong (a size that is not positive
+    /// and finite, a centre that is not finite) and the name of the offending field.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        if let Some(x) = self.center().iter().find(|x| !x.is_finite()) {
+            return Some((
+                "center",
+                format!("the centre has a non-finite coordinate {x}"),
+            ));
+        }
+        let size = self.size();
+        size.iter()
+            .find(|s| !(s.is_finite() && **s > 0.0))
+            .map(|s| {
+                (
+                    self.size_name(),
+                    format!("{} must be positive and finite, not {s}", self.size_name()),
+                )
+            })
+    }
+}
+
+/// An ellipse: centre, semi-axes (a along the rotated x axis) and angle θ (radians).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EllipseItem {
+    /// Its centre (x, y).
+    pub center: [f64; 2],
+    /// Its semi-axes (a, b); a lies along the first column of R(θ).
+    pub semi_axes: [f64; 2],
+    /// The angle θ of eq. 1, in radians.
+    pub theta: f64,
+}
+
+impl EllipseItem {
+    /// Its area πab.
+    pub fn area(&self) -> f64 {
+        PI * self.semi_axes[0] * self.semi_axes[1]
+    }
+
+    /// Its quadratic form M = R diag(a², b²) Rᵀ as [M11, M12, M22].
+    ///
+    /// # Errors
+    /// [`pw85::Error`] for a semi-axis that is not positive and finite or a non-finite angle.
+    pub fn quadratic_form(&self) -> Result<pw85::Sym2, pw85::Error> {
+        pw85::shape::from_axes_angle_2d(&self.semi_axes, self.theta)
+    }
+}
+
+/// An ellipsoid: centre, semi-axes (a, b, c along the columns of R) and unit quaternion
+/// (w, x, y, z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EllipsoidItem {
+    /// Its centre (x, y, z).
+    pub center: [f64; 3],
+    /// Its semi-axes (a, b, c); semi-axis k lies along column k of R(q).
+    pub semi_axes: [f64; 3],
+    /// Its orientation (w, x, y, z), Hamilton active rotation; normalised where used.
+    pub quaternion: [f64; 4],
+}
+
+impl EllipsoidItem {
+    /// Its volume 4/3 πabc.
+    pub fn volume(&self) -> f64 {
+        4.0 / 3.0 * PI * self.semi_axes[0] * self.semi_axes[1] * self.semi_axes[2]
+    }
+
+    /// Its quadratic form M = R diag(a², b², c²) Rᵀ as [M11, M12, M13, M22, M23, M33].
+    ///
+    /// # Errors
+    /// [`pw85::Error`] for a semi-axis that is not positive and finite or a zero or
+    /// non-finite quaternion.
+    pub fn quadratic_form(&self) -> Result<pw85::Sym3, pw85::Error> {
+        pw85::shape::from_axes_quaternion(&self.semi_axes, &self.quaternion)
+    }
+}
+
+/// The items of a packing, all ellipses or all ellipsoids.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Items {
+    /// 2D.
+    Ellipses(Vec<EllipseItem>),
+    /// 3D.
+    Ellipsoids(Vec<EllipsoidItem>),
+}
+
+impl Items {
+    /// How many.
+    pub fn len(&self) -> usize {
+        match self {
+            Items::Ellipses(v) => v.len(),
+            Items::Ellipsoids(v) => v.len(),
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// 2 or 3.
+    pub fn dimension(&self) -> usize {
+        match self {
+            Items::Ellipses(_) => 2,
+            Items::Ellipsoids(_) => 3,
+        }
+    }
+
+    /// Their total area (2D) or volume (3D).
+    pub fn total_measure(&self) -> f64 {
+        // A fold from +0.0: `sum()` of no floats is −0.0, which prints as a density "-0".
+        match self {
+            Items::Ellipses(v) => v.iter().map(EllipseItem::area).fold(0.0, |a, x| a + x),
+            Items::Ellipsoids(v) => v.iter().map(EllipsoidItem::volume).fold(0.0, |a, x| a + x),
+        }
+    }
+
+    /// "ellipses" or "ellipsoids" (or the singular for one item).
+    pub fn noun(&self) -> &'static str {
+        match (self, self.len() == 1) {
+            (Items::Ellipses(_), false) => "ellipses",
+            (Items::Ellipses(_), true) => "ellipse",
+            (Items::Ellipsoids(_), false) => "ellipsoids",
+            (Items::Ellipsoids(_), true) => "ellipsoid",
+        }
+    }
+}
+
+/// Total item area or volume divided by the container's: the packing density.
+///
+/// NaN when the container has no area or volume (a zero size).
+pub fn density(container: &Container, items: &Items) -> f64 {
+    let measure = container.measure();
+    if measure > 0.0 {
+        items.total_measure() / measure
+    } else {
+        f64::NAN
+    }
+}
+
+/// A container and the items in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Packing {
+    /// The container.
+    pub container: Container,
+    /// The items.
+    pub items: Items,
+}
+
+impl Packing {
+    /// A packing, checked: items and container of the same dimension, positive finite sizes,
+    /// finite centres and angles, non-zero quaternions.
+    ///
+    /// # Errors
+    /// [`PackingError::Inconsistent`] naming the first offending item (0-based id).
+    pub fn new(container: Container, items: Items) -> Result<Self, PackingError> {
+        let inconsistent = |message: String| PackingError::Inconsistent {
+            source_name: "packing".to_string(),
+            message,
+        };
+        if let Some((_, message)) = container.problem() {
+            return Err(inconsistent(format!("container: {message}")));
+        }
+        if container.dimension() != items.dimension() {
+            return Err(inconsistent(format!(
+                "a {} container holds {}D items",
+                container.kind(),
+                items.dimension()
+            )));
+        }
+        let check = |id: usize, fields: &[(&str, f64)], semi_axes: &[f64]| {
+            if let Some((name, v)) = fields.iter().find(|(_, v)| !v.is_finite()) {
+                return Err(inconsistent(format!("item {id}: `{name}` is {v}")));
+            }
+            if let Some(l) = semi_axes.iter().find(|l| **l <= 0.0) {
+                return Err(inconsistent(format!(
+                    "item {id}: semi-axis {l} is not positive"
+                )));
+            }
+            Ok(())
+        };
+        match &items {
+            Items::Ellipses(v) => {
+                for (id, e) in v.iter().enumerate() {
+                    let [x, y] = e.center;
+                    let [a, b] = e.semi_axes;
+                    let fields = [("x", x), ("y", y), ("a", a), ("b", b), ("theta", e.theta)];
+                    check(id, &fields, &e.semi_axes)?;
+                }
+            }
+            Items::Ellipsoids(v) => {
+                for (id, e) in v.iter().enumerate() {
+                    let [x, y, z] = e.center;
+                    let [a, b, c] = e.semi_axes;
+                    let [qw, qx, qy, qz] = e.quaternion;
+                    let fields = [
+                        ("x", x),
+                        ("y", y),
+                        ("z", z),
+                        ("a", a),
+                        ("b", b),
+                        ("c", c),
+                        ("qw", qw),
+                        ("qx", qx),
+                        ("qy", qy),
+                        ("qz", qz),
+                    ];
+                    check(id, &fields, &e.semi_axes)?;
+                    if e.quaternion.iter().all(|q| *q == 0.0) {
+                        return Err(inconsistent(format!("item {id}: the quaternion is zero")));
+                    }
+                }
+            }
+        }
+        Ok(Packing { container, items })
+    }
+
+    /// The packing density (see [`density`]).
+    pub fn density(&self) -> f64 {
+        density(&self.container, &self.items)
+    }
+}
+
+/// What the certification of a packing found (PW85 on every candidate pair, exact
+/// containment).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Certificate {
+    /// Pairs with μ² < 1 (overlapping interiors).
+    pub overlapping_pairs: u64,
+    /// Items not inside the container.
+    pub containment_violations: u64,
+    /// The smallest PW85 μ² over the candidate pairs (≥ 1 when no pair overlaps); `null` when
+    /// there was no pair to check.
+    pub min_mu2: Option<f64>,
+}
+
+impl Certificate {
+    /// No overlap and every item inside.
+    pub fn is_certified(&self) -> bool {
+        self.overlapping_pairs == 0 && self.containment_violations == 0
+    }
+}
+
+/// The contents of `summary.json`.
+///
+/// ```json
+/// {
+///   "container": { "kind": "ellipse", "center": [0.0, 0.0], "semi_axes": [9.1, 7.5] },
+///   "items": 30,
+///   "density": 0.8790,
+///   "objective": 214.4,
+///   "wall_seconds": 12.5,
+///   "local_minimisations": 17,
+///   "certificate": { "overlapping_pairs": 0, "containment_violations": 0, "min_mu2": 1.0000003 }
+/// }
+/// ```
+///
+/// Unknown top-level keys are ignored when reading, so that later versions can add fields.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// The container.
+    pub container: Container,
+    /// The number of items (rows of `packing.csv`).
+    pub items: usize,
+    /// Total item area or volume / container area or volume.
+    pub density: f64,
+    /// The solver's objective at the packing (the container's area or volume, or whatever the
+    /// model minimised).
+    pub objective: f64,
+    /// Wall-clock seconds of the run.
+    pub wall_seconds: f64,
+    /// Local minimisations completed.
+    pub local_minimisations: u64,
+    /// The certificate.
+    pub certificate: Certificate,
+}
+
+impl Summary {
+    /// The summary of `packing` (container, item count and density taken from it).
+    pub fn new(
+        packing: &Packing,
+        objective: f64,
+        wall_seconds: f64,
+        local_minimisations: u64,
+        certificate: Certificate,
+    ) -> Self {
+        Summary {
+            container: packing.container.clone(),
+            items: packing.items.len(),
+            density: packing.density(),
+            objective,
+            wall_seconds,
+            local_minimisations,
+            certificate,
+        }
+    }
+}
+
+/// 17 significant digits: enough for every double to read back to itself.
+fn num(x: f64) -> String {
+    format!("{x:.16e}")
+}
+
+/// The text of [`CSV_FILE`].
+pub fn csv_string(items: &Items) -> String {
+    let columns: &[&str] = match items {
+        Items::Ellipses(_) => &CSV_COLUMNS_2D,
+        Items::Ellipsoids(_) => &CSV_COLUMNS_3D,
+    };
+    let mut out = columns.join(",");
+    out.push('\n');
+    let mut row = |id: usize, fields: &[f64]| {
+        out.push_str(&id.to_string());
+        for f in fields {
+            out.push(',');
+            out.push_str(&num(*f));
+        }
+        out.push('\n');
+    };
+    match items {
+        Items::Ellipses(v) => {
+            for (id, e) in v.iter().enumerate() {
+                let [x, y] = e.center;
+                let [a, b] = e.semi_axes;
+                row(id, &[x, y, a, b, e.theta]);
+            }
+        }
+        Items::Ellipsoids(v) => {
+            for (id, e) in v.iter().enumerate() {
+                let [x, y, z] = e.center;
+                let [a, b, c] = e.semi_axes;
+                let [qw, qx, qy, qz] = e.quaternion;
+                row(id, &[x, y, z, a, b, c, qw, qx, qy, qz]);
+            }
+        }
+    }
+    out
+}
+
+/// Writes [`csv_string`] to `path` atomically.
+///
+/// # Errors
+/// [`PackingError::Write`] naming the file.
+pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
+    Ok(crate::output::write_atomically(
+        path,
+        csv_string(items).as_bytes(),
+    )?)
+}
+
+/// Reads [`CSV_FILE`] text. The header decides the dimension: with any of `z, c, qw, qx, qy,
+/// qz` it must hold every 3D column, else every 2D column; columns may come in any order and
+/// other columns are ignored. `source_name` names the file in messages.
+///
+/// # Errors
+/// [`PackingError::Malformed`] for broken CSV, [`PackingError::MissingColumn`], and
+/// [`PackingError::BadValue`] (line, column, name) for a cell that is not a finite number, a
+/// semi-axis that is not positive, a zero quaternion or an `id` that is not an integer.
+pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let malformed = |e: csv::Error| PackingError::Malformed {
+        source_name: source_name.to_string(),
+        line: e.position().map_or(1, csv::Position::line),
+        message: e.to_string(),
+    };
+    let header = reader.headers().map_err(malformed)?.clone();
+    let three_d = header
+        .iter()
+        .any(|h| CSV_COLUMNS_3D.contains(&h) && !CSV_COLUMNS_2D.contains(&h));
+    let expected: &[&'static str] = if three_d {
+        &CSV_COLUMNS_3D
+    } else {
+        &CSV_COLUMNS_2D
+    };
+    let mut index = Vec::with_capacity(expected.len());
+    for &column in expected {
+        let i =
+            header
+                .iter()
+                .position(|h| h == column)
+                .ok_or_else(|| PackingError::MissingColumn {
+                    source_name: source_name.to_string(),
+                    column,
+                    expected: expected.join(","),
+                })?;
+        index.push(i);
+    }
+    let mut ellipses = Vec::new();
+    let mut ellipsoids = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(malformed)?;
+        let line = record.position().map_or(0, csv::Position::line);
+        let bad = |k: usize, message: String| PackingError::BadValue {
+            source_name: source_name.to_string(),
+            line,
+            column: index[k] as u64 + 1,
+            name: expected[k].to_string(),
+            message,
+        };
+        // Every column of the record exists: the csv reader rejects rows of another length.
+        let cell = |k: usize| record.get(index[k]).unwrap_or("");
+        let id = cell(0);
+        if id.parse::<u64>().is_err() {
+            return Err(bad(0, format!("`{id}` is not a non-negative integer")));
+        }
+        let mut values = [0.0; 10];
+        for (k, slot) in values.iter_mut().enumerate().take(expected.len() - 1) {
+            let text = cell(k + 1);
+            *slot = match text.parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                _ => return Err(bad(k + 1, format!("`{text}` is not a finite number"))),
+            };
+        }
+        let axes = if three_d { 4..7 } else { 3..5 };
+        for k in axes {
+            if values[k - 1] <= 0.0 {
+                return Err(bad(k, format!("semi-axis {} is not positive", cell(k))));
+            }
+        }
+        if three_d {
+            let [x, y, z, a, b, c, qw, qx, qy, qz] = values;
+            if [qw, qx, qy, qz].iter().all(|q| *q == 0.0) {
+                return Err(bad(
+                    7,
+                    "the quaternion (qw, qx, qy, qz) is zero".to_string(),
+                ));
+            }
+            ellipsoids.push(EllipsoidItem {
+                center: [x, y, z],
+                semi_axes: [a, b, c],
+                quaternion: [qw, qx, qy, qz],
+            });
+        } else {
+            let [x, y, a, b, theta, ..] = values;
+            ellipses.push(EllipseItem {
+                center: [x, y],
+                semi_axes: [a, b],
+                theta,
+            });
+        }
+    }
+    Ok(if three_d {
+        Items::Ellipsoids(ellipsoids)
+    } else {
+        Items::Ellipses(ellipses)
+    })
+}
+
+/// The text of [`SUMMARY_FILE`] (pretty-printed JSON).
+///
+/// # Errors
+/// [`PackingError::NonFinite`] when a number is NaN or infinite (JSON would store `null`, which
+/// the reader could not read back).
+pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
+    let mut fields: Vec<(&'static str, f64)> = vec![
+        ("density", summary.density),
+        ("objective", summary.objective),
+        ("wall_seconds", summary.wall_seconds),
+    ];
+    if let Some(m) = summary.certificate.min_mu2 {
+        fields.push(("certificate.min_mu2", m));
+    }
+    fields.extend(
+        summary
+            .container
+            .center()
+            .iter()
+            .map(|c| ("container.center", *c)),
+    );
+    let size_name = match summary.container.size_name() {
+        "radius" => "container.radius",
+        "semi_axes" => "container.semi_axes",
+        _ => "container.half_sides",
+    };
+    fields.extend(summary.container.size().into_iter().map(|s| (size_name, s)));
+    if let Some((field, value)) = fields.into_iter().find(|(_, v)| !v.is_finite()) {
+        return Err(PackingError::NonFinite { field, value });
+    }
+    // Serialising plain structs of numbers and strings into a String cannot fail.
+    let mut text = serde_json::to_string_pretty(summary).unwrap_or_default();
+    text.push('\n');
+    Ok(text)
+}
+
+/// Writes [`summary_json`] to `path` atomically.
+///
+/// # Errors
+/// [`PackingError::NonFinite`] or [`PackingError::Write`].
+pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError> {
+    let text = summary_json(summary)?;
+    Ok(crate::output::write_atomically(path, text.as_bytes())?)
+}
+
+/// Reads [`SUMMARY_FILE`] text.
+///
+/// # Errors
+/// [`PackingError::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
+/// wrong type; [`PackingError::Inconsistent`] for a container size that is not positive.
+pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingError> {
+    let summary: Summary = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+        source_name: source_name.to_string(),
+        line: e.line() as u64,
+        message: format!("column {}: {e}", e.column()),
+    })?;
+    if let Some((field, message)) = summary.container.problem() {
+        return Err(PackingError::Inconsistent {
+            source_name: source_name.to_string(),
+            message: format!("container.{field}: {message}"),
+        });
+    }
+    Ok(summary)
+}
+
+/// Reads `packing.csv` and `summary.json` and checks that they agree (dimension, item count).
+///
+/// # Errors
+/// [`PackingError::Read`] naming the file, and every error of [`read_csv`] and
+/// [`read_summary`]; [`PackingError::Inconsistent`] when they disagree.
+pub fn read_packing_files(
+    csv_path: &Path,
+    summary_path: &Path,
+) -> Result<(Packing, Summary), PackingError> {
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|source| PackingError::Read {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let csv_name = csv_path.display().to_string();
+    let summary_name = summary_path.display().to_string();
+    let items = read_csv(&read(csv_path)?, &csv_name)?;
+    let summary = read_summary(&read(summary_path)?, &summary_name)?;
+    if summary.container.dimension() != items.dimension() {
+        return Err(PackingError::Inconsistent {
+            source_name: csv_name,
+            message: format!(
+                "{}D items (by the header) but {summary_name} has a {} container",
+                items.dimension(),
+                summary.container.kind()
+            ),
+        });
+    }
+    if summary.items != items.len() {
+        return Err(PackingError::Inconsistent {
+            source_name: csv_name,
+            message: format!(
+                "{} items, but {summary_name} says `items`: {}",
+                items.len(),
+                summary.items
+            ),
+        });
+    }
+    let packing = Packing::new(summary.container.clone(), items).map_err(|e| match e {
+        PackingError::Inconsistent { message, .. } => PackingError::Inconsistent {
+            source_name: csv_name.clone(),
+            message,
+        },
+        other => other,
+    })?;
+    Ok((packing, summary))
+}
+
+/// Reads [`CSV_FILE`] and [`SUMMARY_FILE`] from a directory (see [`read_packing_files`]).
+///
+/// # Errors
+/// As [`read_packing_files`].
+pub fn read_packing_dir(dir: &Path) -> Result<(Packing, Summary), PackingError> {
+    read_packing_files(&dir.join(CSV_FILE), &dir.join(SUMMARY_FILE))
+}
+
+/// Writes `packing.csv`, `summary.json` and (when `xyz`) `packing.xyz` into `dir`, each
+/// atomically. The directory must exist.
+///
+/// # Errors
+/// The first error of [`write_csv`], [`write_summary`], [`write_xyz`].
+pub fn write_files(
+    dir: &Path,
+    packing: &Packing,
+    summary: &Summary,
+    xyz: bool,
+) -> Result<(), PackingError> {
+    write_csv(&dir.join(CSV_FILE), &packing.items)?;
+    write_summary(&dir.join(SUMMARY_FILE), summary)?;
+    if xyz {
+        write_xyz(&dir.join(XYZ_FILE), packing)?;
+    }
+    Ok(())
+}
+
+/// The third semi-axis given to an ellipse in the XYZ file, so that OVITO shows a flat
+/// ellipsoid whose outline seen along z is the ellipse (a zero would make OVITO fall back to
+/// the particle radius).
+fn ellipse_thickness(e: &EllipseItem) -> f64 {
+    e.semi_axes[0].min(e.semi_axes[1])
+}
+
+/// The text of [`XYZ_FILE`], extended XYZ as OVITO reads it.
+///
+/// ```text
+/// 2
+/// Lattice="8 0 0 0 8 0 0 0 8" Origin="-4 -4 -4" pbc="F F F" Properties=species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4 dimension=3 container=ball container_center="0 0 0" container_radius=4
+/// E x y z a b c qx qy qz qw
+/// ```
+///
+/// `aspherical_shape` holds the semi-axes, `orientation` the quaternion in OVITO's order
+/// (x, y, z, w) — OVITO's *Orientation* property is (X, Y, Z, W) with W the scalar part. The
+/// cell (`Lattice`, `Origin`) is the container's bounding box, not periodic. Ellipses are
+/// written at z = 0 as ellipsoids (a, b, min(a, b)) rotated by θ about z, with `dimension=2`;
+/// the container is in the `container*` keys, which OVITO keeps as global attributes.
+pub fn xyz_string(packing: &Packing) -> String {
+    let items = &packing.items;
+    let container = &packing.container;
+    let mut half = container.half_extents();
+    let mut center = container.center().to_vec();
+    if let Items::Ellipses(v) = items {
+        // A flat slab around z = 0 thick enough for the flattened ellipsoids.
+        let t = v.iter().map(ellipse_thickness).fold(1.0_f64, f64::max);
+        half.push(t);
+        center.push(0.0);
+    }
+    let lattice = format!(
+        "{} 0 0 0 {} 0 0 0 {}",
+        num(2.0 * half[0]),
+        num(2.0 * half[1]),
+        num(2.0 * half[2])
+    );
+    let origin: Vec<String> = (0..3).map(|k| num(center[k] - half[k])).collect();
+    let join = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");
+    let size = container.size();
+    let size_value = if size.len() == 1 {
+        num(size[0])
+    } else {
+        format!("\"{}\"", join(&size))
+    };
+    let mut out = format!(
+        "{}\nLattice=\"{lattice}\" Origin=\"{}\" pbc=\"F F F\" Properties={XYZ_PROPERTIES} \
+         dimension={} container={} container_center=\"{}\" container_{}={size_value}\n",
+        items.len(),
+        origin.join(" "),
+        items.dimension(),
+        container.kind(),
+        join(container.center()),
+        container.size_name(),
+    );
+    match items {
+        Items::Ellipses(v) => {
+            for e in v {
+                let (s, c) = (0.5 * e.theta).sin_cos();
+                let fields = [
+                    e.center[0],
+                    e.center[1],
+                    0.0,
+                    e.semi_axes[0],
+                    e.semi_axes[1],
+                    ellipse_thickness(e),
+                    0.0,
+                    0.0,
+                    s,
+                    c,
+                ];
+                out.push_str(&format!("E {}\n", join(&fields)));
+            }
+        }
+        Items::Ellipsoids(v) => {
+            for e in v {
+                let [w, x, y, z] = e.quaternion;
+                let [cx, cy, cz] = e.center;
+                let [a, b, c] = e.semi_axes;
+                out.push_str(&format!("E {}\n", join(&[cx, cy, cz, a, b, c, x, y, z, w])));
+            }
+        }
+    }
+    out
+}
+
+/// Writes [`xyz_string`] to `path` atomically.
+///
+/// # Errors
+/// [`PackingError::Write`] naming the file.
+pub fn write_xyz(path: &Path, packing: &Packing) -> Result<(), PackingError> {
+    Ok(crate::output::write_atomically(
+        path,
+        xyz_string(packing).as_bytes(),
+    )?)
+}
+
+/// Splits an extended XYZ comment line into `key=value` pairs (values may be double-quoted).
+fn xyz_pairs(line: &str) -> Result<Vec<(String, String)>, String> {
+    let mut pairs = Vec::new();
+    let mut chars = line.chars().peekable();
+    loop {
+        while chars.next_if(|c| c.is_whitespace()).is_some() {}
+        if chars.peek().is_none() {
+            return Ok(pairs);
+        }
+        let key: String =
+            std::iter::from_fn(|| chars.next_if(|c| *c != '=' && !c.is_whitespace())).collect();
+        if chars.next_if_eq(&'=').is_none() {
+            return Err(format!("`{key}` has no `=value`"));
+        }
+        let value: String = if chars.next_if_eq(&'"').is_some() {
+            let v: String = std::iter::from_fn(|| chars.next_if(|c| *c != '"')).collect();
+            if chars.next_if_eq(&'"').is_none() {
+                return Err(format!("the value of `{key}` has no closing quote"));
+            }
+            v
+        } else {
+            std::iter::from_fn(|| chars.next_if(|c| !c.is_whitespace())).collect()
+        };
+        pairs.push((key, value));
+    }
+}
+
+/// Reads the [`XYZ_FILE`] that [`xyz_string`] writes (not arbitrary extended XYZ: the
+/// `Properties` must be [`XYZ_PROPERTIES`] and the `dimension` and `container*` keys present).
+/// Ellipses get θ = 2 atan2(q_z, q_w), the same orientation as written, within (−2π, 2π].
+///
+/// # Errors
+/// [`PackingError::Malformed`] for a header that is not ours or a wrong number of rows,
+/// [`PackingError::BadValue`] (line, column) for a field that is not a number or impossible.
+pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> {
+    let malformed = |line: u64, message: String| PackingError::Malformed {
+        source_name: source_name.to_string(),
+        line,
+        message,
+    };
+    let mut lines = text.lines();
+    let count_text = lines.next().unwrap_or("").trim();
+    let count: usize = count_text
+        .parse()
+        .map_err(|_| malformed(1, format!("`{count_text}` is not a number of items")))?;
+    let comment = lines
+        .next()
+        .ok_or_else(|| malformed(2, "the comment line is missing".to_string()))?;
+    let pairs = xyz_pairs(comment).map_err(|m| malformed(2, m))?;
+    let get = |key: &str| {
+        pairs
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case(key))
+            .map(|(_, v)| v.as_str())
+            .ok_or_else(|| malformed(2, format!("the comment line has no `{key}=`")))
+    };
+    let properties = get("Properties")?;
+    if properties != XYZ_PROPERTIES {
+        return Err(malformed(
+            2,
+            format!("Properties={properties}: expected {XYZ_PROPERTIES}"),
+        ));
+    }
+    let numbers = |key: &str| -> Result<Vec<f64>, PackingError> {
+        get(key)?
+            .split_whitespace()
+            .map(|t| {
+                t.parse::<f64>()
+                    .map_err(|_| malformed(2, format!("{key}: `{t}` is not a number")))
+            })
+            .collect()
+    };
+    let dimension = get("dimension")?;
+    let kind_name = get("container")?;
+    let kind = ContainerKind::from_name(kind_name)
+        .ok_or_else(|| malformed(2, format!("container={kind_name}: unknown kind")))?;
+    if dimension != kind.dimension().to_string() {
+        return Err(malformed(
+            2,
+            format!("dimension={dimension} but container={kind_name}"),
+        ));
+    }
+    let center = numbers("container_center")?;
+    let size_key = match kind {
+        ContainerKind::Circle | ContainerKind::Ball => "container_radius",
+        ContainerKind::Ellipse | ContainerKind::Ellipsoid => "container_semi_axes",
+        ContainerKind::Rectangle | ContainerKind::Cuboid => "container_half_sides",
+    };
+    let size = numbers(size_key)?;
+    let container = Container::from_parts(kind, &center, &size).map_err(|e| {
+        let message = match e {
+            PackingError::Inconsistent { message, .. } => message,
+            other => other.to_string(),
+        };
+        malformed(2, format!("container_center, {size_key}: {message}"))
+    })?;
+    const NAMES: [&str; 11] = [
+        "species", "x", "y", "z", "a", "b", "c", "qx", "qy", "qz", "qw",
+    ];
+    let mut ellipses = Vec::new();
+    let mut ellipsoids = Vec::new();
+    let mut rows = 0;
+    for (index, row) in lines.enumerate() {
+        let line = index as u64 + 3;
+        if row.trim().is_empty() {
+            continue;
+        }
+        rows += 1;
+        if rows > count {
+            return Err(malformed(
+                line,
+                format!("more rows than the {count} announced"),
+            ));
+        }
+        let fields: Vec<&str> = row.split_whitespace().collect();
+        if fields.len() != NAMES.len() {
+            return Err(malformed(
+                line,
+                format!("{} fields, expected {}", fields.len(), NAMES.len()),
+            ));
+        }
+        let mut v = [0.0; 10];
+        for (k, slot) in v.iter_mut().enumerate() {
+            *slot = match fields[k + 1].parse::<f64>() {
+                Ok(x) if x.is_finite() => x,
+                _ => {
+                    return Err(PackingError::BadValue {
+                        source_name: source_name.to_string(),
+                        line,
+                        column: k as u64 + 2,
+                        name: NAMES[k + 1].to_string(),
+                        message: format!("`{}` is not a finite number", fields[k + 1]),
+                    });
+                }
+            };
+        }
+        let [x, y, z, a, b, c, qx, qy, qz, qw] = v;
+        if let Some(k) = [a, b, c].iter().position(|l| *l <= 0.0) {
+            return Err(PackingError::BadValue {
+                source_name: source_name.to_string(),
+                line,
+                column: k as u64 + 5,
+                name: NAMES[k + 4].to_string(),
+                message: format!("semi-axis {} is not positive", v[k + 3]),
+            });
+        }
+        if kind.dimension() == 2 {
+            ellipses.push(EllipseItem {
+                center: [x, y],
+                semi_axes: [a, b],
+                theta: 2.0 * qz.atan2(qw),
+            });
+        } else {
+            ellipsoids.push(EllipsoidItem {
+                center: [x, y, z],
+                semi_axes: [a, b, c],
+                quaternion: [qw, qx, qy, qz],
+            });
+        }
+    }
+    if rows != count {
+        return Err(malformed(
+            1,
+            format!("{count} items announced, {rows} rows found"),
+        ));
+    }
+    let items = if kind.dimension() == 2 {
+        Items::Ellipses(ellipses)
+    } else {
+        Items::Ellipsoids(ellipsoids)
+    };
+    Packing::new(container, items).map_err(|e| match e {
+        PackingError::Inconsistent { message, .. } => PackingError::Inconsistent {
+            source_name: source_name.to_string(),
+            message,
+        },
+        other => other,
+    })
+}

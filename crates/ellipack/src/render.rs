@@ -1,0 +1,750 @@
+//! Pictures of a packing, `packing.svg` and `packing.png`, drawn with plotters.
+//!
+//! * 2D: the ellipses and the container to scale (equal scales on both axes), the ellipses
+//!   filled with a light colour and outlined, the container outlined over them.
+//! * 3D: three orthographic projections side by side — onto the x–y plane seen from +z, the
+//!   x–z plane seen from −y, the y–z plane seen from +x (a right-handed frame in each). The
+//!   projection of the ellipsoid {x : (x − c)ᵀ M⁻¹ (x − c) ≤ 1} onto two coordinate axes is the
+//!   ellipse whose matrix is the 2×2 sub-block of M = R diag(l²) Rᵀ on those rows and columns,
+//!   so each ellipsoid is drawn as its exact outline. Ellipsoids are painted back to front and
+//!   shaded by depth (nearer is lighter), so the front layer reads as in a photograph.
+//!
+//! Every picture has a title line (count, container, density) and a scale bar. Ellipses are
+//! polygons of 12 to 48 vertices depending on their size on screen, which keeps 10 000 items
+//! fast. An empty packing draws its container alone.
+
+use crate::packing::{Container, Items, Packing};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::path::{Path, PathBuf};
+
+/// The file name of the SVG picture.
+pub const SVG_FILE: &str = "packing.svg";
+/// The file name of the PNG picture.
+pub const PNG_FILE: &str = "packing.png";
+
+/// The font of every label (DejaVu Sans, embedded: plotters has no system font loader in this
+/// build, and text without a registered font panics).
+const FONT_BYTES: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+const FONT: &str = "sans-serif";
+
+/// What to draw besides the packing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Width in pixels (the height follows from the container's shape).
+    pub width: u32,
+    /// Put before the title line, e.g. the scene's or instance's name. The title itself, "N
+    /// ellipses in a circle (radius r) — density d", is always drawn.
+    pub label: Option<String>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            width: 1200,
+            label: None,
+        }
+    }
+}
+
+/// Why a picture could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// plotters failed while drawing.
+    #[error("{path}: drawing failed: {message}")]
+    Draw {
+        /// The picture.
+        path: PathBuf,
+        /// What plotters said.
+        message: String,
+    },
+    /// The embedded font was rejected (a broken build, not user data).
+    #[error("the embedded font could not be loaded")]
+    Font,
+    /// A temporary file for the PNG encoder could not be used.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The picture could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::Error),
+}
+
+/// The size in pixels of the pictures of `packing`: `options.width` wide (at least 200), as
+/// tall as the container's shape needs at equal scales (at most 1.5 × the width).
+pub fn picture_size(packing: &Packing, options: &RenderOptions) -> (u32, u32) {
+    Layout::new(packing, options).size
+}
+
+/// The SVG picture as text.
+///
+/// # Errors
+/// [`RenderError::Draw`] or [`RenderError::Font`].
+pub fn svg_string(packing: &Packing, options: &RenderOptions) -> Result<String, RenderError> {
+    register_font()?;
+    let layout = Layout::new(packing, options);
+    let mut text = String::new();
+    {
+        let backend = SVGBackend::with_string(&mut text, layout.size);
+        draw(backend.into_drawing_area(), packing, &layout)
+            .map_err(|message| draw_error(SVG_FILE, message))?;
+    }
+    Ok(text)
+}
+
+/// The PNG picture as bytes.
+///
+/// # Errors
+/// [`RenderError::Draw`], [`RenderError::Font`], or [`RenderError::Io`] for the encoder's
+/// temporary file.
+pub fn png_bytes(packing: &Packing, options: &RenderOptions) -> Result<Vec<u8>, RenderError> {
+    register_font()?;
+    let layout = Layout::new(packing, options);
+    // plotters encodes PNG only into a file; a private temporary file keeps the real target
+    // for write_atomically.
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = std::env::temp_dir().join(format!("ellipack-render-{}-{n}.png", std::process::id()));
+    let result = (|| {
+        {
+            let backend = BitMapBackend::new(&tmp, layout.size);
+            let area = backend.into_drawing_area();
+            draw(area.clone(), packing, &layout)
+                .map_err(|message| draw_error(PNG_FILE, message))?;
+            area.present()
+                .map_err(|e| draw_error(PNG_FILE, e.to_string()))?;
+        }
+        std::fs::read(&tmp).map_err(|source| RenderError::Io {
+            path: tmp.clone(),
+            source,
+        })
+    })();
+    // Best effort: the temporary file is of no use once read (or once drawing failed).
+    let _ = std::fs::remove_file(&tmp);
+    result
+}
+
+/// Writes [`svg_string`] to `path` atomically.
+///
+/// # Errors
+/// As [`svg_string`], or [`RenderError::Write`].
+pub fn write_svg(
+    path: &Path,
+    packing: &Packing,
+    options: &RenderOptions,
+) -> Result<(), RenderError> {
+    let text = svg_string(packing, options).map_err(|e| rename(e, path))?;
+    Ok(crate::output::write_atomically(path, text.as_bytes())?)
+}
+
+/// Writes [`png_bytes`] to `path` atomically.
+///
+/// # Errors
+/// As [`png_bytes`], or [`RenderError::Write`].
+pub fn write_png(
+    path: &Path,
+    packing: &Packing,
+    options: &RenderOptions,
+) -> Result<(), RenderError> {
+    let bytes = png_bytes(packing, options).map_err(|e| rename(e, path))?;
+    Ok(crate::output::write_atomically(path, &bytes)?)
+}
+
+/// Writes [`SVG_FILE`] and [`PNG_FILE`] into `dir` (which must exist).
+///
+/// # Errors
+/// The first error of [`write_svg`] and [`write_png`].
+pub fn write_pictures(
+    dir: &Path,
+    packing: &Packing,
+    options: &RenderOptions,
+) -> Result<(), RenderError> {
+    write_svg(&dir.join(SVG_FILE), packing, options)?;
+    write_png(&dir.join(PNG_FILE), packing, options)
+}
+
+fn draw_error(file: &str, message: String) -> RenderError {
+    RenderError::Draw {
+        path: PathBuf::from(file),
+        message,
+    }
+}
+
+fn rename(e: RenderError, path: &Path) -> RenderError {
+    match e {
+        RenderError::Draw { message, .. } => RenderError::Draw {
+            path: path.to_path_buf(),
+            message,
+        },
+        other => other,
+    }
+}
+
+fn register_font() -> Result<(), RenderError> {
+    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
+    });
+    if ok { Ok(()) } else { Err(RenderError::Font) }
+}
+
+/// One projection: which world axes go right (`u`) and up (`v`), which axis points at the
+/// viewer (`depth`, with its sign), where it sits on the canvas.
+#[derive(Clone, Debug)]
+struct Panel {
+    u: usize,
+    v: usize,
+    depth: Option<(usize, f64)>,
+    label: &'static str,
+    /// World bounds [umin, umax, vmin, vmax].
+    bounds: [f64; 4],
+    /// Pixel position of the panel's top-left corner.
+    origin: (i32, i32),
+}
+
+impl Panel {
+    fn to_pixel(&self, scale: f64, u: f64, v: f64) -> (i32, i32) {
+        let x = f64::from(self.origin.0) + (u - self.bounds[0]) * scale;
+        let y = f64::from(self.origin.1) + (self.bounds[3] - v) * scale;
+        // Far-off points (an item flung out of the container) are clamped so that i32
+        // arithmetic in the backends cannot overflow.
+        (
+            x.clamp(-1e6, 1e6).round() as i32,
+            y.clamp(-1e6, 1e6).round() as i32,
+        )
+    }
+
+    fn width(&self) -> f64 {
+        self.bounds[1] - self.bounds[0]
+    }
+
+    fn height(&self) -> f64 {
+        self.bounds[3] - self.bounds[2]
+    }
+}
+
+struct Layout {
+    size: (u32, u32),
+    margin: i32,
+    font_px: f64,
+    title: String,
+    scale: f64,
+    panels: Vec<Panel>,
+    /// Top of the drawing band (panels are centred vertically in it).
+    top: i32,
+    /// Top of the scale bar band.
+    footer_y: i32,
+}
+
+impl Layout {
+    fn new(packing: &Packing, options: &RenderOptions) -> Self {
+        let width = options.width.max(200);
+        let w = f64::from(width);
+        let margin = (w / 60.0).max(10.0);
+        let font_px = (w / 55.0).clamp(12.0, 36.0);
+        let title_band = 2.0 * font_px;
+        let (lo, hi) = world_box(packing);
+        let dimension = packing.container.dimension();
+        let mut panels: Vec<Panel> = if dimension == 2 {
+            vec![Panel {
+                u: 0,
+                v: 1,
+                depth: None,
+                label: "",
+                bounds: [0.0; 4],
+                origin: (0, 0),
+            }]
+        } else {
+            vec![
+                panel_3d(0, 1, (2, 1.0), "x →, y ↑ (seen from +z)"),
+                panel_3d(0, 2, (1, -1.0), "x →, z ↑ (seen from −y)"),
+                panel_3d(1, 2, (0, 1.0), "y →, z ↑ (seen from +x)"),
+            ]
+        };
+        for p in &mut panels {
+            p.bounds = [lo[p.u], hi[p.u], lo[p.v], hi[p.v]];
+        }
+        let label_band = if dimension == 2 { 0.0 } else { 1.6 * font_px };
+        let gaps = margin * (panels.len() as f64 - 1.0);
+        let total_width: f64 = panels.iter().map(Panel::width).sum();
+        let max_height = panels.iter().map(Panel::height).fold(0.0, f64::max);
+        let footer_band = 2.0 * font_px;
+        let mut scale = (w - 2.0 * margin - gaps) / total_width;
+        // A very tall container would make a very tall picture: cap its height.
+        let max_drawing_height = 1.5 * w - title_band - label_band - footer_band - 2.0 * margin;
+        if max_height * scale > max_drawing_height {
+            scale = max_drawing_height / max_height;
+        }
+        if !(scale.is_finite() && scale > 0.0) {
+            scale = 1.0;
+        }
+        let drawing_height = max_height * scale;
+        let top = margin + title_band + label_band;
+        let mut x = margin + (w - 2.0 * margin - gaps - total_width * scale) / 2.0;
+        for p in &mut panels {
+            // Centre each panel vertically in the drawing band.
+            let y = top + (drawing_height - p.height() * scale) / 2.0;
+            p.origin = (x.round() as i32, y.round() as i32);
+            x += p.width() * scale + margin;
+        }
+        let footer_y = (top + drawing_height + 0.5 * margin) as i32;
+        let height = (top + drawing_height + 0.5 * margin + footer_band).ceil() as u32;
+        let title = match &options.label {
+            Some(label) if !label.is_empty() => format!("{label}: {}", default_title(packing)),
+            _ => default_title(packing),
+        };
+        Layout {
+            size: (width, height),
+            margin: margin as i32,
+            font_px,
+            title,
+            scale,
+            panels,
+            top: top.round() as i32,
+            footer_y,
+        }
+    }
+}
+
+fn panel_3d(u: usize, v: usize, depth: (usize, f64), label: &'static str) -> Panel {
+    Panel {
+        u,
+        v,
+        depth: Some(depth),
+        label,
+        bounds: [0.0; 4],
+        origin: (0, 0),
+    }
+}
+
+/// "30 ellipses in an ellipse (semi-axes 9.12, 7.54), density 0.87152".
+fn default_title(packing: &Packing) -> String {
+    let kind = packing.container.kind();
+    let article = if kind.name().starts_with('e') {
+        "an"
+    } else {
+        "a"
+    };
+    let size: Vec<String> = packing
+        .container
+        .size()
+        .iter()
+        .map(|s| format!("{}", Sig(*s)))
+        .collect();
+    let size_name = packing.container.size_name().replace('_', "-");
+    format!(
+        "{} {} in {article} {kind} ({size_name} {}) — density {:.5}",
+        packing.items.len(),
+        packing.items.noun(),
+        size.join(", "),
+        packing.density()
+    )
+}
+
+/// Six significant digits without trailing zeros.
+struct Sig(f64);
+
+impl std::fmt::Display for Sig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() {
+            return write!(f, "{x}");
+        }
+        let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+        let s = format!("{x:.digits$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        f.write_str(&s)
+    }
+}
+
+/// The world box holding the container and every item (items may stick out of an
+/// uncertified packing), padded by 2 %; never empty.
+fn world_box(packing: &Packing) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut include = |c: &[f64], half: &[f64]| {
+        for k in 0..c.len() {
+            let (a, b) = (c[k] - half[k], c[k] + half[k]);
+            if a.is_finite() && b.is_finite() {
+                lo[k] = lo[k].min(a);
+                hi[k] = hi[k].max(b);
+            }
+        }
+    };
+    if packing.container.problem().is_none() {
+        include(
+            packing.container.center(),
+            &packing.container.half_extents(),
+        );
+    }
+    for (center, m) in quadratic_forms(&packing.items) {
+        let half: Vec<f64> = (0..center.len()).map(|k| m[k][k].sqrt()).collect();
+        include(&center, &half);
+    }
+    let n = packing.container.dimension();
+    let mut span = (0..n)
+        .map(|k| hi[k] - lo[k])
+        .filter(|s| s.is_finite())
+        .fold(0.0, f64::max);
+    if span <= 0.0 {
+        span = 1.0;
+    }
+    for k in 0..3 {
+        if !(lo[k].is_finite() && hi[k].is_finite()) || k >= n {
+            lo[k] = -0.5 * span;
+            hi[k] = 0.5 * span;
+        }
+        if hi[k] - lo[k] < 1e-3 * span {
+            let mid = 0.5 * (lo[k] + hi[k]);
+            lo[k] = mid - 0.5e-3 * span;
+            hi[k] = mid + 0.5e-3 * span;
+        }
+        let pad = 0.02 * span;
+        lo[k] -= pad;
+        hi[k] += pad;
+        // Coordinates so large that the padding vanishes in rounding (1e300 ± 1): give up on
+        // this axis and show a unit box, rather than divide by a zero extent.
+        if !(hi[k] - lo[k] > 0.0 && (hi[k] - lo[k]).is_finite()) {
+            lo[k] = -0.5;
+            hi[k] = 0.5;
+        }
+    }
+    (lo, hi)
+}
+
+/// Centre and full matrix M = R diag(l²) Rᵀ of every drawable item (items whose shape is
+/// invalid are skipped: a picture should still show the rest).
+fn quadratic_forms(items: &Items) -> Vec<(Vec<f64>, [[f64; 3]; 3])> {
+    match items {
+        Items::Ellipses(v) => v
+            .iter()
+            .filter_map(|e| {
+                let q = e.quadratic_form().ok()?;
+                let m = [[q[0], q[1], 0.0], [q[1], q[2], 0.0], [0.0, 0.0, 0.0]];
+                e.center
+                    .iter()
+                    .all(|c| c.is_finite())
+                    .then(|| (e.center.to_vec(), m))
+            })
+            .collect(),
+        Items::Ellipsoids(v) => v
+            .iter()
+            .filter_map(|e| {
+                let q = e.quadratic_form().ok()?;
+                let m = [[q[0], q[1], q[2]], [q[1], q[3], q[4]], [q[2], q[4], q[5]]];
+                e.center
+                    .iter()
+                    .all(|c| c.is_finite())
+                    .then(|| (e.center.to_vec(), m))
+            })
+            .collect(),
+    }
+}
+
+/// The outline of the ellipse {c + L (cos t, sin t)} with L Lᵀ = [[m11, m12], [m12, m22]]
+/// (a Cholesky factor: no eigen-decomposition needed), as pixels.
+fn ellipse_polygon(
+    panel: &Panel,
+    scale: f64,
+    c: (f64, f64),
+    m11: f64,
+    m12: f64,
+    m22: f64,
+) -> Option<Vec<(i32, i32)>> {
+    if !(m11 > 0.0 && m11.is_finite() && m22.is_finite() && m12.is_finite()) {
+        return None;
+    }
+    let l11 = m11.sqrt();
+    let l21 = m12 / l11;
+    // Rounding can leave a tiny negative Schur complement for a needle seen end-on.
+    let l22 = (m22 - l21 * l21).max(0.0).sqrt();
+    let radius_px = (m11 + m22).sqrt() * scale;
+    let n = (radius_px.ceil() as usize).clamp(12, 48);
+    let points = (0..n)
+        .map(|i| {
+            let t = std::f64::consts::TAU * i as f64 / n as f64;
+            let (s, co) = t.sin_cos();
+            panel.to_pixel(scale, c.0 + l11 * co, c.1 + l21 * co + l22 * s)
+        })
+        .collect();
+    Some(points)
+}
+
+const LABEL: RGBColor = RGBColor(60, 60, 60);
+const BACKGROUND: RGBColor = RGBColor(255, 255, 255);
+const CONTAINER_FILL: RGBColor = RGBColor(244, 244, 246);
+const CONTAINER_LINE: RGBColor = RGBColor(20, 20, 20);
+const LIGHT: (f64, f64, f64) = (186.0, 214.0, 240.0);
+const LIGHT_WARM: (f64, f64, f64) = (247.0, 205.0, 160.0);
+const DEEP: (f64, f64, f64) = (60.0, 92.0, 140.0);
+
+fn mix(a: (f64, f64, f64), b: (f64, f64, f64), t: f64) -> RGBColor {
+    let t = t.clamp(0.0, 1.0);
+    let f = |x: f64, y: f64| (x + (y - x) * t).round().clamp(0.0, 255.0) as u8;
+    RGBColor(f(a.0, b.0), f(a.1, b.1), f(a.2, b.2))
+}
+
+fn darker(c: RGBColor, factor: f64) -> RGBColor {
+    let f = |x: u8| (f64::from(x) * factor).round() as u8;
+    RGBColor(f(c.0), f(c.1), f(c.2))
+}
+
+fn draw<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    packing: &Packing,
+    layout: &Layout,
+) -> Result<(), String> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    area.fill(&BACKGROUND).map_err(err)?;
+    let small = (FONT, 0.85 * layout.font_px).into_font().color(&LABEL);
+    let room = f64::from(layout.size.0) - 2.0 * f64::from(layout.margin);
+    let title_font = fitted(&area, &layout.title, layout.font_px, room);
+    area.draw(&Text::new(
+        layout.title.clone(),
+        (layout.margin, layout.margin),
+        (FONT, title_font).into_font().color(&BLACK),
+    ))
+    .map_err(err)?;
+    let forms = quadratic_forms(&packing.items);
+    // Colour by size when the items differ (mixed shapes), else one colour.
+    let measures: Vec<f64> = forms
+        .iter()
+        .map(|(_, m)| {
+            if packing.container.dimension() == 2 {
+                (m[0][0] * m[1][1] - m[0][1] * m[0][1]).max(0.0).sqrt()
+            } else {
+                determinant(m).max(0.0).sqrt()
+            }
+        })
+        .collect();
+    let (mmin, mmax) = measures
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(*x), b.max(*x))
+        });
+    let varied = mmax > mmin * (1.0 + 1e-9);
+    for panel in &layout.panels {
+        let scale = layout.scale;
+        if !panel.label.is_empty() {
+            // Labels in one row above the drawing band, each no wider than its panel.
+            let room = panel.width() * scale + 0.8 * f64::from(layout.margin);
+            let size = fitted(&area, panel.label, 0.85 * layout.font_px, room);
+            let label_y = layout.top - (1.4 * layout.font_px) as i32;
+            let style = (FONT, size).into_font().color(&LABEL);
+            area.draw(&Text::new(panel.label, (panel.origin.0, label_y), style))
+                .map_err(err)?;
+        }
+        let outline = container_outline(&packing.container, panel, scale);
+        if let Some(points) = &outline {
+            area.draw(&Polygon::new(points.clone(), CONTAINER_FILL.filled()))
+                .map_err(err)?;
+        }
+        // Painter's order: farthest first.
+        let mut order: Vec<(usize, f64)> = forms
+            .iter()
+            .enumerate()
+            .map(|(i, (c, _))| {
+                let d = panel.depth.map_or(0.0, |(axis, sign)| sign * c[axis]);
+                (i, d)
+            })
+            .collect();
+        order.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (dmin, dmax) = match (order.first(), order.last()) {
+            (Some(a), Some(b)) => (a.1, b.1),
+            _ => (0.0, 0.0),
+        };
+        for (i, d) in order {
+            let (c, m) = &forms[i];
+            let fill = if panel.depth.is_some() {
+                let t = if dmax > dmin {
+                    (d - dmin) / (dmax - dmin)
+                } else {
+                    1.0
+                };
+                mix(DEEP, LIGHT, 0.25 + 0.75 * t)
+            } else if varied {
+                let t = (measures[i] / mmin).ln() / (mmax / mmin).ln();
+                mix(LIGHT, LIGHT_WARM, t)
+            } else {
+                mix(LIGHT, LIGHT, 0.0)
+            };
+            let (u, v) = (panel.u, panel.v);
+            let Some(points) =
+                ellipse_polygon(panel, scale, (c[u], c[v]), m[u][u], m[u][v], m[v][v])
+            else {
+                continue;
+            };
+            area.draw(&Polygon::new(points.clone(), fill.filled()))
+                .map_err(err)?;
+            let mut closed = points;
+            closed.push(closed[0]);
+            area.draw(&PathElement::new(
+                closed,
+                darker(fill, 0.55).stroke_width(1),
+            ))
+            .map_err(err)?;
+        }
+        if let Some(mut points) = outline {
+            points.push(points[0]);
+            let width = (layout.font_px / 8.0).round().max(2.0) as u32;
+            area.draw(&PathElement::new(
+                points,
+                CONTAINER_LINE.stroke_width(width),
+            ))
+            .map_err(err)?;
+        }
+    }
+    draw_scale_bar(&area, layout, &small).map_err(err)?;
+    Ok(())
+}
+
+/// The font size (at most `size`) at which `text` is at most `room` pixels wide.
+fn fitted<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    size: f64,
+    room: f64,
+) -> f64 {
+    let width = area
+        .estimate_text_size(text, &(FONT, size).into_font().color(&LABEL))
+        .map_or(0.0, |(w, _)| f64::from(w));
+    if width > room && room > 0.0 {
+        (size * room / width).max(6.0)
+    } else {
+        size
+    }
+}
+
+fn determinant(m: &[[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// The container's outline in a panel: a circle or axis-aligned ellipse (192 vertices: it is
+/// the largest thing on the page), or a rectangle.
+fn container_outline(container: &Container, panel: &Panel, scale: f64) -> Option<Vec<(i32, i32)>> {
+    if container.problem().is_some() {
+        return None;
+    }
+    let c = container.center();
+    let half = container.half_extents();
+    let (cu, cv, hu, hv) = (c[panel.u], c[panel.v], half[panel.u], half[panel.v]);
+    match container {
+        Container::Rectangle { .. } | Container::Cuboid { .. } => Some(vec![
+            panel.to_pixel(scale, cu - hu, cv - hv),
+            panel.to_pixel(scale, cu + hu, cv - hv),
+            panel.to_pixel(scale, cu + hu, cv + hv),
+            panel.to_pixel(scale, cu - hu, cv + hv),
+        ]),
+        _ => Some(
+            (0..192)
+                .map(|i| {
+                    let (s, co) = (std::f64::consts::TAU * f64::from(i) / 192.0).sin_cos();
+                    panel.to_pixel(scale, cu + hu * co, cv + hv * s)
+                })
+                .collect(),
+        ),
+    }
+}
+
+/// A bar of a round length (1, 2 or 5 × 10ᵏ) about a fifth of the first panel's width, with
+/// its length written beside it.
+fn draw_scale_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    layout: &Layout,
+    style: &TextStyle<'_>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let Some(panel) = layout.panels.first() else {
+        return Ok(());
+    };
+    let target = 0.2 * panel.width();
+    if !(target.is_finite() && target > 0.0) {
+        return Ok(());
+    }
+    let power = 10f64.powf(target.log10().floor());
+    let length = [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|k| k * power)
+        .find(|l| *l <= target)
+        .unwrap_or(power);
+    let x0 = panel.origin.0;
+    let x1 = x0 + (length * layout.scale).round() as i32;
+    let y = layout.footer_y + (0.6 * layout.font_px) as i32;
+    let tick = (0.3 * layout.font_px) as i32;
+    let line = BLACK.stroke_width(2);
+    area.draw(&PathElement::new(vec![(x0, y), (x1, y)], line))?;
+    area.draw(&PathElement::new(
+        vec![(x0, y - tick), (x0, y + tick)],
+        line,
+    ))?;
+    area.draw(&PathElement::new(
+        vec![(x1, y - tick), (x1, y + tick)],
+        line,
+    ))?;
+    let label = style.pos(Pos::new(HPos::Left, VPos::Center));
+    area.draw(&Text::new(
+        format!("{}", Sig(length)),
+        (x1 + tick * 2, y),
+        label,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The outline drawn for an ellipsoid is its exact shadow: every surface point projects
+    /// inside the ellipse of the 2×2 sub-block of M, and some reach its boundary.
+    #[test]
+    fn projections_use_the_sub_block_of_m() {
+        let item = crate::packing::EllipsoidItem {
+            center: [0.3, -1.0, 2.0],
+            semi_axes: [2.0, 0.7, 0.3],
+            quaternion: [0.8, 0.3, -0.5, 0.2],
+        };
+        let r = pw85::shape::rotation_from_quaternion(&item.quaternion).unwrap();
+        let q = item.quadratic_form().unwrap();
+        let m = [[q[0], q[1], q[2]], [q[1], q[3], q[4]], [q[2], q[4], q[5]]];
+        for (u, v) in [(0, 1), (0, 2), (1, 2)] {
+            let (a, b, c) = (m[u][u], m[u][v], m[v][v]);
+            let det = a * c - b * b;
+            let mut largest: f64 = 0.0;
+            for i in 0..200 {
+                for j in 0..100 {
+                    let (st, ct) = (std::f64::consts::PI * f64::from(j) / 99.0).sin_cos();
+                    let (sp, cp) = (std::f64::consts::TAU * f64::from(i) / 200.0).sin_cos();
+                    let s = [st * cp, st * sp, ct];
+                    let local: Vec<f64> = (0..3).map(|k| item.semi_axes[k] * s[k]).collect();
+                    let x: Vec<f64> = (0..3)
+                        .map(|row| (0..3).map(|k| r[row][k] * local[k]).sum())
+                        .collect();
+                    // (p)ᵀ [[a, b], [b, c]]⁻¹ p for the projected offset p.
+                    let (pu, pv) = (x[u], x[v]);
+                    let value = (c * pu * pu - 2.0 * b * pu * pv + a * pv * pv) / det;
+                    assert!(value <= 1.0 + 1e-12, "{value}");
+                    largest = largest.max(value);
+                }
+            }
+            assert!(largest > 0.999, "plane {u}{v}: {largest}");
+        }
+    }
+
+    #[test]
+    fn scale_labels_have_six_significant_digits() {
+        assert_eq!(Sig(18.710_000_1).to_string(), "18.71");
+        assert_eq!(Sig(49.398_601).to_string(), "49.3986");
+        assert_eq!(Sig(5.0).to_string(), "5");
+        assert_eq!(Sig(0.002).to_string(), "0.002");
+        assert_eq!(Sig(123_456_789.0).to_string(), "123456789");
+    }
+}

@@ -1,0 +1,934 @@
+//! The scene file of `ellipack pack` (TOML): what to pack, into which container, with which
+//! solver settings, and what to write.
+//!
+//! ```toml
+//! name = "30 ellipses in an ellipse"  # optional: used in picture titles
+//! dimension = 2                       # 2: ellipses, 3: ellipsoids
+//! seed = 1                            # optional (default 0): the multi-start's random seed
+//!
+//! [container]
+//! kind = "ellipse"                    # 2D: circle | ellipse | rectangle
+//!                                     # 3D: ball | ellipsoid | cuboid
+//!
+//! [[shapes]]                          # one table per group of identical items
+//! count = 20
+//! semi_axes = [2.0, 1.0]              # dimension values, each > 0
+//!
+//! [[shapes]]                          # several groups: mixed shapes
+//! count = 10
+//! semi_axes = [1.0, 1.0]
+//!
+//! [solver]                            # optional; the defaults are shown
+//! feasibility_tolerance = 1e-4        # ε_feas, as in the paper's Section 6
+//! optimality_tolerance = 1e-4         # ε_opt
+//! time_limit = 60.0                   # seconds of wall clock (--time-limit overrides it)
+//! threads = 0                         # 0: every core (--threads overrides it)
+//! # local_minimisations = 50          # cap on multi-start local minimisations (default: none)
+//! inner_solver = "projected-lbfgs"    # or "spg"
+//! perturbation = 0.025                # multi-start perturbation, relative (paper: 2.5 % in 2D,
+//!                                     # 10 % in 3D: the default follows the dimension)
+//!
+//! [output]                            # optional; the defaults are shown
+//! # directory = "out"                 # default directory (--out overrides it)
+//! pictures = true                     # packing.svg and packing.png
+//! xyz = true                          # packing.xyz
+//! image_width = 1200                  # pixels
+//! ```
+//!
+//! Reading it:
+//!
+//! ```
+//! # let text = include_str!("scene.rs").lines()
+//! #     .skip_while(|l| !l.starts_with("//! ```toml")).skip(1)
+//! #     .take_while(|l| !l.starts_with("//! ```"))
+//! #     .map(|l| l.strip_prefix("//! ").unwrap_or("")).collect::<Vec<_>>().join("\n");
+//! use ellipack::scene::{Dimension, InnerSolver, Scene};
+//! use ellipack::packing::ContainerKind;
+//!
+//! let scene = Scene::from_toml_str(&text, "scene.toml").unwrap();
+//! assert_eq!(scene.dimension, Dimension::Two);
+//! assert_eq!(scene.container, ContainerKind::Ellipse);
+//! assert_eq!(scene.item_count(), 30);
+//! assert_eq!(scene.solver.inner_solver, InnerSolver::ProjectedLbfgs);
+//! assert_eq!(scene.solver.perturbation, 0.025);
+//!
+//! let err = Scene::from_toml_str("dimension = 2\n[container]\nkind = \"ball\"\n", "bad.toml")
+//!     .unwrap_err();
+//! assert_eq!(err.to_string(),
+//!     "bad.toml: line 3, column 8: `container.kind`: a ball is a 3D container; \
+//!      with dimension = 2 use circle, ellipse or rectangle");
+//! ```
+//!
+//! Unknown keys, values of the wrong type and impossible values (a semi-axis ≤ 0, a count of
+//! 0, no shapes, a container of the other dimension) are errors whose message names the file,
+//! the line, the column and the key, as `shapes[1].count` (groups counted from 0).
+
+use crate::packing::ContainerKind;
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use toml::Spanned;
+
+/// The built-in scene of `ellipack pack` without a scene file: 30 ellipses with semi-axes
+/// (2, 1) in a minimum-area ellipse, short enough to finish well within a minute.
+pub const DEFAULT_SCENE: &str = r#"# The built-in scene of `ellipack pack`.
+name = "30 ellipses (2, 1) in a minimum-area ellipse"
+dimension = 2
+seed = 1
+
+[container]
+kind = "ellipse"
+
+[[shapes]]
+count = 30
+semi_axes = [2.0, 1.0]
+
+[solver]
+time_limit = 45.0
+"#;
+
+/// The largest number of items a scene may ask for: far beyond what the solver handles in a
+/// day, low enough that a typo (an extra zero or six) is caught before memory runs out.
+pub const MAX_ITEMS: usize = 10_000_000;
+
+/// Why a scene could not be read: the file, the position and the key of the first problem.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{source_name}: line {line}, column {column}: `{key}`: {message}")]
+pub struct SceneError {
+    /// The file, or `<built-in scene>`.
+    pub source_name: String,
+    /// 1-based line of the offending value or key (of the enclosing table for a missing
+    /// key; line 1 when the key is missing at the top level).
+    pub line: usize,
+    /// 1-based column (in characters).
+    pub column: usize,
+    /// The dotted key, e.g. `solver.time_limit` or `shapes[0].semi_axes`.
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Ellipses or ellipsoids.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Dimension {
+    /// Ellipses in the plane.
+    Two,
+    /// Ellipsoids in space.
+    Three,
+}
+
+impl Dimension {
+    /// 2 or 3.
+    pub fn get(self) -> usize {
+        match self {
+            Dimension::Two => 2,
+            Dimension::Three => 3,
+        }
+    }
+}
+
+/// The inner solver of the augmented Lagrangian's bound-constrained subproblems.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum InnerSolver {
+    /// Nonmonotone spectral projected gradient (`"spg"`).
+    Spg,
+    /// Active-set projected L-BFGS (`"projected-lbfgs"`).
+    #[default]
+    ProjectedLbfgs,
+}
+
+impl InnerSolver {
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            InnerSolver::Spg => "spg",
+            InnerSolver::ProjectedLbfgs => "projected-lbfgs",
+        }
+    }
+}
+
+/// A group of identical items.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeGroup {
+    /// How many (≥ 1).
+    pub count: usize,
+    /// Their semi-axes: as many as the dimension, each positive and finite.
+    pub semi_axes: Vec<f64>,
+}
+
+/// Settings of the solver and the multi-start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// ε_feas (> 0; default 1e-4, the paper's).
+    pub feasibility_tolerance: f64,
+    /// ε_opt (> 0; default 1e-4, the paper's).
+    pub optimality_tolerance: f64,
+    /// Wall-clock limit of the whole run (default 60 s).
+    pub time_limit: Duration,
+    /// Worker threads; 0 means every available core.
+    pub threads: usize,
+    /// Cap on the multi-start's local minimisations; `None`: until the time limit.
+    pub local_minimisations: Option<u64>,
+    /// The subproblem solver.
+    pub inner_solver: InnerSolver,
+    /// Largest relative perturbation of centres and angles between multi-start iterations, in
+    /// [0, 1) (default: 0.025 in 2D, 0.10 in 3D, the paper's Section 6).
+    pub perturbation: f64,
+}
+
+/// Default wall-clock limit of a run.
+pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(60);
+
+impl SolverSettings {
+    /// The defaults for a dimension.
+    pub fn defaults(dimension: Dimension) -> Self {
+        SolverSettings {
+            feasibility_tolerance: 1e-4,
+            optimality_tolerance: 1e-4,
+            time_limit: DEFAULT_TIME_LIMIT,
+            threads: 0,
+            local_minimisations: None,
+            inner_solver: InnerSolver::default(),
+            perturbation: default_perturbation(dimension),
+        }
+    }
+}
+
+fn default_perturbation(dimension: Dimension) -> f64 {
+    match dimension {
+        Dimension::Two => 0.025,
+        Dimension::Three => 0.10,
+    }
+}
+
+/// What to write besides `packing.csv` and `summary.json` (always written).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputOptions {
+    /// The output directory when `--out` is not given.
+    pub directory: Option<PathBuf>,
+    /// Write `packing.svg` and `packing.png` (default true).
+    pub pictures: bool,
+    /// Write `packing.xyz` (default true).
+    pub xyz: bool,
+    /// Width of the pictures in pixels, 200 to 8000 (default 1200).
+    pub image_width: u32,
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        OutputOptions {
+            directory: None,
+            pictures: true,
+            xyz: true,
+            image_width: 1200,
+        }
+    }
+}
+
+/// A validated scene: everything a packing run needs to start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// A name for titles, if given.
+    pub name: Option<String>,
+    /// 2D or 3D.
+    pub dimension: Dimension,
+    /// The container's shape (of the scene's dimension); its size is what the run minimises.
+    pub container: ContainerKind,
+    /// The items, by group (at least one group).
+    pub shapes: Vec<ShapeGroup>,
+    /// Solver settings.
+    pub solver: SolverSettings,
+    /// The random seed of the multi-start.
+    pub seed: u64,
+    /// Output options.
+    pub output: OutputOptions,
+}
+
+// The file as written, with the position of every value that validation may reject.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: Option<String>,
+    dimension: Spanned<i64>,
+    seed: Option<Spanned<i64>>,
+    container: RawContainer,
+    shapes: Option<Spanned<Vec<RawShapes>>>,
+    solver: Option<RawSolver>,
+    output: Option<RawOutput>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContainer {
+    kind: Spanned<ContainerKind>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawShapes {
+    count: Spanned<i64>,
+    semi_axes: Spanned<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    feasibility_tolerance: Option<Spanned<f64>>,
+    optimality_tolerance: Option<Spanned<f64>>,
+    time_limit: Option<Spanned<f64>>,
+    threads: Option<Spanned<i64>>,
+    local_minimisations: Option<Spanned<i64>>,
+    inner_solver: Option<InnerSolver>,
+    perturbation: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawOutput {
+    directory: Option<String>,
+    pictures: Option<bool>,
+    xyz: Option<bool>,
+    image_width: Option<Spanned<i64>>,
+}
+
+impl Scene {
+    /// Parses and validates a scene. `source_name` names it in messages (a path, or
+    /// `<built-in scene>`).
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the line, column and key of the first problem: TOML syntax,
+    /// unknown keys, wrong types, missing `dimension`, `container.kind` or shapes, a
+    /// dimension other than 2 or 3, a container of the other dimension, a count < 1, semi-axes
+    /// that are not positive and finite or not `dimension` of them, tolerances, time limit or
+    /// perturbation out of range.
+    pub fn from_toml_str(text: &str, source_name: &str) -> Result<Scene, SceneError> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(text, source_name, &e))?;
+        Validator { text, source_name }.scene(raw)
+    }
+
+    /// Reads and validates a scene file.
+    ///
+    /// # Errors
+    /// A [`SceneError`] (line 1, key `<file>`) when the file cannot be read, else as
+    /// [`Scene::from_toml_str`].
+    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            source_name: name.clone(),
+            line: 1,
+            column: 1,
+            key: "<file>".to_string(),
+            message: e.to_string(),
+        })?;
+        Scene::from_toml_str(&text, &name)
+    }
+
+    /// The built-in scene, [`DEFAULT_SCENE`].
+    pub fn default_scene() -> Scene {
+        // A unit test parses the constant, so this cannot fail in a released build.
+        Scene::from_toml_str(DEFAULT_SCENE, "<built-in scene>")
+            .unwrap_or_else(|e| panic!("the built-in scene is invalid: {e}"))
+    }
+
+    /// The total number of items.
+    pub fn item_count(&self) -> usize {
+        self.shapes.iter().map(|g| g.count).sum()
+    }
+
+    /// The semi-axes of every item in order (groups expanded), as ellipses; `None` in 3D.
+    pub fn ellipse_axes(&self) -> Option<Vec<[f64; 2]>> {
+        (self.dimension == Dimension::Two).then(|| self.expand(|l| [l[0], l[1]]))
+    }
+
+    /// The semi-axes of every item in order (groups expanded), as ellipsoids; `None` in 2D.
+    pub fn ellipsoid_axes(&self) -> Option<Vec<[f64; 3]>> {
+        (self.dimension == Dimension::Three).then(|| self.expand(|l| [l[0], l[1], l[2]]))
+    }
+
+    fn expand<T: Copy>(&self, convert: impl Fn(&[f64]) -> T) -> Vec<T> {
+        let mut out = Vec::with_capacity(self.item_count());
+        for g in &self.shapes {
+            out.extend(std::iter::repeat_n(convert(&g.semi_axes), g.count));
+        }
+        out
+    }
+
+    /// A one-line description: the name if given, else e.g. "30 ellipses (2, 1) in a
+    /// minimum-area ellipse".
+    pub fn title(&self) -> String {
+        if let Some(name) = &self.name {
+            return name.clone();
+        }
+        let n = self.item_count();
+        let noun = match (self.dimension, n == 1) {
+            (Dimension::Two, false) => "ellipses",
+            (Dimension::Two, true) => "ellipse",
+            (Dimension::Three, false) => "ellipsoids",
+            (Dimension::Three, true) => "ellipsoid",
+        };
+        let axes = if self.shapes.len() == 1 {
+            let list: Vec<String> = self.shapes[0]
+                .semi_axes
+                .iter()
+                .map(|l| l.to_string())
+                .collect();
+            format!(" ({})", list.join(", "))
+        } else {
+            format!(" of {} shapes", self.shapes.len())
+        };
+        format!(
+            "{n} {noun}{axes} in a minimum-{} {}",
+            self.container.measure_name(),
+            self.container
+        )
+    }
+
+    /// The scene as TOML that [`Scene::from_toml_str`] reads back to an equal scene (every
+    /// setting written out, floats in their shortest exact form).
+    pub fn to_toml_string(&self) -> String {
+        let mut out = String::new();
+        let line = |out: &mut String, key: &str, value: String| {
+            out.push_str(key);
+            out.push_str(" = ");
+            out.push_str(&value);
+            out.push('\n');
+        };
+        if let Some(name) = &self.name {
+            line(&mut out, "name", toml_string(name));
+        }
+        line(&mut out, "dimension", self.dimension.get().to_string());
+        line(&mut out, "seed", self.seed.to_string());
+        out.push_str("\n[container]\n");
+        line(&mut out, "kind", toml_string(self.container.name()));
+        for g in &self.shapes {
+            out.push_str("\n[[shapes]]\n");
+            line(&mut out, "count", g.count.to_string());
+            let axes: Vec<String> = g.semi_axes.iter().map(|l| toml_float(*l)).collect();
+            line(&mut out, "semi_axes", format!("[{}]", axes.join(", ")));
+        }
+        let s = &self.solver;
+        out.push_str("\n[solver]\n");
+        line(
+            &mut out,
+            "feasibility_tolerance",
+            toml_float(s.feasibility_tolerance),
+        );
+        line(
+            &mut out,
+            "optimality_tolerance",
+            toml_float(s.optimality_tolerance),
+        );
+        line(
+            &mut out,
+            "time_limit",
+            toml_float(s.time_limit.as_secs_f64()),
+        );
+        line(&mut out, "threads", s.threads.to_string());
+        if let Some(n) = s.local_minimisations {
+            line(&mut out, "local_minimisations", n.to_string());
+        }
+        line(&mut out, "inner_solver", toml_string(s.inner_solver.name()));
+        line(&mut out, "perturbation", toml_float(s.perturbation));
+        let o = &self.output;
+        out.push_str("\n[output]\n");
+        if let Some(dir) = &o.directory {
+            line(
+                &mut out,
+                "directory",
+                toml_string(&dir.display().to_string()),
+            );
+        }
+        line(&mut out, "pictures", o.pictures.to_string());
+        line(&mut out, "xyz", o.xyz.to_string());
+        line(&mut out, "image_width", o.image_width.to_string());
+        out
+    }
+}
+
+impl fmt::Display for Scene {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.title())
+    }
+}
+
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// Rust's `Debug` for f64 is the shortest string that reads back exactly, and always has a
+/// `.` or an exponent, which TOML needs to see a float.
+fn toml_float(x: f64) -> String {
+    format!("{x:?}")
+}
+
+struct Validator<'a> {
+    text: &'a str,
+    source_name: &'a str,
+}
+
+impl Validator<'_> {
+    fn error(&self, span: std::ops::Range<usize>, key: &str, message: String) -> SceneError {
+        let (line, column) = line_column(self.text, span.start);
+        SceneError {
+            source_name: self.source_name.to_string(),
+            line,
+            column,
+            key: key.to_string(),
+            message,
+        }
+    }
+
+    fn positive(&self, value: &Option<Spanned<f64>>, key: &str) -> Result<Option<f64>, SceneError> {
+        match value {
+            None => Ok(None),
+            Some(v) if v.get_ref().is_finite() && *v.get_ref() > 0.0 => Ok(Some(*v.get_ref())),
+            Some(v) => Err(self.error(
+                v.span(),
+                key,
+                format!("must be positive and finite, not {}", v.get_ref()),
+            )),
+        }
+    }
+
+    fn scene(&self, raw: RawScene) -> Result<Scene, SceneError> {
+        let dimension = match *raw.dimension.get_ref() {
+            2 => Dimension::Two,
+            3 => Dimension::Three,
+            d => {
+                return Err(self.error(
+                    raw.dimension.span(),
+                    "dimension",
+                    format!("must be 2 (ellipses) or 3 (ellipsoids), not {d}"),
+                ));
+            }
+        };
+        let kind = *raw.container.kind.get_ref();
+        if kind.dimension() != dimension.get() {
+            let choices = match dimension {
+                Dimension::Two => "circle, ellipse or rectangle",
+                Dimension::Three => "ball, ellipsoid or cuboid",
+            };
+            return Err(self.error(
+                raw.container.kind.span(),
+                "container.kind",
+                format!(
+                    "a {kind} is a {}D container; with dimension = {} use {choices}",
+                    kind.dimension(),
+                    dimension.get()
+                ),
+            ));
+        }
+        let seed = match &raw.seed {
+            None => 0,
+            Some(s) => u64::try_from(*s.get_ref()).map_err(|_| {
+                self.error(
+                    s.span(),
+                    "seed",
+                    format!("must be a non-negative integer, not {}", s.get_ref()),
+                )
+            })?,
+        };
+        let shapes = self.shapes(raw.shapes, dimension)?;
+        let solver = self.solver(raw.solver, dimension)?;
+        let output = self.output(raw.output)?;
+        Ok(Scene {
+            name: raw.name,
+            dimension,
+            container: kind,
+            shapes,
+            solver,
+            seed,
+            output,
+        })
+    }
+
+    fn shapes(
+        &self,
+        raw: Option<Spanned<Vec<RawShapes>>>,
+        dimension: Dimension,
+    ) -> Result<Vec<ShapeGroup>, SceneError> {
+        let empty = "the scene has nothing to pack: add a [[shapes]] table with `count` and \
+                     `semi_axes`";
+        let Some(raw) = raw else {
+            return Err(self.error(0..0, "shapes", empty.to_string()));
+        };
+        if raw.get_ref().is_empty() {
+            return Err(self.error(raw.span(), "shapes", empty.to_string()));
+        }
+        let mut total = 0usize;
+        let mut groups = Vec::new();
+        for (i, g) in raw.into_inner().into_iter().enumerate() {
+            let count = *g.count.get_ref();
+            let key = format!("shapes[{i}].count");
+            if count < 1 {
+                return Err(self.error(
+                    g.count.span(),
+                    &key,
+                    format!("must be at least 1, not {count}"),
+                ));
+            }
+            // `count` is positive; beyond usize it is beyond MAX_ITEMS too.
+            let count = usize::try_from(count).unwrap_or(usize::MAX);
+            total = total.saturating_add(count);
+            if total > MAX_ITEMS {
+                return Err(self.error(
+                    g.count.span(),
+                    &key,
+                    format!("the scene would hold {total} items, more than {MAX_ITEMS}"),
+                ));
+            }
+            let key = format!("shapes[{i}].semi_axes");
+            let axes = g.semi_axes.get_ref();
+            if axes.len() != dimension.get() {
+                return Err(self.error(
+                    g.semi_axes.span(),
+                    &key,
+                    format!(
+                        "{} values for dimension = {}: give {} semi-axes",
+                        axes.len(),
+                        dimension.get(),
+                        dimension.get()
+                    ),
+                ));
+            }
+            if let Some(l) = axes.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
+                return Err(self.error(
+                    g.semi_axes.span(),
+                    &key,
+                    format!("every semi-axis must be positive and finite, not {l}"),
+                ));
+            }
+            groups.push(ShapeGroup {
+                count,
+                semi_axes: axes.clone(),
+            });
+        }
+        Ok(groups)
+    }
+
+    fn solver(
+        &self,
+        raw: Option<RawSolver>,
+        dimension: Dimension,
+    ) -> Result<SolverSettings, SceneError> {
+        let mut s = SolverSettings::defaults(dimension);
+        let Some(raw) = raw else { return Ok(s) };
+        if let Some(v) =
+            self.positive(&raw.feasibility_tolerance, "solver.feasibility_tolerance")?
+        {
+            s.feasibility_tolerance = v;
+        }
+        if let Some(v) = self.positive(&raw.optimality_tolerance, "solver.optimality_tolerance")? {
+            s.optimality_tolerance = v;
+        }
+        if let Some(v) = self.positive(&raw.time_limit, "solver.time_limit")? {
+            s.time_limit = Duration::try_from_secs_f64(v).map_err(|_| {
+                let span = raw.time_limit.as_ref().map_or(0..0, Spanned::span);
+                self.error(
+                    span,
+                    "solver.time_limit",
+                    format!("{v} seconds is too long"),
+                )
+            })?;
+        }
+        if let Some(t) = &raw.threads {
+            s.threads = usize::try_from(*t.get_ref()).map_err(|_| {
+                self.error(
+                    t.span(),
+                    "solver.threads",
+                    format!(
+                        "must be 0 (every core) or a positive count, not {}",
+                        t.get_ref()
+                    ),
+                )
+            })?;
+        }
+        if let Some(n) = &raw.local_minimisations {
+            let v = *n.get_ref();
+            if v < 1 {
+                return Err(self.error(
+                    n.span(),
+                    "solver.local_minimisations",
+                    format!("must be at least 1, not {v}"),
+                ));
+            }
+            s.local_minimisations = Some(v.unsigned_abs());
+        }
+        if let Some(solver) = raw.inner_solver {
+            s.inner_solver = solver;
+        }
+        if let Some(p) = &raw.perturbation {
+            let v = *p.get_ref();
+            if !(0.0..1.0).contains(&v) {
+                return Err(self.error(
+                    p.span(),
+                    "solver.perturbation",
+                    format!("must be in [0, 1) (a fraction, 0.025 is 2.5 %), not {v}"),
+                ));
+            }
+            s.perturbation = v;
+        }
+        Ok(s)
+    }
+
+    fn output(&self, raw: Option<RawOutput>) -> Result<OutputOptions, SceneError> {
+        let mut o = OutputOptions::default();
+        let Some(raw) = raw else { return Ok(o) };
+        o.directory = raw.directory.map(PathBuf::from);
+        o.pictures = raw.pictures.unwrap_or(o.pictures);
+        o.xyz = raw.xyz.unwrap_or(o.xyz);
+        if let Some(w) = &raw.image_width {
+            let v = *w.get_ref();
+            o.image_width = u32::try_from(v)
+                .ok()
+                .filter(|w| (200..=8000).contains(w))
+                .ok_or_else(|| {
+                    self.error(
+                        w.span(),
+                        "output.image_width",
+                        format!("must be between 200 and 8000 pixels, not {v}"),
+                    )
+                })?;
+        }
+        Ok(o)
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = text.get(..offset).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
+/// Converts a TOML error into a [`SceneError`], finding the key from the text around the
+/// error's position (the toml crate keeps its key path private).
+fn toml_error(text: &str, source_name: &str, e: &toml::de::Error) -> SceneError {
+    let span = e.span().unwrap_or(0..0);
+    let mut offset = span.start.min(text.len());
+    // Byte offsets from the parser sit on character boundaries; make sure before slicing.
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let (line, column) = line_column(text, offset);
+    let message = plain_types(e.message().trim());
+    let table = table_path(text, offset);
+    let key = if let Some(field) = missing_field(&message) {
+        // A key missing at the top level comes with an empty span, one missing in a table
+        // with the span of the table's header (or of its inline `{`).
+        if span.is_empty() {
+            field.to_string()
+        } else {
+            match inline_key(text, offset) {
+                Some(outer) => join_key(&join_key(&table, &outer), field),
+                None => join_key(&table, field),
+            }
+        }
+    } else {
+        match key_near(text, offset) {
+            KeyNear::Header(path) => path,
+            KeyNear::Key(k) => join_key(&table, &k),
+            KeyNear::Nothing => table.clone(),
+        }
+    };
+    // A mangled header (`[]`) or key can leave nothing to name: name the place instead.
+    let key = if !key.is_empty() {
+        key
+    } else if !table.is_empty() {
+        table
+    } else {
+        "<document>".to_string()
+    };
+    SceneError {
+        source_name: source_name.to_string(),
+        line,
+        column,
+        key,
+        message,
+    }
+}
+
+/// Serde's type names are Rust's: say "an integer" and "a number" to a person.
+fn plain_types(message: &str) -> String {
+    message
+        .replace("expected i64", "expected an integer")
+        .replace("expected u64", "expected a non-negative integer")
+        .replace("expected f64", "expected a number")
+}
+
+fn join_key(table: &str, key: &str) -> String {
+    if table.is_empty() {
+        key.to_string()
+    } else {
+        format!("{table}.{key}")
+    }
+}
+
+/// The field named in serde's "missing field `x`".
+fn missing_field(message: &str) -> Option<&str> {
+    message
+        .strip_prefix("missing field `")
+        .and_then(|rest| rest.split('`').next())
+}
+
+/// The header name of a `[table]` or `[[array]]` line.
+fn header_name(line: &str) -> Option<(&str, bool)> {
+    let t = line.trim();
+    if let Some(inner) = t.strip_prefix("[[") {
+        return inner.split("]]").next().map(|n| (n.trim(), true));
+    }
+    t.strip_prefix('[')
+        .and_then(|inner| inner.split(']').next())
+        .map(|n| (n.trim(), false))
+}
+
+/// The dotted path of the table that holds byte `offset`: "" at the top level, `solver`,
+/// `shapes[1]` (the second `[[shapes]]`, counted from 0).
+fn table_path(text: &str, offset: usize) -> String {
+    let mut path = String::new();
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        if start > offset {
+            break;
+        }
+        start += line.len();
+        if let Some((name, array)) = header_name(line) {
+            path = if array {
+                let index = match counts.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, c)) => {
+                        *c += 1;
+                        *c
+                    }
+                    None => {
+                        counts.push((name.to_string(), 0));
+                        0
+                    }
+                };
+                format!("{name}[{index}]")
+            } else {
+                name.to_string()
+            };
+        }
+    }
+    path
+}
+
+enum KeyNear {
+    Header(String),
+    Key(String),
+    Nothing,
+}
+
+/// The key whose value (or name) sits at byte `offset`: the key before the last `=` on that
+/// line before the offset, or the token at the offset (an unknown key), or for a value on a
+/// continuation line of a multi-line array the key of the line that opened it.
+fn key_near(text: &str, offset: usize) -> KeyNear {
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    let line = &text[line_start..line_end];
+    if header_name(line).is_some() {
+        return KeyNear::Header(table_path(text, offset));
+    }
+    let before = &text[line_start..offset];
+    if let Some(eq) = before.rfind('=') {
+        let inner = key_before(&before[..eq]);
+        return match (inline_key(text, offset), inner) {
+            (Some(outer), Some(inner)) if outer != inner => {
+                KeyNear::Key(format!("{outer}.{inner}"))
+            }
+            (_, Some(inner)) => KeyNear::Key(inner),
+            (Some(outer), None) => KeyNear::Key(outer),
+            (None, None) => KeyNear::Nothing,
+        };
+    }
+    let token: String = text[offset..line_end]
+        .chars()
+        .take_while(|c| *c != '=' && *c != '\n')
+        .collect();
+    let token = token.trim();
+    if !token.is_empty() && text[offset..line_end].contains('=') {
+        return KeyNear::Key(token.to_string());
+    }
+    // A continuation line: look upwards for the line with the key.
+    for previous in text[..line_start].lines().rev() {
+        if header_name(previous).is_some() {
+            break;
+        }
+        if let Some(eq) = previous.find('=') {
+            return key_before(&previous[..eq]).map_or(KeyNear::Nothing, KeyNear::Key);
+        }
+    }
+    KeyNear::Nothing
+}
+
+/// For an offset inside an inline table (`shapes = [{count = 1, …}]`), the key of the line
+/// that holds the inline table (`shapes`).
+fn inline_key(text: &str, offset: usize) -> Option<String> {
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    // The span of a table missing a key starts at its `{`.
+    let end = if text[offset..].starts_with('{') {
+        offset + 1
+    } else {
+        offset
+    };
+    let before = &text[line_start..end];
+    let eq = before.find('=')?;
+    before[eq..]
+        .contains('{')
+        .then(|| key_before(&before[..eq]))?
+}
+
+/// The bare (possibly dotted) key just before a `=`.
+fn key_before(s: &str) -> Option<String> {
+    let s = s.trim_end();
+    let start = s
+        .char_indices()
+        .rev()
+        .find(|(_, c)| !(c.is_ascii_alphanumeric() || *c == '_' || *c == '-' || *c == '.'))
+        .map_or(0, |(i, c)| i + c.len_utf8());
+    let key = s[start..].trim();
+    (!key.is_empty()).then(|| key.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_scene_parses() {
+        let scene = Scene::default_scene();
+        assert_eq!(scene.dimension, Dimension::Two);
+        assert_eq!(scene.container, ContainerKind::Ellipse);
+        assert_eq!(scene.item_count(), 30);
+        assert_eq!(scene.shapes[0].semi_axes, vec![2.0, 1.0]);
+        assert!(scene.solver.time_limit < Duration::from_secs(60));
+    }
+
+    #[test]
+    fn line_and_column_count_characters() {
+        let text = "a = 1\nbé = 2\n";
+        assert_eq!(line_column(text, 0), (1, 1));
+        let offset = text.find('2').unwrap();
+        assert_eq!(line_column(text, offset), (2, 6));
+    }
+
+    #[test]
+    fn table_paths_count_arrays_from_zero() {
+        let text = "x = 1\n[[shapes]]\ncount = 1\n[[shapes]]\ncount = 2\n[solver]\nthreads = 1\n";
+        assert_eq!(table_path(text, 0), "");
+        assert_eq!(
+            table_path(text, text.find("count = 1").unwrap()),
+            "shapes[0]"
+        );
+        assert_eq!(
+            table_path(text, text.find("count = 2").unwrap()),
+            "shapes[1]"
+        );
+        assert_eq!(table_path(text, text.find("threads").unwrap()), "solver");
+    }
+}

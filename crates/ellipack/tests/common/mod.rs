@@ -1,0 +1,114 @@
+//! Small packings for the tests: lattices that do not overlap, with varied orientations, so
+//! that round trips and pictures exercise every column.
+
+#![allow(dead_code)]
+
+use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
+use std::path::PathBuf;
+
+/// A deterministic generator in [0, 1) (SplitMix64), so that tests need no dependency.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+/// Ellipses (2, 1) (or of varied sizes when `mixed`) on a lattice of 4.2 × 4.2 cells, each
+/// rotated freely (a (2, 1) ellipse fits in its cell whatever its angle), inside an ellipse
+/// that holds every cell.
+pub fn ellipses(n_side: usize, mixed: bool, seed: u64) -> Packing {
+    let mut rng = Rng::new(seed);
+    let mut items = Vec::new();
+    let step = 4.2;
+    let half = (n_side as f64 - 1.0) / 2.0;
+    for i in 0..n_side {
+        for j in 0..n_side {
+            let (a, b) = if mixed {
+                let a = rng.range(0.6, 2.0);
+                (a, rng.range(0.3, a))
+            } else {
+                (2.0, 1.0)
+            };
+            items.push(EllipseItem {
+                center: [(i as f64 - half) * step, (j as f64 - half) * step],
+                semi_axes: [a, b],
+                theta: rng.range(-3.2, 3.2),
+            });
+        }
+    }
+    // Cells reach half·step + 2.1 from the centre along each axis; an ellipse with semi-axes
+    // √2 times that holds the bounding square.
+    let reach = (half * step + 2.1) * std::f64::consts::SQRT_2;
+    let container = Container::Ellipse {
+        center: [0.0, 0.0],
+        semi_axes: [reach * 1.05, reach],
+    };
+    Packing::new(container, Items::Ellipses(items)).unwrap()
+}
+
+/// Ellipsoids (1, 0.75, 0.5) on a cubic lattice of spacing 2.05 (each fits in its cell
+/// whatever its orientation), randomly oriented, inside a ball or cuboid holding every cell.
+pub fn ellipsoids(n_side: usize, ball: bool, seed: u64) -> Packing {
+    let mut rng = Rng::new(seed);
+    let step = 2.05;
+    let half = (n_side as f64 - 1.0) / 2.0;
+    let mut items = Vec::new();
+    for i in 0..n_side {
+        for j in 0..n_side {
+            for k in 0..n_side {
+                let q = [
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                ];
+                let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+                items.push(EllipsoidItem {
+                    center: [
+                        (i as f64 - half) * step,
+                        (j as f64 - half) * step,
+                        (k as f64 - half) * step,
+                    ],
+                    semi_axes: [1.0, 0.75, 0.5],
+                    quaternion: q.map(|x| x / norm),
+                });
+            }
+        }
+    }
+    let reach = half * step + 1.03;
+    let container = if ball {
+        Container::Ball {
+            center: [0.0, 0.0, 0.0],
+            radius: reach * 3f64.sqrt(),
+        }
+    } else {
+        Container::Cuboid {
+            center: [0.0, 0.0, 0.0],
+            half_sides: [reach, reach, reach],
+        }
+    };
+    Packing::new(container, Items::Ellipsoids(items)).unwrap()
+}
+
+/// A fresh directory for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ellipack-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

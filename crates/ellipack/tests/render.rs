@@ -1,0 +1,175 @@
+//! Pictures: files of the expected size for 2D and 3D packings, an empty packing, and many
+//! items fast.
+
+mod common;
+
+use ellipack::packing::{Container, Items, Packing};
+use ellipack::render::{self, RenderOptions};
+use std::time::Instant;
+
+/// Width and height from a PNG's IHDR chunk.
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    (be(&bytes[16..20]), be(&bytes[20..24]))
+}
+
+/// Keeps a copy of a picture where ELLIPACK_PICTURES points, so that a person can look at it.
+fn keep(path: &std::path::Path, name: &str) {
+    if let Ok(dir) = std::env::var("ELLIPACK_PICTURES") {
+        std::fs::copy(path, std::path::Path::new(&dir).join(name)).unwrap();
+    }
+}
+
+fn keep_bytes(bytes: &[u8], name: &str) {
+    if let Ok(dir) = std::env::var("ELLIPACK_PICTURES") {
+        std::fs::write(std::path::Path::new(&dir).join(name), bytes).unwrap();
+    }
+}
+
+fn check_pictures(packing: &Packing, name: &str, width: u32) {
+    let dir = common::temp_dir(&format!("render-{name}"));
+    let options = RenderOptions { width, label: None };
+    render::write_pictures(&dir, packing, &options).unwrap();
+    let (w, h) = render::picture_size(packing, &options);
+    assert_eq!(w, width);
+    assert!(h >= 100 && h <= 3 * width / 2, "{name}: height {h}");
+    let png = std::fs::read(dir.join(render::PNG_FILE)).unwrap();
+    assert_eq!(png_size(&png), (w, h), "{name}");
+    let svg = std::fs::read_to_string(dir.join(render::SVG_FILE)).unwrap();
+    assert!(svg.starts_with("<svg"), "{name}");
+    assert!(svg.contains(&format!("width=\"{w}\"")) && svg.contains(&format!("height=\"{h}\"")));
+    // One filled polygon per item and panel, plus the container's fill in each panel.
+    let panels = if packing.container.dimension() == 2 {
+        1
+    } else {
+        3
+    };
+    let polygons = svg.matches("<polygon").count();
+    assert_eq!(polygons, panels * (packing.items.len() + 1), "{name}");
+    assert!(svg.contains("density"), "{name}: title");
+    keep(&dir.join(render::PNG_FILE), &format!("{name}.png"));
+    keep(&dir.join(render::SVG_FILE), &format!("{name}.svg"));
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        2,
+        "no temporary file left"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn two_dimensional_pictures() {
+    check_pictures(&common::ellipses(6, false, 1), "ellipses", 900);
+    check_pictures(&common::ellipses(8, true, 2), "mixed", 700);
+}
+
+#[test]
+fn three_dimensional_pictures() {
+    check_pictures(&common::ellipsoids(4, true, 3), "ball", 1500);
+    check_pictures(&common::ellipsoids(3, false, 4), "cuboid", 1200);
+}
+
+#[test]
+fn a_tall_rectangle_stays_within_bounds() {
+    let mut packing = common::ellipses(3, false, 5);
+    packing.container = Container::Rectangle {
+        center: [0.0, 0.0],
+        half_sides: [7.0, 70.0],
+    };
+    check_pictures(&packing, "tall", 600);
+}
+
+#[test]
+fn an_empty_packing_draws_its_container() {
+    let packing = Packing::new(
+        Container::Circle {
+            center: [1.0, -2.0],
+            radius: 3.0,
+        },
+        Items::Ellipses(vec![]),
+    )
+    .unwrap();
+    check_pictures(&packing, "empty2d", 400);
+    let packing = Packing::new(
+        Container::Ellipsoid {
+            center: [0.0, 0.0, 0.0],
+            semi_axes: [3.0, 2.0, 1.0],
+        },
+        Items::Ellipsoids(vec![]),
+    )
+    .unwrap();
+    check_pictures(&packing, "empty3d", 400);
+}
+
+#[test]
+fn ten_thousand_items_render_quickly() {
+    let packing = common::ellipses(100, false, 6);
+    assert_eq!(packing.items.len(), 10_000);
+    let start = Instant::now();
+    let png = render::png_bytes(&packing, &RenderOptions::default()).unwrap();
+    let svg = render::svg_string(&packing, &RenderOptions::default()).unwrap();
+    let elapsed = start.elapsed().as_secs_f64();
+    assert!(png.len() > 1000 && svg.len() > 10_000);
+    keep_bytes(&png, "many2d.png");
+    assert!(elapsed < 10.0, "10 000 ellipses took {elapsed:.1} s");
+    let packing = common::ellipsoids(22, true, 7);
+    assert!(packing.items.len() >= 10_000);
+    let start = Instant::now();
+    let png = render::png_bytes(&packing, &RenderOptions::default()).unwrap();
+    let elapsed = start.elapsed().as_secs_f64();
+    assert!(png.len() > 1000);
+    keep_bytes(&png, "many3d.png");
+    assert!(elapsed < 10.0, "10 648 ellipsoids took {elapsed:.1} s");
+}
+
+#[test]
+fn broken_data_draws_what_it_can_without_panicking() {
+    use ellipack::packing::{EllipseItem, EllipsoidItem};
+    // Built by hand, bypassing Packing::new's checks.
+    let packing = Packing {
+        container: Container::Circle {
+            center: [0.0, 0.0],
+            radius: -1.0,
+        },
+        items: Items::Ellipses(vec![
+            EllipseItem {
+                center: [f64::NAN, 0.0],
+                semi_axes: [1.0, 1.0],
+                theta: 0.0,
+            },
+            EllipseItem {
+                center: [0.0, 0.0],
+                semi_axes: [0.0, 1.0],
+                theta: 0.0,
+            },
+            EllipseItem {
+                center: [1e300, -1e300],
+                semi_axes: [1.0, 1e-300],
+                theta: 1e300,
+            },
+        ]),
+    };
+    render::png_bytes(&packing, &RenderOptions::default()).unwrap();
+    render::svg_string(&packing, &RenderOptions::default()).unwrap();
+    let packing = Packing {
+        container: Container::Ball {
+            center: [0.0; 3],
+            radius: f64::INFINITY,
+        },
+        items: Items::Ellipsoids(vec![EllipsoidItem {
+            center: [0.0; 3],
+            semi_axes: [1e6, 1e-6, 1.0],
+            quaternion: [0.0; 4],
+        }]),
+    };
+    render::png_bytes(
+        &packing,
+        &RenderOptions {
+            width: 1,
+            label: Some(String::new()),
+        },
+    )
+    .unwrap();
+}
