@@ -165,3 +165,49 @@ fn measure_accepts_both_reference_files_as_they_are() {
         assert!(n > 100, "{file}: {n} rows");
     }
 }
+
+#[test]
+fn pack_writes_a_certified_packing_that_verify_accepts() {
+    let dir = temp_dir("pack");
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "dimension = 3\nseed = 2\n[container]\nkind = \"ball\"\n[[shapes]]\ncount = 6\n\
+         semi_axes = [1.0, 0.75, 0.5]\n[solver]\ntime_limit = 30.0\nlocal_minimisations = 2\n\
+         threads = 1\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let run = ellipack().arg("pack").arg(&scene).arg("--out").arg(&out).output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    for file in ["packing.csv", "summary.json", "packing.xyz", "packing.svg", "packing.png"] {
+        let len = std::fs::metadata(out.join(file)).map(|m| m.len()).unwrap_or(0);
+        assert!(len > 0, "{file} missing or empty");
+    }
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"overlapping_pairs\": 0"), "{summary}");
+    assert!(summary.contains("\"containment_violations\": 0"), "{summary}");
+    let verify = ellipack().arg("verify").arg(&out).output().unwrap();
+    let text = String::from_utf8(verify.stdout).unwrap();
+    assert!(verify.status.success() && text.contains("certified"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn pack_rejects_a_bad_scene_naming_key_and_line() {
+    let dir = temp_dir("badscene");
+    let scene = dir.join("bad.toml");
+    std::fs::write(
+        &scene,
+        "dimension = 2\n[container]\nkind = \"ellipse\"\n[[shapes]]\ncount = 3\nsemi_axes = [2.0, -1.0]\n",
+    )
+    .unwrap();
+    let run = ellipack().arg("pack").arg(&scene).arg("--out").arg(dir.join("o")).output().unwrap();
+    assert!(!run.status.success());
+    let stderr = String::from_utf8(run.stderr).unwrap();
+    assert!(stderr.contains("bad.toml: line 6") && stderr.contains("semi_axes"), "{stderr}");
+    let run = ellipack().args(["pack", "--instance", "no-such"]).output().unwrap();
+    assert!(!run.status.success());
+    assert!(String::from_utf8(run.stderr).unwrap().contains("unknown instance"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
