@@ -104,7 +104,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     if scene.output.pictures {
         let options = RenderOptions {
             width: scene.output.image_width,
-            label: Some(scene.title()),
+            label: scene.name.clone(),
         };
         write_pictures(&out, &outcome.packing, &options)?;
     }

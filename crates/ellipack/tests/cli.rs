@@ -178,18 +178,42 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
     )
     .unwrap();
     let out = dir.join("out");
-    let run = ellipack().arg("pack").arg(&scene).arg("--out").arg(&out).output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    for file in ["packing.csv", "summary.json", "packing.xyz", "packing.svg", "packing.png"] {
-        let len = std::fs::metadata(out.join(file)).map(|m| m.len()).unwrap_or(0);
+    let run = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for file in [
+        "packing.csv",
+        "summary.json",
+        "packing.xyz",
+        "packing.svg",
+        "packing.png",
+    ] {
+        let len = std::fs::metadata(out.join(file))
+            .map(|m| m.len())
+            .unwrap_or(0);
         assert!(len > 0, "{file} missing or empty");
     }
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(summary.contains("\"overlapping_pairs\": 0"), "{summary}");
-    assert!(summary.contains("\"containment_violations\": 0"), "{summary}");
+    assert!(
+        summary.contains("\"containment_violations\": 0"),
+        "{summary}"
+    );
     let verify = ellipack().arg("verify").arg(&out).output().unwrap();
     let text = String::from_utf8(verify.stdout).unwrap();
-    assert!(verify.status.success() && text.contains("certified"), "{text}");
+    assert!(
+        verify.status.success() && text.contains("certified"),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -202,12 +226,28 @@ fn pack_rejects_a_bad_scene_naming_key_and_line() {
         "dimension = 2\n[container]\nkind = \"ellipse\"\n[[shapes]]\ncount = 3\nsemi_axes = [2.0, -1.0]\n",
     )
     .unwrap();
-    let run = ellipack().arg("pack").arg(&scene).arg("--out").arg(dir.join("o")).output().unwrap();
+    let run = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("o"))
+        .output()
+        .unwrap();
     assert!(!run.status.success());
     let stderr = String::from_utf8(run.stderr).unwrap();
-    assert!(stderr.contains("bad.toml: line 6") && stderr.contains("semi_axes"), "{stderr}");
-    let run = ellipack().args(["pack", "--instance", "no-such"]).output().unwrap();
+    assert!(
+        stderr.contains("bad.toml: line 6") && stderr.contains("semi_axes"),
+        "{stderr}"
+    );
+    let run = ellipack()
+        .args(["pack", "--instance", "no-such"])
+        .output()
+        .unwrap();
     assert!(!run.status.success());
-    assert!(String::from_utf8(run.stderr).unwrap().contains("unknown instance"));
+    assert!(
+        String::from_utf8(run.stderr)
+            .unwrap()
+            .contains("unknown instance")
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
