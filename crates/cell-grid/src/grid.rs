@@ -5,8 +5,9 @@ use crate::error::Error;
 use crate::hash::{CellKey, CellMap};
 
 /// Largest number of cells along one axis. The edge margin below already keeps the count
-/// under `1 / (16 eps) = 2^48` (the edge is at least `16 eps (|lo| + |hi|)`), which also keeps
-/// the integer cell coordinates exact; the clamp only guards that reasoning.
+/// under `1 / (16 eps) = 2^48` (the edge is at least `32 eps max|x|` and the side at most
+/// `2 max|x|`), which also keeps the integer cell coordinates exact; the clamp only guards
+/// that reasoning.
 const MAX_CELLS_PER_AXIS: f64 = 281_474_976_710_656.0; // 2^48
 
 /// Default floor of the cap on dense cells: below it the array is small whatever `m` is.
@@ -130,8 +131,10 @@ pub struct Grid<const D: usize> {
     pub(crate) reach: f64,
     pub(crate) lo: [f64; D],
     pub(crate) extent: [f64; D],
-    /// `1 / L_a` on periodic axes, 0 elsewhere: the minimum-image shift
-    /// `L_a round(d_a / L_a)` then vanishes on non-periodic axes without a branch.
+    /// `L_a` and `1 / L_a` on periodic axes, 0 elsewhere: the minimum-image shift
+    /// `L_a round(d_a / L_a)` then vanishes on non-periodic axes without a branch (and
+    /// without `inf * 0` when a bounding box is wider than the largest `f64`).
+    pub(crate) period: [f64; D],
     pub(crate) inv_period: [f64; D],
     pub(crate) edge: [f64; D],
     pub(crate) inv_edge: [f64; D],
@@ -215,8 +218,11 @@ impl<const D: usize> Grid<D> {
         };
         if let Some((lo, hi)) = b.domain {
             for a in 0..D {
+                // The side must be finite too: `1e308 - (-1e308)` is not, and a box side
+                // enters the minimum image.
                 let ok = lo[a].is_finite()
                     && hi[a].is_finite()
+                    && (hi[a] - lo[a]).is_finite()
                     && if b.periodic[a] {
                         lo[a] < hi[a]
                     } else {
@@ -248,6 +254,7 @@ impl<const D: usize> Grid<D> {
             reach: cutoff,
             lo: [0.0; D],
             extent: [0.0; D],
+            period: [0.0; D],
             inv_period: [0.0; D],
             edge: [1.0; D],
             inv_edge: [1.0; D],
@@ -382,9 +389,10 @@ impl<const D: usize> Grid<D> {
         } else {
             self.cutoff
         };
+        // The largest coordinate magnitude (not |lo| + |hi|, which may overflow).
         let mut scale = 0.0_f64;
         for a in 0..D {
-            scale = scale.max(lo[a].abs() + hi[a].abs());
+            scale = scale.max(lo[a].abs()).max(hi[a].abs());
             if self.periodic[a] && m > 0 && reach > 0.5 * (hi[a] - lo[a]) {
                 return Err(Error::CutoffTooLargeForBox {
                     axis: a,
@@ -407,14 +415,16 @@ impl<const D: usize> Grid<D> {
         // With no items the reach of radii is 0; any positive edge will do.
         let base = if cell_reach > 0.0 { cell_reach } else { 1.0 };
         let safe = base * (1.0 + EDGE_MARGIN_ULPS * f64::EPSILON)
-            + EDGE_MARGIN_ULPS * f64::EPSILON * scale;
+            + 2.0 * EDGE_MARGIN_ULPS * f64::EPSILON * scale;
 
         let mut dims = [1usize; D];
         let mut edge = [safe; D];
         let mut padded_cells = 1.0_f64;
         for a in 0..D {
             let len = hi[a] - lo[a];
-            // Fewer, larger cells are always correct: clamping the count is safe.
+            // Fewer, larger cells are always correct: clamping the count is safe. A side
+            // that overflows to infinity gets cells of infinite edge: every point lands in
+            // cell 0 along that axis, which is coarse but exact.
             let n = (len / safe).floor().clamp(1.0, MAX_CELLS_PER_AXIS);
             if len > 0.0 {
                 edge[a] = len / n;
@@ -433,10 +443,10 @@ impl<const D: usize> Grid<D> {
         self.lo = lo;
         for a in 0..D {
             self.extent[a] = hi[a] - lo[a];
-            self.inv_period[a] = if self.periodic[a] {
-                1.0 / self.extent[a]
+            (self.period[a], self.inv_period[a]) = if self.periodic[a] {
+                (self.extent[a], 1.0 / self.extent[a])
             } else {
-                0.0
+                (0.0, 0.0)
             };
             self.edge[a] = edge[a];
             self.inv_edge[a] = 1.0 / edge[a];
@@ -1015,7 +1025,30 @@ impl<const D: usize> Grid<D> {
         let mut d = [0.0; D];
         for k in 0..D {
             let t = b[k] - a[k];
-            d[k] = t - self.extent[k] * (t * self.inv_period[k]).round();
+            d[k] = if self.periodic[k] {
+                t - self.period[k] * (t * self.inv_period[k]).round()
+            } else {
+                t
+            };
+        }
+        d
+    }
+
+    /// [`min_image`](Self::min_image) for two points already wrapped into the box, where
+    /// `|b - a| < L`: one conditional shift instead of a rounding, which without SSE4.1 is
+    /// a library call. `period` is 0 on open axes, where neither test fires.
+    #[inline(always)]
+    pub(crate) fn min_image_wrapped(&self, a: &[f64; D], b: &[f64; D]) -> [f64; D] {
+        let mut d = [0.0; D];
+        for k in 0..D {
+            let mut t = b[k] - a[k];
+            let l = self.period[k];
+            if t > 0.5 * l {
+                t -= l;
+            } else if t < -0.5 * l {
+                t += l;
+            }
+            d[k] = t;
         }
         d
     }

@@ -155,7 +155,7 @@ impl<const D: usize> Grid<D> {
                 }
             });
             for q in k + 1..self.large_ids.len() {
-                let d = self.min_image(x, self.large_pos[q]);
+                let d = self.min_image_wrapped(&x, &self.large_pos[q]);
                 let d2 = dot(&d, &d);
                 let s = r + self.large_r[q];
                 if d2 < s * s {
@@ -274,18 +274,16 @@ pub(crate) struct Close<F, const P: bool, const R: bool> {
 impl<F, const P: bool, const R: bool> Close<F, P, R> {
     #[inline(always)]
     fn delta<const D: usize>(g: &Grid<D>, pa: &[f64; D], pb: &[f64; D]) -> [f64; D] {
-        let mut d = [0.0; D];
-        for k in 0..D {
-            let t = pb[k] - pa[k];
-            d[k] = if P {
-                // Stored positions are wrapped into the box, so |t| < L and one rounded
-                // multiple of L gives the minimum image.
-                t - g.extent[k] * (t * g.inv_period[k]).round()
-            } else {
-                t
-            };
+        if P {
+            // Stored positions are wrapped into the box, so |pb - pa| < L.
+            g.min_image_wrapped(pa, pb)
+        } else {
+            let mut d = [0.0; D];
+            for k in 0..D {
+                d[k] = pb[k] - pa[k];
+            }
+            d
         }
-        d
     }
 }
 

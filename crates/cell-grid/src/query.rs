@@ -1,7 +1,7 @@
 //! Neighbours of one item or of an arbitrary point.
 
 use crate::error::Error;
-use crate::grid::{Grid, check_query_point, valid_reach};
+use crate::grid::{Grid, Layout, check_query_point, valid_reach};
 use crate::pairs::dot;
 
 impl<const D: usize> Grid<D> {
@@ -49,7 +49,7 @@ impl<const D: usize> Grid<D> {
     /// Tests `x` with radius `r` against every large item (radius sum as the threshold).
     fn scan_large<V: FnMut(usize, [f64; D], f64)>(&self, x: &[f64; D], r: f64, mut visit: V) {
         for q in 0..self.large_ids.len() {
-            let d = self.min_image(*x, self.large_pos[q]);
+            let d = self.min_image_wrapped(x, &self.large_pos[q]);
             let d2 = dot(&d, &d);
             let s = r + self.large_r[q];
             if d2 < s * s {
@@ -145,7 +145,7 @@ impl<const D: usize> Grid<D> {
             volume *= (hi[a] - lo[a] + 1) as f64;
         }
         let emit = |p: usize, visit: &mut V| {
-            let d = self.min_image(*x, self.sorted[p]);
+            let d = self.min_image_wrapped(x, &self.sorted[p]);
             let d2 = dot(&d, &d);
             visit(p, d, d2);
         };
@@ -155,6 +155,11 @@ impl<const D: usize> Grid<D> {
             }
             return;
         }
+        // In the dense layout the cells of one x-row of the box are consecutive, and so are
+        // their items: one run per row instead of one lookup per cell (a large item's box
+        // can span thousands of cells).
+        let rows = self.layout == Layout::Dense && !self.periodic[0];
+        let first = usize::from(rows);
         let mut c = lo;
         loop {
             let mut w = c;
@@ -163,13 +168,19 @@ impl<const D: usize> Grid<D> {
                     w[a] = c[a].rem_euclid(self.dims[a] as i64);
                 }
             }
-            if let Some(s) = self.find_slot(&w) {
+            if rows {
+                let s0 = self.dense_slot(&w);
+                let s1 = s0 + (hi[0] - lo[0]) as usize;
+                for p in self.start[s0]..self.start[s1 + 1] {
+                    emit(p, &mut visit);
+                }
+            } else if let Some(s) = self.find_slot(&w) {
                 for p in self.start[s]..self.start[s + 1] {
                     emit(p, &mut visit);
                 }
             }
-            // Odometer increment over the box [lo, hi].
-            let mut a = 0;
+            // Odometer increment over the box [lo, hi] (axes from `first` on).
+            let mut a = first;
             loop {
                 if a == D {
                     return;

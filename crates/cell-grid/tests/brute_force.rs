@@ -577,3 +577,36 @@ fn large_inputs_match_the_hashed_layout_and_sampled_brute_force() {
         }
     }
 }
+
+#[test]
+fn coordinates_near_the_largest_float() {
+    // The bounding box side overflows to infinity; the pairs must still be exact and no
+    // distance may turn into NaN.
+    let big = f64::MAX / 2.0;
+    let pts2 = [[-big, 0.0], [big, 0.0], [big, 0.5], [0.0, 0.0], [0.25, 0.0]];
+    let bx = Box::<2>::open();
+    let want = brute_pairs(&pts2, |_, _| 1.0, &bx);
+    assert_eq!(want, vec![(1, 2), (3, 4)]);
+    let g = Grid::<2>::build(&pts2, 1.0).unwrap();
+    check_grid(&g, &pts2, &want, &bx);
+    check_neighbours(&g, &pts2, &want);
+    let pts3 = [
+        [-big, -big, 1.0],
+        [big, big, 1.0],
+        [big, big, 1.5],
+        [1.0, 2.0, 3.0],
+    ];
+    let want = brute_pairs(&pts3, |_, _| 1.0, &Box::<3>::open());
+    assert_eq!(want, vec![(1, 2)]);
+    let g = GridBuilder::<3>::with_radii(&[0.5; 4])
+        .build(&pts3)
+        .unwrap();
+    check_grid(&g, &pts3, &want, &Box::<3>::open());
+    // A domain whose side is not finite is refused.
+    assert!(matches!(
+        GridBuilder::<2>::with_cutoff(1.0)
+            .domain([-big * 1.5, 0.0], [big * 1.5, 1.0])
+            .build(&pts2),
+        Err(cell_grid::Error::InvalidDomain { axis: 0, .. })
+    ));
+}

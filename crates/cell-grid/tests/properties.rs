@@ -129,7 +129,15 @@ proptest! {
             let expected = brute_pairs(&pts, |_, _| cutoff, &bx);
             let mut got = g.close_pairs();
             got.sort_unstable();
-            prop_assert_eq!(got, expected);
+            prop_assert_eq!(&got, &expected);
+            let mut within = Vec::new();
+            g.for_each_pair_within(&pts, |i, j, _| within.push((i, j))).unwrap();
+            within.sort_unstable();
+            prop_assert_eq!(&within, &expected);
+            for i in 0..pts.len() {
+                let n = g.neighbours(i).unwrap();
+                prop_assert!(n.iter().all(|&j| got.contains(&(i.min(j), i.max(j)))));
+            }
         }
     }
 }
