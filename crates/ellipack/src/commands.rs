@@ -9,7 +9,7 @@ use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 /// The arguments of `ellipack pack`.
@@ -87,15 +87,37 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         let flag = Arc::clone(&interrupted);
         move || flag.load(Ordering::SeqCst)
     };
+    // The best certified density is known between local minimisations (main thread); the
+    // objective and infeasibility inside them (worker threads): both feed one message.
+    let best = Arc::new(AtomicU64::new(0f64.to_bits()));
+    let observe = {
+        let (bar, best) = (bar.clone(), Arc::clone(&best));
+        move |p: &auglag::Progress<'_>| {
+            if let auglag::Event::Outer {
+                objective,
+                infeasibility,
+                ..
+            } = p.event
+            {
+                let best = f64::from_bits(best.load(Ordering::Relaxed));
+                bar.set_message(format!(
+                    "objective {objective:.6}, infeasibility {infeasibility:.1e}, best certified \
+                     density {best:.5}"
+                ));
+            }
+        }
+    };
     let outcome = run(
         &scene,
         &options,
         &mut |p| {
+            best.store(p.best_density.to_bits(), Ordering::Relaxed);
             bar.set_message(format!(
                 "{} local minimisations, last density {:.5}, best certified density {:.5}",
                 p.local_minimisations, p.last_density, p.best_density
             ));
         },
+        &observe,
         &stop,
     )?;
     bar.finish_and_clear();

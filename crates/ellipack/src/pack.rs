@@ -71,11 +71,12 @@ pub fn run(
     scene: &Scene,
     options: &RunOptions,
     progress: &mut dyn FnMut(&MultiStartProgress),
+    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
     interrupt: &(dyn Fn() -> bool + Sync),
 ) -> Result<RunOutcome, PackError> {
     match (scene.ellipse_axes(), scene.ellipsoid_axes()) {
-        (Some(axes), _) => run_n::<2>(scene, &axes, options, progress, interrupt),
-        (_, Some(axes)) => run_n::<3>(scene, &axes, options, progress, interrupt),
+        (Some(axes), _) => run_n::<2>(scene, &axes, options, progress, observe, interrupt),
+        (_, Some(axes)) => run_n::<3>(scene, &axes, options, progress, observe, interrupt),
         _ => Err(PackError::Mismatch("the scene has no items".into())),
     }
 }
@@ -85,6 +86,7 @@ fn run_n<const N: usize>(
     axes: &[[f64; N]],
     options: &RunOptions,
     progress: &mut dyn FnMut(&MultiStartProgress),
+    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
     interrupt: &(dyn Fn() -> bool + Sync),
 ) -> Result<RunOutcome, PackError> {
     let kind = model_container(scene.container);
@@ -116,7 +118,7 @@ fn run_n<const N: usize>(
             .map_or(usize::MAX, |n| usize::try_from(n).unwrap_or(usize::MAX)),
         time_limit: Some(options.time_limit.unwrap_or(scene.solver.time_limit)),
     };
-    let result = multistart(axes, kind, &x0, &settings, progress, interrupt)?;
+    let result = multistart(axes, kind, &x0, &settings, progress, observe, interrupt)?;
     let mut problem = problem;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(
@@ -359,7 +361,14 @@ mod tests {
             "t.toml",
         )
         .unwrap();
-        let out = run(&scene, &RunOptions::default(), &mut |_| {}, &|| false).unwrap();
+        let out = run(
+            &scene,
+            &RunOptions::default(),
+            &mut |_| {},
+            &|_| {},
+            &|| false,
+        )
+        .unwrap();
         assert!(out.summary.certificate.is_certified());
         assert!(out.summary.certificate.min_mu2.is_some_and(|m| m >= 1.0));
         assert_eq!(out.summary.local_minimisations, 2);
@@ -370,7 +379,7 @@ mod tests {
             resume_from: Some(out.packing.clone()),
             ..RunOptions::default()
         };
-        let out2 = run(&scene, &resumed, &mut |_| {}, &|| false).unwrap();
+        let out2 = run(&scene, &resumed, &mut |_| {}, &|_| {}, &|| false).unwrap();
         assert!(out2.summary.density >= out.summary.density * (1.0 - 1e-6));
     }
 

@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (density, before, factor, report, check) = if dim == 2 {
         let mut p = Problem::<2>::new(vec![[2.0, 1.0]; m], kind)?;
         let x0 = lattice_start(&p);
-        let r = local_minimisation(&mut p, &x0, &settings, &mut || false)?;
+        let r = local_minimisation(&mut p, &x0, &settings, &mut |_| false)?;
         let check = independent_check(&mut p, &r.x)?;
         (
             r.density,
@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
         let x0 = lattice_start(&p);
-        let r = local_minimisation(&mut p, &x0, &settings, &mut || false)?;
+        let r = local_minimisation(&mut p, &x0, &settings, &mut |_| false)?;
         let check = independent_check(&mut p, &r.x)?;
         (
             r.density,

@@ -35,11 +35,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let r = if dim == 2 {
         let axes = vec![[2.0, 1.0]; m];
         let x0 = paper_start(&axes, kind)?;
-        multistart(&axes, kind, &x0, &settings, &mut report, &|| false)?
+        multistart(&axes, kind, &x0, &settings, &mut report, &|_| {}, &|| false)?
     } else {
         let axes = vec![[1.0, 0.75, 0.5]; m];
         let x0 = paper_start(&axes, kind)?;
-        multistart(&axes, kind, &x0, &settings, &mut report, &|| false)?
+        multistart(&axes, kind, &x0, &settings, &mut report, &|_| {}, &|| false)?
     };
     println!(
         "{dim}D m = {m} {kind:?}: best density {:.5} after {:.1} s ({} local minimisations in {:.1} s, {threads} threads)",

@@ -83,7 +83,8 @@ pub struct MultiStartResult {
 
 /// Runs the multi-start from `x0` (for example [`lattice_start`], or a packing read back to
 /// resume a run). `progress` sees every finished local minimisation, in start order;
-/// `interrupt` is polled often and stops the run, keeping the best packing found.
+/// `observe` sees the solver's progress inside every local minimisation, from whichever thread
+/// runs it; `interrupt` is polled often and stops the run, keeping the best packing found.
 ///
 /// # Errors
 /// Errors of the model or of the first local minimisation (a wrong-length `x0`, non-finite
@@ -94,13 +95,17 @@ pub fn multistart<const N: usize>(
     x0: &[f64],
     settings: &MultiStartSettings,
     progress: &mut dyn FnMut(&MultiStartProgress),
+    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
     interrupt: &(dyn Fn() -> bool + Sync),
 ) -> Result<MultiStartResult, Error> {
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     let stop = || interrupt() || out_of_time();
     let mut problem = Problem::<N>::new(semi_axes.to_vec(), kind)?;
-    let first = local_minimisation(&mut problem, x0, &settings.local, &mut || stop())?;
+    let first = local_minimisation(&mut problem, x0, &settings.local, &mut |p| {
+        observe(p);
+        stop()
+    })?;
     let mut done = 1;
     let mut time_to_best = start.elapsed();
     progress(&MultiStartProgress {
@@ -129,7 +134,10 @@ pub fn multistart<const N: usize>(
                     let stop = &stop;
                     scope.spawn(move || {
                         let mut p = Problem::<N>::new(semi_axes.to_vec(), kind)?;
-                        local_minimisation(&mut p, &x, local, &mut || stop())
+                        local_minimisation(&mut p, &x, local, &mut |progress| {
+                            observe(progress);
+                            stop()
+                        })
                     })
                 })
                 .collect();
@@ -255,6 +263,7 @@ mod tests {
             &x0,
             &settings,
             &mut |_| {},
+            &|_| {},
             &|| false,
         )
         .unwrap()
@@ -286,6 +295,7 @@ mod tests {
             &mut |p| {
                 first.get_or_insert(p.last_density);
             },
+            &|_| {},
             &|| false,
         )
         .unwrap();
@@ -321,6 +331,7 @@ mod tests {
             &x0,
             &MultiStartSettings::paper(2, 1),
             &mut |_| {},
+            &|_| {},
             &|| true,
         )
         .unwrap();

@@ -178,9 +178,10 @@ pub fn item_measure<const N: usize>(problem: &Problem<N>) -> f64 {
         .sum()
 }
 
-/// One local minimisation from `x0`, certified and repaired. `interrupt` is polled at every
-/// solver iteration; returning `true` stops the solver, and the point reached is still
-/// certified and repaired.
+/// One local minimisation from `x0`, certified and repaired. `observe` sees the solver's
+/// progress at every iteration (objective and infeasibility at the end of each outer
+/// iteration); returning `true` stops the solver, and the point reached is still certified and
+/// repaired.
 ///
 /// # Errors
 /// [`Error::LengthMismatch`] when `x0` does not fit the problem; errors of the model on
@@ -189,7 +190,7 @@ pub fn local_minimisation<const N: usize>(
     problem: &mut Problem<N>,
     x0: &[f64],
     settings: &LocalSettings,
-    interrupt: &mut dyn FnMut() -> bool,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<LocalResult, Error> {
     if x0.len() != problem.var_count() {
         return Err(Error::LengthMismatch {
@@ -212,8 +213,8 @@ pub fn local_minimisation<const N: usize>(
             ..Options::default()
         };
         let adapter = Adapter::new(problem);
-        auglag::minimize_with_callback(&adapter, x, &options, |_: &Progress<'_>| {
-            if interrupted || interrupt() {
+        auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
+            if interrupted || observe(progress) {
                 interrupted = true;
                 Control::Stop
             } else {
@@ -530,7 +531,7 @@ mod tests {
                 optimality_tolerance: 1e-8,
                 ..LocalSettings::default()
             };
-            let r = local_minimisation(&mut p, &x, &settings, &mut || false).unwrap();
+            let r = local_minimisation(&mut p, &x, &settings, &mut |_| false).unwrap();
             assert!(r.certificate.is_feasible());
             let radius = *r.x.last().unwrap();
             assert!(
@@ -547,7 +548,7 @@ mod tests {
         let mut p = Problem::<2>::new(vec![[2.0, 1.0]; 12], ContainerKind::Ellipsoid).unwrap();
         let x0 = lattice_start(&p);
         let start_density = item_measure(&p) / p.evaluate(&x0, None).unwrap().objective;
-        let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut || false).unwrap();
+        let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
         assert!(r.certificate.is_feasible());
         assert!(
             r.density > start_density,
@@ -575,7 +576,7 @@ mod tests {
         let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerKind::Ball).unwrap();
         let x0 = lattice_start(&p);
         let mut calls = 0;
-        let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut || {
+        let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| {
             calls += 1;
             calls > 5
         })
