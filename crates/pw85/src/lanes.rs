@@ -127,41 +127,16 @@ impl Forms4 {
         }
     }
 
-    /// [`RationalForm::newton_terms`], lane-wise (same operations, same order).
+    /// [`RationalForm::newton_terms`], lane-wise (the same generic formulas).
     #[inline(always)]
     fn newton_terms(&self, lambda: V4) -> (V4, V4, V4) {
-        let one = V4::splat(1.0);
-        let two = V4::splat(2.0);
-        let (s, t) = (one - lambda, lambda);
-        let [a0, a1, a2] = self.alpha;
-        let [b0, b1, b2, b3] = self.beta;
-        let a = s * (s * a0 + t * a1) + t * t * a2;
-        let da = two * (t * a2 - s * a0) + (s - t) * a1;
-        let dda = two * (a0 + a2 - a1);
-        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
-        let db = V4::splat(3.0) * (t * t * b3 - s * s * b0)
-            + s * (s - two * t) * b1
-            + t * (two * s - t) * b2;
-        let ddb = V4::splat(6.0) * (s * b0 + t * b3)
-            + (two * t - V4::splat(4.0) * s) * b1
-            + (two * s - V4::splat(4.0) * t) * b2;
-        let p = t * s;
-        let ab = a * b;
-        let n1 = (s - t) * ab + p * (da * b - a * db);
-        let n2 = -(t * t + s * s) * ab * ab
-            + p * p * (b * b * (dda * a - da * da) - a * a * (ddb * b - db * db));
-        (n1, n2, p * ab)
+        crate::poly::newton_terms(&self.alpha, &self.beta, lambda)
     }
 
     /// [`RationalForm::f`], lane-wise.
     #[inline(always)]
     fn f(&self, lambda: V4) -> V4 {
-        let (s, t) = (V4::splat(1.0) - lambda, lambda);
-        let [a0, a1, a2] = self.alpha;
-        let [b0, b1, b2, b3] = self.beta;
-        let a = s * (s * a0 + t * a1) + t * t * a2;
-        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
-        lambda * (V4::splat(1.0) - lambda) * a / b
+        crate::poly::f_value(&self.alpha, &self.beta, lambda)
     }
 }
 

@@ -137,21 +137,17 @@ impl RationalForm {
 
     /// a(λ).
     pub fn a(&self, lambda: f64) -> f64 {
-        let (s, t) = (1.0 - lambda, lambda);
-        let [a0, a1, a2] = self.alpha;
-        s * (s * a0 + t * a1) + t * t * a2
+        pencil_values(&self.alpha, &self.beta, lambda)[0]
     }
 
     /// b(λ).
     pub fn b(&self, lambda: f64) -> f64 {
-        let (s, t) = (1.0 - lambda, lambda);
-        let [b0, b1, b2, b3] = self.beta;
-        s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3)
+        pencil_values(&self.alpha, &self.beta, lambda)[3]
     }
 
     /// f(λ) = λ (1 − λ) a(λ) / b(λ) (eq. 15).
     pub fn f(&self, lambda: f64) -> f64 {
-        lambda * (1.0 - lambda) * self.a(lambda) / self.b(lambda)
+        f_value(&self.alpha, &self.beta, lambda)
     }
 
     /// The same function of μ = 1 − λ: the coefficient lists reversed (Q1 and Q2 swapped).
@@ -169,14 +165,7 @@ impl RationalForm {
     #[inline]
     pub(crate) fn log_derivatives(&self, lambda: f64) -> LogDerivatives {
         let (s, t) = (1.0 - lambda, lambda);
-        let [a0, a1, a2] = self.alpha;
-        let [b0, b1, b2, b3] = self.beta;
-        let a = s * (s * a0 + t * a1) + t * t * a2;
-        let da = 2.0 * (t * a2 - s * a0) + (s - t) * a1;
-        let dda = 2.0 * (a0 + a2 - a1);
-        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
-        let db = 3.0 * (t * t * b3 - s * s * b0) + s * (s - 2.0 * t) * b1 + t * (2.0 * s - t) * b2;
-        let ddb = 6.0 * (s * b0 + t * b3) + (2.0 * t - 4.0 * s) * b1 + (2.0 * s - 4.0 * t) * b2;
+        let [a, da, dda, b, db, ddb] = pencil_values(&self.alpha, &self.beta, lambda);
         // One division instead of four: 1/(ts), 1/a and 1/b all follow from 1/(ts·a·b). The
         // coefficients are normalised (largest 1), so the product stays far from underflow
         // except for pencils spanning hundreds of decades, which take the slow path.
@@ -208,21 +197,7 @@ impl RationalForm {
     /// so one division per step instead of five matters.
     #[inline(always)]
     pub(crate) fn newton_terms(&self, lambda: f64) -> (f64, f64, f64) {
-        let (s, t) = (1.0 - lambda, lambda);
-        let [a0, a1, a2] = self.alpha;
-        let [b0, b1, b2, b3] = self.beta;
-        let a = s * (s * a0 + t * a1) + t * t * a2;
-        let da = 2.0 * (t * a2 - s * a0) + (s - t) * a1;
-        let dda = 2.0 * (a0 + a2 - a1);
-        let b = s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3);
-        let db = 3.0 * (t * t * b3 - s * s * b0) + s * (s - 2.0 * t) * b1 + t * (2.0 * s - t) * b2;
-        let ddb = 6.0 * (s * b0 + t * b3) + (2.0 * t - 4.0 * s) * b1 + (2.0 * s - 4.0 * t) * b2;
-        let p = t * s;
-        let ab = a * b;
-        let n1 = (s - t) * ab + p * (da * b - a * db);
-        let n2 = -(t * t + s * s) * ab * ab
-            + p * p * (b * b * (dda * a - da * da) - a * a * (ddb * b - db * db));
-        (n1, n2, p * ab)
+        newton_terms(&self.alpha, &self.beta, lambda)
     }
 
     /// The maximiser of f on [0, 1], from the starting point `t0` ∈ (0, 1): returns (λ₀, f(λ₀),
@@ -304,6 +279,54 @@ impl RationalForm {
         let t = 1.0 / (1.0 + ratio);
         if t > 0.0 && t < 1.0 { t } else { 0.5 }
     }
+}
+
+/// a, a′, a″, b, b′, b″ at λ from the Bernstein coefficients, in any arithmetic (the scalar
+/// solver and the four-lane batch share these formulas, so their results agree bit for bit).
+#[inline(always)]
+pub(crate) fn pencil_values<T: Arith>(alpha: &[T; 3], beta: &[T; 4], lambda: T) -> [T; 6] {
+    let c = T::lift;
+    let (s, t) = (c(1.0) - lambda, lambda);
+    let [a0, a1, a2] = *alpha;
+    let [b0, b1, b2, b3] = *beta;
+    [
+        s * (s * a0 + t * a1) + t * t * a2,
+        c(2.0) * (t * a2 - s * a0) + (s - t) * a1,
+        c(2.0) * (a0 + a2 - a1),
+        s * s * (s * b0 + t * b1) + t * t * (s * b2 + t * b3),
+        c(3.0) * (t * t * b3 - s * s * b0) + s * (s - c(2.0) * t) * b1 + t * (c(2.0) * s - t) * b2,
+        c(6.0) * (s * b0 + t * b3)
+            + (c(2.0) * t - c(4.0) * s) * b1
+            + (c(2.0) * s - c(4.0) * t) * b2,
+    ]
+}
+
+/// [`RationalForm::newton_terms`] in any arithmetic.
+#[inline(always)]
+pub(crate) fn newton_terms<T: Arith + core::ops::Neg<Output = T>>(
+    alpha: &[T; 3],
+    beta: &[T; 4],
+    lambda: T,
+) -> (T, T, T) {
+    let [a, da, dda, b, db, ddb] = pencil_values(alpha, beta, lambda);
+    let (s, t) = (T::lift(1.0) - lambda, lambda);
+    let p = t * s;
+    let ab = a * b;
+    let n1 = (s - t) * ab + p * (da * b - a * db);
+    let n2 = -(t * t + s * s) * ab * ab
+        + p * p * (b * b * (dda * a - da * da) - a * a * (ddb * b - db * db));
+    (n1, n2, p * ab)
+}
+
+/// f(λ) = λ (1 − λ) a(λ) / b(λ) in any arithmetic.
+#[inline(always)]
+pub(crate) fn f_value<T: Arith + core::ops::Div<Output = T>>(
+    alpha: &[T; 3],
+    beta: &[T; 4],
+    lambda: T,
+) -> T {
+    let [a, _, _, b, _, _] = pencil_values(alpha, beta, lambda);
+    lambda * (T::lift(1.0) - lambda) * a / b
 }
 
 /// The state of one λ iteration ([`RationalForm::search_step`]).
