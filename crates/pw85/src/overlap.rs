@@ -65,8 +65,8 @@ fn overlap_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
     let det2 = det_generic(q2, &adj2);
-    check_positive_definite(Argument::Q1, q1, det1, det_magnitude(q1))?;
-    check_positive_definite(Argument::Q2, q2, det2, det_magnitude(q2))?;
+    check_positive_definite(Argument::Q1, q1, det1, det_magnitude(q1, det1))?;
+    check_positive_definite(Argument::Q2, q2, det2, det_magnitude(q2, det2))?;
 
     let r2 = r12[0] * r12[0] + r12[1] * r12[1] + r12[2] * r12[2];
     let spheres = Spheres {
@@ -148,8 +148,15 @@ fn overlap_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Err
     }
 }
 
-/// Σ|terms| of det Q as the cofactor expansion computes it.
-fn det_magnitude(q: &Sym3) -> f64 {
+/// A bound on Σ|terms| of det Q as the cofactor expansion computes it. For the positive
+/// definiteness check only its size relative to det Q matters, so the cheap bound 6 Q11 Q22 Q33
+/// (each of the six terms of a determinant with |Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ) is at most the product of the
+/// diagonal) is used when it already proves det Q > 0, and the exact Σ|terms| otherwise.
+fn det_magnitude(q: &Sym3, det: f64) -> f64 {
+    let cheap = 6.0 * q[0] * q[3] * q[5];
+    if det > 1e-12 * cheap {
+        return cheap;
+    }
     let m = crate::sym::lift6::<Mag>(q);
     det_generic(&m, &adjugate_generic(&m)).0
 }
