@@ -127,13 +127,17 @@ fn run_n<const N: usize>(
         &mut problem,
         &result.best.x,
     )?;
-    let summary = Summary::new(
+    let mut summary = Summary::new(
         &packing,
         result.best.objective,
         result.wall_time.as_secs_f64(),
         result.local_minimisations as u64,
         certificate,
     );
+    summary.repair = Some(crate::packing::Repair {
+        dilation: result.best.repair_factor,
+        density_before: result.best.density_before_repair,
+    });
     Ok(RunOutcome {
         packing,
         summary,

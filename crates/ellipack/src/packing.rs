@@ -647,6 +647,20 @@ pub struct Summary {
     pub local_minimisations: u64,
     /// The certificate.
     pub certificate: Certificate,
+    /// What the certified repair cost, when the packing came from the solver.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repair: Option<Repair>,
+}
+
+/// The repair that made the solver's point certifiable: every centre and the container were
+/// scaled by `dilation` ≥ 1, which lowered the density from `density_before` to the summary's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Repair {
+    /// The dilation factor s ≥ 1 (1: nothing needed repair).
+    pub dilation: f64,
+    /// Density of the solver's point before the dilation.
+    pub density_before: f64,
 }
 
 impl Summary {
@@ -666,6 +680,7 @@ impl Summary {
             wall_seconds,
             local_minimisations,
             certificate,
+            repair: None,
         }
     }
 }
@@ -835,6 +850,10 @@ pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
     ];
     if let Some(m) = summary.certificate.min_mu2 {
         fields.push(("certificate.min_mu2", m));
+    }
+    if let Some(r) = summary.repair {
+        fields.push(("repair.dilation", r.dilation));
+        fields.push(("repair.density_before", r.density_before));
     }
     fields.extend(
         summary
