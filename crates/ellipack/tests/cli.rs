@@ -208,6 +208,10 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         summary.contains("\"containment_violations\": 0"),
         "{summary}"
     );
+    assert!(
+        summary.contains("\"dilation\"") && summary.contains("\"density_before\""),
+        "the repair is recorded: {summary}"
+    );
     let verify = ellipack().arg("verify").arg(&out).output().unwrap();
     let text = String::from_utf8(verify.stdout).unwrap();
     assert!(
