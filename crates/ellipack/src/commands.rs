@@ -162,6 +162,12 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         outcome.repair_factor - 1.0,
         outcome.density_before_repair
     );
+    if outcome.failed_starts > 0 {
+        println!(
+            "{} starts were abandoned because the solver diverged from them",
+            outcome.failed_starts
+        );
+    }
     println!("wrote {}", out.display());
     Ok(if s.certificate.is_certified() {
         ExitCode::SUCCESS

@@ -60,6 +60,8 @@ pub struct RunOutcome {
     pub seconds_to_best: f64,
     /// Whether the run was interrupted (Ctrl-C).
     pub interrupted: bool,
+    /// Starts abandoned because the solver diverged.
+    pub failed_starts: usize,
 }
 
 /// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
@@ -145,6 +147,7 @@ fn run_n<const N: usize>(
         repair_factor: result.best.repair_factor,
         seconds_to_best: result.time_to_best.as_secs_f64(),
         interrupted: result.interrupted,
+        failed_starts: result.failed_starts,
     })
 }
 

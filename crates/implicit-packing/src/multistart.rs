@@ -73,6 +73,8 @@ pub struct MultiStartResult {
     /// Local minimisations completed (a start cut off by the time limit or an interrupt is
     /// not counted, except the first, whose packing is returned if nothing better exists).
     pub local_minimisations: usize,
+    /// Starts abandoned because the solver diverged (the model refused its point).
+    pub failed_starts: usize,
     /// When the best packing was found, from the start of the run.
     pub time_to_best: Duration,
     /// Wall time of the run.
@@ -115,6 +117,7 @@ pub fn multistart<const N: usize>(
         elapsed: time_to_best,
     });
     let mut current = first.x.clone();
+    let mut failed_starts = 0;
     let mut best = first;
     let threads = settings.threads.max(1);
     while done < settings.max_local_minimisations && !stop() {
@@ -151,7 +154,12 @@ pub fn multistart<const N: usize>(
         });
         let mut round_best: Option<LocalResult> = None;
         for result in results {
-            let result = result?;
+            // A start that diverged (the model refuses its point, e.g. a centre beyond 1e30)
+            // is a failed start, not a failed run: the best packing so far stands.
+            let Ok(result) = result else {
+                failed_starts += 1;
+                continue;
+            };
             if result.report.stop_reason == auglag::StopReason::Interrupted {
                 // Cut off by the time limit or an interrupt, usually still at its perturbed
                 // (infeasible) start: repaired, but not a result of the method.
@@ -182,6 +190,7 @@ pub fn multistart<const N: usize>(
     Ok(MultiStartResult {
         best,
         local_minimisations: done,
+        failed_starts,
         time_to_best,
         wall_time: start.elapsed(),
         interrupted: interrupt(),
