@@ -255,3 +255,44 @@ fn pack_rejects_a_bad_scene_naming_key_and_line() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_the_best_packing_so_far() {
+    let dir = temp_dir("sigint");
+    let out = dir.join("out");
+    let mut child = ellipack()
+        .args([
+            "pack",
+            "--instance",
+            "ball-100",
+            "--time-limit",
+            "120",
+            "--threads",
+            "1",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Long enough for the first local minimisation to be under way.
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("(interrupted)"), "{text}");
+    let verify = ellipack().arg("verify").arg(&out).output().unwrap();
+    assert!(
+        verify.status.success(),
+        "{}",
+        String::from_utf8_lossy(&verify.stdout)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
