@@ -261,7 +261,7 @@ fn pack_rejects_a_bad_scene_naming_key_and_line() {
 fn ctrl_c_writes_the_best_packing_so_far() {
     let dir = temp_dir("sigint");
     let out = dir.join("out");
-    let mut child = ellipack()
+    let child = ellipack()
         .args([
             "pack",
             "--instance",
