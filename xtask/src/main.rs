@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use xtask::{Part, Run, workspace_root};
 
 /// ellipack's repository tasks.
 #[derive(Parser)]
@@ -14,27 +15,93 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Regenerate and check the evidence: theory checks, snapshots, CSV data and figures.
-    ///
-    /// Not implemented yet (a stub): the validation harness is the subject of the issue
-    /// "`cargo xtask validate`". Until then it runs nothing and exits with failure, so that
-    /// nobody mistakes it for a passing validation.
+    /// Regenerate and check the evidence: theory checks, snapshots, CSV data, figures and
+    /// docs/validation.md. Exits non-zero if any check fails.
     Validate {
-        /// The short run meant for CI.
-        #[arg(long)]
+        /// The short run meant for CI (≤ 3 minutes on 2 cores).
+        #[arg(long, global = true)]
         quick: bool,
+        /// Write nothing; fail if a stable generated file differs from what the code produces.
+        #[arg(long, global = true)]
+        check: bool,
+        /// Run one part only (default: all).
+        #[command(subcommand)]
+        part: Option<PartArg>,
     },
+}
+
+#[derive(Subcommand, Clone, Copy)]
+enum PartArg {
+    /// Theory checks: each residual against its tolerance, PASS/FAIL.
+    Theory,
+    /// The insta snapshots (fixed pairs, check table), compared with the committed ones.
+    Snapshots,
+    /// Figures comparing both criteria (approach path, agreement and cost, packings).
+    Figures,
+    /// Stiff and extreme cases.
+    Stiff,
+    /// Error against run time; model time against m.
+    Timing,
 }
 
 fn main() -> ExitCode {
     match Cli::parse().command {
-        Command::Validate { quick } => {
-            eprintln!(
-                "cargo xtask validate{}: not implemented yet (see the issue \
-                 \"cargo xtask validate\"); the test suite is `cargo test --workspace`",
-                if quick { " --quick" } else { "" }
-            );
-            ExitCode::FAILURE
+        Command::Validate { quick, check, part } => {
+            let parts: Vec<Part> = match part {
+                None => Part::ALL.to_vec(),
+                Some(PartArg::Theory) => vec![Part::Theory],
+                Some(PartArg::Snapshots) => vec![Part::Snapshots],
+                Some(PartArg::Figures) => vec![Part::Figures],
+                Some(PartArg::Stiff) => vec![Part::Stiff],
+                Some(PartArg::Timing) => vec![Part::Timing],
+            };
+            let mut run = Run::new(workspace_root(), quick, check);
+            if let Err(e) = run.run(&parts) {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+            // The report is the whole story: it is written only when every part ran.
+            if part.is_none()
+                && let Err(e) = xtask::report::write(&mut run)
+            {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+            summarise(&run)
         }
+    }
+}
+
+fn summarise(run: &Run) -> ExitCode {
+    let o = &run.outputs;
+    eprintln!(
+        "validate{}: {:.0} s, {} files written, {} unchanged",
+        if run.quick { " --quick" } else { "" },
+        run.start.elapsed().as_secs_f64(),
+        o.written.len(),
+        o.unchanged.len()
+    );
+    for s in &run.skipped {
+        eprintln!("SKIPPED {s}");
+    }
+    for p in &o.stale {
+        eprintln!(
+            "STALE   {} (run `cargo xtask validate` and commit it)",
+            p.display()
+        );
+    }
+    for f in &run.failures {
+        eprintln!("{f}");
+    }
+    if run.failures.is_empty() && o.stale.is_empty() {
+        eprintln!("all checks passed");
+        ExitCode::SUCCESS
+    } else {
+        eprintln!(
+            "{} check(s) failed, {} stale file(s)",
+            run.failures.len(),
+            o.stale.len()
+        );
+        ExitCode::FAILURE
     }
 }

@@ -65,6 +65,7 @@ pub mod sym;
 
 pub use contact::{
     Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function, contact_function_2d,
+    contact_function_refined,
 };
 pub use error::{Argument, Error};
 pub use overlap::{overlap, overlap_2d};

@@ -371,3 +371,24 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn refined_path_agrees_with_the_fast_path_within_its_bound() {
+    let mut rng = Rng(6);
+    for _ in 0..2000 {
+        let (q1, q2) = (rng.ellipsoid(1.5), rng.ellipsoid(1.5));
+        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let fast = contact_function(&r, &q1, &q2).unwrap();
+        let exact = pw85::contact_function_refined(&r, &q1, &q2).unwrap();
+        assert!(exact.refined);
+        assert!(exact.error_estimate < 1e-15, "{}", exact.error_estimate);
+        // The fast path's error is within its own estimate (the estimate is a bound).
+        assert!(
+            rel(fast.mu2, exact.mu2) <= fast.error_estimate + exact.error_estimate,
+            "{} vs {} (estimate {:e})",
+            fast.mu2,
+            exact.mu2,
+            fast.error_estimate
+        );
+    }
+}

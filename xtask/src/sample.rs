@@ -1,0 +1,254 @@
+//! Pseudo-random pairs of ellipsoids and ellipses, the same for every run and machine.
+//!
+//! The generator is SplitMix64, and the pairs are built with +, −, ×, / and √ only (all
+//! correctly rounded in IEEE arithmetic): `exp`, `ln` and `sin` differ by an ulp between libm
+//! implementations, which would make the snapshots machine-dependent. Values spread over
+//! decades come from [`Rng::spread`] (a reciprocal-uniform law) rather than a log-uniform one
+//! for that reason; only the 2D sampler uses `sin` and `cos`.
+
+use crate::error::{self, Error};
+use pw85::{Sym2, Sym3};
+
+/// SplitMix64 (Steele, Lea, Flood 2014): tiny, and good enough for sampling test inputs.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator from a seed.
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1), 53 random bits.
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// In [lo, hi] with 1/x uniform: spread over decades like a log-uniform law (denser near
+    /// `lo`), from rational operations only.
+    pub fn spread(&mut self, lo: f64, hi: f64) -> f64 {
+        1.0 / self.uniform(1.0 / hi, 1.0 / lo)
+    }
+
+    /// A point uniform in the unit ball (rejection), as a direction when normalised.
+    pub fn in_ball(&mut self) -> [f64; 3] {
+        loop {
+            let v = [
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+            ];
+            let n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            if (1e-4..=1.0).contains(&n2) {
+                return v;
+            }
+        }
+    }
+
+    /// A random unit direction.
+    pub fn direction(&mut self) -> [f64; 3] {
+        let v = self.in_ball();
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|x| x / n)
+    }
+
+    /// A uniformly distributed rotation as a unit quaternion (w, x, y, z): a point uniform in
+    /// the 4-ball, normalised.
+    pub fn quaternion(&mut self) -> [f64; 4] {
+        loop {
+            let q = [
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+            ];
+            let n2: f64 = q.iter().map(|x| x * x).sum();
+            if (1e-2..=1.0).contains(&n2) {
+                let n = n2.sqrt();
+                return q.map(|x| x / n);
+            }
+        }
+    }
+}
+
+/// One pair of ellipsoids in the packing paper's parametrisation (centre, semi-axes,
+/// quaternion), convertible to the PW85 one (r12, Q1, Q2). `i` is the first ellipsoid (PW85's
+/// 1, the implicit model's unit ball).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair3 {
+    /// Centre of i.
+    pub ci: [f64; 3],
+    /// Semi-axes of i.
+    pub li: [f64; 3],
+    /// Rotation of i.
+    pub qi: [f64; 4],
+    /// Centre of j.
+    pub cj: [f64; 3],
+    /// Semi-axes of j.
+    pub lj: [f64; 3],
+    /// Rotation of j.
+    pub qj: [f64; 4],
+}
+
+/// The PW85 form of a pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pw85Pair {
+    /// c2 − c1.
+    pub r12: [f64; 3],
+    /// Q of the first ellipsoid.
+    pub q1: Sym3,
+    /// Q of the second.
+    pub q2: Sym3,
+}
+
+impl Pair3 {
+    /// r12, Q1, Q2.
+    pub fn pw85(&self) -> Result<Pw85Pair, Error> {
+        Ok(Pw85Pair {
+            r12: [0, 1, 2].map(|k| self.cj[k] - self.ci[k]),
+            q1: pw85::shape::from_axes_quaternion(&self.li, &self.qi)
+                .map_err(error::pw85("the first ellipsoid of a pair"))?,
+            q2: pw85::shape::from_axes_quaternion(&self.lj, &self.qj)
+                .map_err(error::pw85("the second ellipsoid of a pair"))?,
+        })
+    }
+
+    /// The same pair with j moved to `ci + t (cj − ci)`.
+    pub fn at_distance_factor(&self, t: f64) -> Self {
+        let mut p = *self;
+        p.cj = [0, 1, 2].map(|k| self.ci[k] + t * (self.cj[k] - self.ci[k]));
+        p
+    }
+}
+
+/// One pair of ellipses (centre, semi-axes, angle of the first semi-axis).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair2 {
+    /// Centre of i.
+    pub ci: [f64; 2],
+    /// Semi-axes of i.
+    pub li: [f64; 2],
+    /// Angle of i.
+    pub ti: f64,
+    /// Centre of j.
+    pub cj: [f64; 2],
+    /// Semi-axes of j.
+    pub lj: [f64; 2],
+    /// Angle of j.
+    pub tj: f64,
+}
+
+impl Pair2 {
+    /// r12, Q1, Q2 of the 2D contact function.
+    pub fn pw85(&self) -> Result<([f64; 2], Sym2, Sym2), Error> {
+        Ok((
+            [self.cj[0] - self.ci[0], self.cj[1] - self.ci[1]],
+            pw85::shape::from_axes_angle_2d(&self.li, self.ti)
+                .map_err(error::pw85("the first ellipse of a pair"))?,
+            pw85::shape::from_axes_angle_2d(&self.lj, self.tj)
+                .map_err(error::pw85("the second ellipse of a pair"))?,
+        ))
+    }
+}
+
+/// Random triaxial semi-axes: the largest 1, the others in [1/aspect, 1], log-uniform.
+pub fn axes(rng: &mut Rng, aspect: f64) -> [f64; 3] {
+    let mut l = [1.0, rng.spread(1.0 / aspect, 1.0), 1.0 / aspect];
+    // Shuffle so that the long axis is not always the first column of the rotation.
+    let k = (rng.unit() * 3.0) as usize % 3;
+    l.swap(0, k);
+    l
+}
+
+/// A pair with uniform axes in [0.3, 2], uniform rotations and j's centre uniform in the
+/// cube [−3, 3]³ about i's (about half overlap): built from rational operations and √ only.
+pub fn stable_pair(rng: &mut Rng) -> Pair3 {
+    let li = [0; 3].map(|_| rng.uniform(0.3, 2.0));
+    let qi = rng.quaternion();
+    let lj = [0; 3].map(|_| rng.uniform(0.3, 2.0));
+    let qj = rng.quaternion();
+    let cj = [0; 3].map(|_| rng.uniform(-3.0, 3.0));
+    Pair3 {
+        ci: [0.0; 3],
+        li,
+        qi,
+        cj,
+        lj,
+        qj,
+    }
+}
+
+/// A random pair whose axes have ratios up to `aspect` and whose centre distance is `s` times
+/// the contact distance along a random direction, `s` uniform in [`s_lo`, `s_hi`]: μ² = s²
+/// up to rounding, so about as many overlapping as separated pairs for [0.5, 1.5].
+pub fn pair_near_contact(rng: &mut Rng, aspect: f64, s_lo: f64, s_hi: f64) -> Result<Pair3, Error> {
+    let li = axes(rng, aspect);
+    let lj = axes(rng, aspect);
+    let qi = rng.quaternion();
+    let qj = rng.quaternion();
+    let d = rng.direction();
+    let ci = [0; 3].map(|_| rng.uniform(-2.0, 2.0));
+    let unit = Pair3 {
+        ci,
+        li,
+        qi,
+        cj: [0, 1, 2].map(|k| ci[k] + d[k]),
+        lj,
+        qj,
+    };
+    // μ is proportional to the centre distance along a fixed direction (eq. 11 is quadratic in
+    // r12), so one contact function at distance 1 places the pair at any μ.
+    let p = unit.pw85()?;
+    let mu = pw85::contact_function(&p.r12, &p.q1, &p.q2)
+        .map_err(error::pw85("a random pair"))?
+        .mu2
+        .sqrt();
+    let s = rng.uniform(s_lo, s_hi);
+    Ok(unit.at_distance_factor(s / mu))
+}
+
+/// A random pair of ellipses near contact, as [`pair_near_contact`].
+pub fn pair_near_contact_2d(
+    rng: &mut Rng,
+    aspect: f64,
+    s_lo: f64,
+    s_hi: f64,
+) -> Result<Pair2, Error> {
+    let li = [1.0, rng.spread(1.0 / aspect, 1.0)];
+    let lj = [rng.spread(1.0 / aspect, 1.0), 1.0];
+    let ti = rng.uniform(0.0, std::f64::consts::PI);
+    let tj = rng.uniform(0.0, std::f64::consts::PI);
+    let a = rng.uniform(0.0, 2.0 * std::f64::consts::PI);
+    let d = [a.cos(), a.sin()];
+    let unit = Pair2 {
+        ci: [0.0; 2],
+        li,
+        ti,
+        cj: d,
+        lj,
+        tj,
+    };
+    let (r, q1, q2) = unit.pw85()?;
+    let mu = pw85::contact_function_2d(&r, &q1, &q2)
+        .map_err(error::pw85("a random pair of ellipses"))?
+        .mu2
+        .sqrt();
+    let s = rng.uniform(s_lo, s_hi) / mu;
+    Ok(Pair2 {
+        cj: [s * d[0], s * d[1]],
+        ..unit
+    })
+}
