@@ -61,6 +61,13 @@ pub enum Error {
         /// The crate's message.
         message: String,
     },
+    /// The `ellipack pack` pipeline refused a scene, or drawing its packing failed.
+    Pack {
+        /// The scene file or the step.
+        context: String,
+        /// The message.
+        message: String,
+    },
     /// cell-grid refused an input.
     Grid {
         /// The crate's message.
@@ -106,6 +113,7 @@ impl fmt::Display for Error {
                 write!(f, "implicit-packing refused {context}: {message}")
             }
             Error::Grid { message } => write!(f, "cell-grid: {message}"),
+            Error::Pack { context, message } => write!(f, "{context}: {message}"),
             Error::Plot { path, message } => {
                 write!(f, "{}: drawing failed: {message}", path.display())
             }

@@ -195,6 +195,10 @@ pub struct Scene {
     /// Semi-axes of every ellipsoid of a model study.
     #[serde(default = "empty")]
     pub item_axes: Spanned<Vec<f64>>,
+    /// `ellipack pack` scene files, relative to `validation/scenes/`, that the packing study
+    /// solves with the command line's own pipeline and draws with its pictures.
+    #[serde(default)]
+    pub pack_scenes: Vec<String>,
     /// Seed of the pseudo-random pairs.
     #[serde(default)]
     pub seed: u64,
