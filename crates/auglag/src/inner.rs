@@ -50,6 +50,27 @@ pub(crate) struct InnerOutcome {
     pub projected_gradient: f64,
 }
 
+impl InnerSettings {
+    /// The tests both solvers apply at the top of iteration `k`, in order: converged, stopped
+    /// by the monitor (`interrupt`, called only when not converged), out of iterations.
+    pub(crate) fn stop(
+        &self,
+        k: usize,
+        projected_gradient: f64,
+        interrupt: impl FnOnce() -> Control,
+    ) -> Option<InnerStatus> {
+        if projected_gradient <= self.tolerance {
+            Some(InnerStatus::Converged)
+        } else if interrupt() == Control::Stop {
+            Some(InnerStatus::Interrupted)
+        } else if k >= self.max_iterations {
+            Some(InnerStatus::MaxIterations)
+        } else {
+            None
+        }
+    }
+}
+
 /// Called once per inner iteration with (iteration, x, F(x), projected-gradient norm,
 /// evaluations so far).
 pub(crate) type Monitor<'m> = dyn FnMut(usize, &[f64], f64, f64, usize) -> Control + 'm;

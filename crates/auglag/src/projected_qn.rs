@@ -37,7 +37,6 @@ use crate::inner::{
     within_noise,
 };
 use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
-use crate::report::Control;
 
 /// Upper limit ε̄ of the ε-active-set rule.
 const ACTIVE_EPSILON: f64 = 1e-3;
@@ -266,16 +265,8 @@ pub(crate) fn minimize<S: Smooth + ?Sized>(
         outcome.iterations = k;
         outcome.value = value;
         outcome.projected_gradient = pg;
-        if pg <= settings.tolerance {
-            outcome.status = InnerStatus::Converged;
-            return outcome;
-        }
-        if monitor(k, x, value, pg, f.evaluations()) == Control::Stop {
-            outcome.status = InnerStatus::Interrupted;
-            return outcome;
-        }
-        if k >= settings.max_iterations {
-            outcome.status = InnerStatus::MaxIterations;
+        if let Some(status) = settings.stop(k, pg, || monitor(k, x, value, pg, f.evaluations())) {
+            outcome.status = status;
             return outcome;
         }
         ws.mark_free(x, grad, lower, upper, pg);

@@ -28,7 +28,6 @@ use crate::inner::{
     within_noise,
 };
 use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
-use crate::report::Control;
 
 /// Buffers of the SPG method, allocated once and reused by every inner solve.
 #[derive(Debug, Clone)]
@@ -90,16 +89,8 @@ pub(crate) fn minimize<S: Smooth + ?Sized>(
         outcome.iterations = k;
         outcome.value = value;
         outcome.projected_gradient = pg;
-        if pg <= settings.tolerance {
-            outcome.status = InnerStatus::Converged;
-            return outcome;
-        }
-        if monitor(k, x, value, pg, f.evaluations()) == Control::Stop {
-            outcome.status = InnerStatus::Interrupted;
-            return outcome;
-        }
-        if k >= settings.max_iterations {
-            outcome.status = InnerStatus::MaxIterations;
+        if let Some(status) = settings.stop(k, pg, || monitor(k, x, value, pg, f.evaluations())) {
+            outcome.status = status;
             return outcome;
         }
         for (((d, &xi), &gi), (&l, &u)) in ws
