@@ -586,7 +586,7 @@ pub fn containment_gradient_derivative<const N: usize>(
                 mat[s][N] = -u[s];
                 mat[N][s] = u[s];
             }
-            let sol = solve_small(&mut mat, &mut rhs, N + 1)?;
+            let sol = crate::linalg::solve_small(&mut mat, &mut rhs, N + 1)?;
             let mut du = [0.0; N];
             du.copy_from_slice(&sol[..N]);
             let mut dp = [0.0; N];
@@ -638,39 +638,4 @@ fn sub_n<const N: usize>(a: &[f64; N], b: &[f64; N]) -> [f64; N] {
 
 fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-/// Gaussian elimination with partial pivoting on the leading `dim × dim` block; `None` if the
-/// matrix is singular to working precision.
-fn solve_small(m: &mut [[f64; 4]; 4], rhs: &mut [f64; 4], dim: usize) -> Option<[f64; 4]> {
-    let scale = m.iter().flatten().fold(0.0f64, |s, v| s.max(v.abs()));
-    for col in 0..dim {
-        let mut p = col;
-        for r in col + 1..dim {
-            if m[r][col].abs() > m[p][col].abs() {
-                p = r;
-            }
-        }
-        if m[p][col].abs() <= 1e-13 * scale {
-            return None;
-        }
-        m.swap(col, p);
-        rhs.swap(col, p);
-        for r in col + 1..dim {
-            let factor = m[r][col] / m[col][col];
-            for s in col..dim {
-                m[r][s] -= factor * m[col][s];
-            }
-            rhs[r] -= factor * rhs[col];
-        }
-    }
-    let mut x = [0.0; 4];
-    for r in (0..dim).rev() {
-        let mut v = rhs[r];
-        for s in r + 1..dim {
-            v -= m[r][s] * x[s];
-        }
-        x[r] = v / m[r][r];
-    }
-    Some(x)
 }

@@ -431,32 +431,8 @@ pub fn a1_reference<const N: usize>(
         rhs[r] = -(u * dsx[r] - dc[r]);
     }
     rhs[N] = -0.5 * (0..N).map(|k| x[k] * dsx[k]).sum::<f64>();
-    let dim = N + 1;
-    for col in 0..dim {
-        let mut p = col;
-        for r in col + 1..dim {
-            if m[r][col].abs() > m[p][col].abs() {
-                p = r;
-            }
-        }
-        m.swap(col, p);
-        rhs.swap(col, p);
-        for r in col + 1..dim {
-            let factor = m[r][col] / m[col][col];
-            for s in col..dim {
-                m[r][s] -= factor * m[col][s];
-            }
-            rhs[r] -= factor * rhs[col];
-        }
-    }
-    let mut sol_vec = [0.0; 4];
-    for r in (0..dim).rev() {
-        let mut v = rhs[r];
-        for s in r + 1..dim {
-            v -= m[r][s] * sol_vec[s];
-        }
-        sol_vec[r] = v / m[r][r];
-    }
+    // A singular system (a degenerate pair) gives NaN, which the callers' checks catch.
+    let sol_vec = crate::linalg::solve_small(&mut m, &mut rhs, N + 1).unwrap_or([f64::NAN; 4]);
     let mut dd2 = 0.0;
     for k in 0..N {
         dd2 += 2.0 * (x[k] - c[k]) * (sol_vec[k] - dc[k]);

@@ -271,6 +271,45 @@ pub(crate) fn graded_svd<const N: usize>(
     out
 }
 
+/// Gaussian elimination with partial pivoting on the leading `dim × dim` block; `None` if the
+/// matrix is singular to working precision.
+pub(crate) fn solve_small(
+    m: &mut [[f64; 4]; 4],
+    rhs: &mut [f64; 4],
+    dim: usize,
+) -> Option<[f64; 4]> {
+    let scale = m.iter().flatten().fold(0.0f64, |s, v| s.max(v.abs()));
+    for col in 0..dim {
+        let mut p = col;
+        for r in col + 1..dim {
+            if m[r][col].abs() > m[p][col].abs() {
+                p = r;
+            }
+        }
+        if m[p][col].abs() <= 1e-13 * scale {
+            return None;
+        }
+        m.swap(col, p);
+        rhs.swap(col, p);
+        for r in col + 1..dim {
+            let factor = m[r][col] / m[col][col];
+            for s in col..dim {
+                m[r][s] -= factor * m[col][s];
+            }
+            rhs[r] -= factor * rhs[col];
+        }
+    }
+    let mut x = [0.0; 4];
+    for r in (0..dim).rev() {
+        let mut v = rhs[r];
+        for s in r + 1..dim {
+            v -= m[r][s] * x[s];
+        }
+        x[r] = v / m[r][r];
+    }
+    Some(x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
