@@ -597,6 +597,30 @@ impl<const D: usize> Grid<D> {
         (self.start[s] < self.start[s + 1]).then_some(s)
     }
 
+    /// Turns the per-cell counts in `start[..nslots]` into inclusive prefix sums (each cell's
+    /// end, which the backward scatter decrements to its start), sets the sentinel, and sizes
+    /// the sorted buffers for the counted items out of `m` (no allocation once large enough).
+    /// Returns the number of items in cells.
+    fn end_offsets_and_buffers(&mut self, nslots: usize, m: usize) -> usize {
+        let mut acc = 0usize;
+        for c in &mut self.start[..nslots] {
+            acc += *c;
+            *c = acc;
+        }
+        self.start[nslots] = acc;
+        self.order.clear();
+        self.order.resize(acc, 0);
+        self.rank.clear();
+        self.rank.resize(m, 0);
+        self.sorted.clear();
+        self.sorted.resize(acc, [0.0; D]);
+        self.sorted_r.clear();
+        if self.radii_mode {
+            self.sorted_r.resize(acc, 0.0);
+        }
+        acc
+    }
+
     /// The counting sort: items into slots, then positions into cell order. Items at or
     /// above the split radius go to the separate large-item arrays instead.
     fn sort_items(&mut self, points: &[[f64; D]]) {
@@ -688,23 +712,7 @@ impl<const D: usize> Grid<D> {
         };
         // Inclusive prefix sums give each cell's end; the backward scatter below decrements
         // them to the starts and keeps each cell's items in ascending index order.
-        let mut acc = 0usize;
-        for c in &mut self.start[..nslots] {
-            acc += *c;
-            *c = acc;
-        }
-        let in_cells = acc;
-        self.start[nslots] = in_cells;
-        self.order.clear();
-        self.order.resize(in_cells, 0);
-        self.rank.clear();
-        self.rank.resize(m, 0);
-        self.sorted.clear();
-        self.sorted.resize(in_cells, [0.0; D]);
-        self.sorted_r.clear();
-        if self.radii_mode {
-            self.sorted_r.resize(in_cells, 0.0);
-        }
+        let in_cells = self.end_offsets_and_buffers(nslots, m);
         for i in (0..m).rev() {
             let s = self.slot_seq[i];
             if s == NO_CELL {
@@ -824,22 +832,8 @@ impl<const D: usize> Grid<D> {
                 self.nonempty.push(s);
             }
         }
-        let mut acc = 0usize;
-        for c in &mut self.start[..ncells] {
-            acc += *c;
-            *c = acc;
-        }
-        self.start[ncells] = in_cells;
-        self.order.clear();
-        self.order.resize(in_cells, 0);
-        self.rank.clear();
-        self.rank.resize(m, 0);
-        self.sorted.clear();
-        self.sorted.resize(in_cells, [0.0; D]);
-        self.sorted_r.clear();
-        if self.radii_mode {
-            self.sorted_r.resize(in_cells, 0.0);
-        }
+        let counted = self.end_offsets_and_buffers(ncells, m);
+        debug_assert_eq!(counted, in_cells);
         for q in (0..in_cells).rev() {
             let s = self.tmp_slots[q];
             self.start[s] -= 1;
