@@ -17,6 +17,7 @@ pub mod implicit;
 pub mod model_time;
 pub mod output;
 pub mod packing;
+pub mod paper_tables;
 pub mod plot;
 pub mod reference;
 pub mod report;
