@@ -164,7 +164,8 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     );
     if outcome.failed_starts > 0 {
         println!(
-            "{} starts were abandoned because the solver diverged from them",
+            "{} starts were abandoned: their local minimisation ended at a point that could \
+             not be certified",
             outcome.failed_starts
         );
     }

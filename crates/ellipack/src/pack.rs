@@ -60,7 +60,7 @@ pub struct RunOutcome {
     pub seconds_to_best: f64,
     /// Whether the run was interrupted (Ctrl-C).
     pub interrupted: bool,
-    /// Starts abandoned because the solver diverged.
+    /// Starts abandoned because their local minimisation ended at an uncertifiable point.
     pub failed_starts: usize,
 }
 

@@ -73,7 +73,8 @@ pub struct MultiStartResult {
     /// Local minimisations completed (a start cut off by the time limit or an interrupt is
     /// not counted, except the first, whose packing is returned if nothing better exists).
     pub local_minimisations: usize,
-    /// Starts abandoned because the solver diverged (the model refused its point).
+    /// Starts abandoned because their local minimisation ended at a point that could not be
+    /// certified (an item's centre outside the container, which no dilation repairs).
     pub failed_starts: usize,
     /// When the best packing was found, from the start of the run.
     pub time_to_best: Duration,
@@ -154,8 +155,9 @@ pub fn multistart<const N: usize>(
         });
         let mut round_best: Option<LocalResult> = None;
         for result in results {
-            // A start that diverged (the model refuses its point, e.g. a centre beyond 1e30)
-            // is a failed start, not a failed run: the best packing so far stands.
+            // A start whose local minimisation ends at a point no dilation can certify (an
+            // item's centre outside the container) is a failed start, not a failed run: the
+            // best packing so far stands.
             let Ok(result) = result else {
                 failed_starts += 1;
                 continue;

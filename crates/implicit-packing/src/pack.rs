@@ -212,7 +212,7 @@ pub fn local_minimisation<const N: usize>(
             scaling: true,
             ..Options::default()
         };
-        let adapter = Adapter::new(problem);
+        let adapter = Adapter::new(problem, centre_bound::<N>(x0));
         auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
             if interrupted || observe(progress) {
                 interrupted = true;
@@ -237,6 +237,13 @@ pub fn local_minimisation<const N: usize>(
         }
     }
     Ok(best.result)
+}
+
+/// Ten times the extent of the start (its farthest centre plus its largest container
+/// dimension): the box the centres are kept in during a local minimisation.
+fn centre_bound<const N: usize>(x0: &[f64]) -> f64 {
+    let extent = x0.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    10.0 * extent.max(1.0)
 }
 
 /// A certified result with the solver's own point kept for a warm start.
@@ -302,20 +309,22 @@ pub fn repair<const N: usize>(
     let mut lo = 1.0;
     let mut y = dilate::<N>(problem, x, s);
     let mut cert = problem.certify(&y)?;
-    let mut grow = 0;
+    // Dilation scales a centre and the container together, so an item whose centre is
+    // outside the container is never repaired: past a factor of 4 the point is given up.
+    const MAX_DILATION: f64 = 4.0;
     while !cert.is_feasible() {
         lo = s;
         s = 1.0 + 2.0 * (s - 1.0).max(1e-9);
+        if s > MAX_DILATION {
+            return Err(Error::Solver(format!(
+                "the solver's point cannot be certified by a dilation up to {MAX_DILATION}: \
+                 {} overlapping pairs, {} items outside the container",
+                cert.overlapping_pairs.len(),
+                cert.outside.len()
+            )));
+        }
         y = dilate::<N>(problem, x, s);
         cert = problem.certify(&y)?;
-        grow += 1;
-        if grow > 200 {
-            return Err(Error::Solver(
-                "the packing could not be repaired by dilation (an item centre outside the \
-                 container?)"
-                    .into(),
-            ));
-        }
     }
     let mut hi = s;
     for _ in 0..60 {
@@ -389,10 +398,11 @@ struct Adapter<'a, const N: usize> {
     model: RefCell<&'a mut Problem<N>>,
     gradient: RefCell<ModelGradient>,
     lower: f64,
+    centre_bound: f64,
 }
 
 impl<'a, const N: usize> Adapter<'a, N> {
-    fn new(model: &'a mut Problem<N>) -> Self {
+    fn new(model: &'a mut Problem<N>, centre_bound: f64) -> Self {
         // Every item contains a ball of its smallest semi-axis, so no container dimension can
         // be smaller than the largest of those: a safe lower bound that keeps the container
         // from collapsing through zero during early iterations.
@@ -405,6 +415,7 @@ impl<'a, const N: usize> Adapter<'a, N> {
             model: RefCell::new(model),
             gradient: RefCell::new(ModelGradient::default()),
             lower,
+            centre_bound,
         }
     }
 
@@ -418,9 +429,17 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         self.model.borrow().var_count()
     }
 
-    fn bounds(&self, lower: &mut [f64], _upper: &mut [f64]) {
+    fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
         let start = self.body_variables();
         lower[start..].fill(self.lower);
+        // Centres stay within a box far larger than any packing the start leads to: without
+        // it a quasi-Newton step from a badly overlapping start could throw an item out to
+        // 1e30, where the model refuses the point and the start is lost.
+        let stride = Problem::<N>::vars_per_body();
+        for k in (0..start).filter(|k| k % stride < N) {
+            lower[k] = -self.centre_bound;
+            upper[k] = self.centre_bound;
+        }
     }
 
     fn n_eq(&self) -> usize {
