@@ -34,7 +34,7 @@
 
 use crate::inner::{
     ARMIJO, InnerOutcome, InnerSettings, InnerStatus, MAX_BACKTRACKS, Monitor, Smooth, backtrack,
-    within_noise,
+    descends_by_gradients,
 };
 use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
 
@@ -363,7 +363,7 @@ fn projected_search<S: Smooth + ?Sized>(
             return Ok(trial);
         }
         if last_finite
-            && within_noise(value, trial)
+            && descends_by_gradients((value, x, grad), (trial, &ws.x_trial, &ws.g_trial))
             && projected_gradient_norm(&ws.x_trial, &ws.g_trial, lower, upper) < pg
         {
             return Ok(trial);

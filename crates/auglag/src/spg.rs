@@ -25,7 +25,7 @@
 
 use crate::inner::{
     ARMIJO, InnerOutcome, InnerSettings, InnerStatus, MAX_BACKTRACKS, Monitor, Smooth, backtrack,
-    within_noise,
+    descends_by_gradients,
 };
 use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
 
@@ -110,7 +110,7 @@ pub(crate) fn minimize<S: Smooth + ?Sized>(
             reference,
             projected_gradient: pg,
         };
-        let new_value = match line_search(f, x, &search, bounds, settings, ws) {
+        let new_value = match line_search(f, (x, grad), &search, bounds, settings, ws) {
             Ok(v) => v,
             Err(status) => {
                 outcome.status = status;
@@ -162,7 +162,7 @@ struct Search {
 /// left in `ws.x_trial` with its gradient in `ws.g_trial`.
 fn line_search<S: Smooth + ?Sized>(
     f: &mut S,
-    x: &[f64],
+    (x, grad): (&[f64], &[f64]),
     search: &Search,
     bounds: (&[f64], &[f64]),
     settings: &InnerSettings,
@@ -194,7 +194,7 @@ fn line_search<S: Smooth + ?Sized>(
             return Ok(trial);
         }
         if last_finite
-            && within_noise(search.value, trial)
+            && descends_by_gradients((search.value, x, grad), (trial, &ws.x_trial, &ws.g_trial))
             && projected_gradient_norm(&ws.x_trial, &ws.g_trial, lower, upper)
                 < search.projected_gradient
         {
