@@ -52,6 +52,31 @@ impl Arith for f64 {
     }
 }
 
+/// Arithmetics with a fused multiply–add (one rounding), for the λ iteration.
+pub(crate) trait Fused: Arith {
+    /// self · b + c with one rounding.
+    fn fused_mul_add(self, b: Self, c: Self) -> Self;
+}
+
+impl Fused for f64 {
+    #[inline(always)]
+    fn fused_mul_add(self, b: Self, c: Self) -> Self {
+        self.mul_add(b, c)
+    }
+}
+
+/// a · b + c: fused when `FMA` (the processor has the instruction), else two roundings. The
+/// scalar and the batched paths take the same `FMA` on a given machine, so their results
+/// still agree bit for bit.
+#[inline(always)]
+pub(crate) fn mul_add<const FMA: bool, T: Fused>(a: T, b: T, c: T) -> T {
+    if FMA {
+        a.fused_mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
 /// Magnitude of an expression: evaluates Σ|terms| instead of Σ terms.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Mag(pub f64);
@@ -90,12 +115,17 @@ impl Arith for Mag {
     }
 }
 
-/// An unevaluated sum `hi + lo` with `|lo| ≤ ulp(hi)/2`.
+/// An unevaluated sum `hi + lo` with `|lo| ≤ ulp(hi)/2`. `FMA`: the exact product's error
+/// term comes from a hardware fused multiply–add (only inside the AVX2 + FMA build) instead of
+/// Dekker's splitting; both are exact, so the results are the same bits.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Dd {
+pub(crate) struct DdT<const FMA: bool> {
     pub hi: f64,
     pub lo: f64,
 }
+
+/// Double-double arithmetic for code outside the dispatched kernels.
+pub(crate) type Dd = DdT<false>;
 
 /// `a + b = s + e` exactly (Knuth).
 #[inline(always)]
@@ -110,6 +140,17 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
 fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     (s, b - (s - a))
+}
+
+/// `a · b = p + e` exactly (barring overflow/underflow), with a hardware FMA when `FMA`.
+#[inline(always)]
+fn two_prod_with<const FMA: bool>(a: f64, b: f64) -> (f64, f64) {
+    if FMA {
+        let p = a * b;
+        (p, a.mul_add(b, -p))
+    } else {
+        two_prod(a, b)
+    }
 }
 
 /// `a · b = p + e` exactly (barring overflow/underflow).
@@ -140,41 +181,41 @@ fn split(a: f64) -> (f64, f64) {
     (hi, a - hi)
 }
 
-impl Add for Dd {
-    type Output = Dd;
+impl<const FMA: bool> Add for DdT<FMA> {
+    type Output = Self;
     #[inline]
-    fn add(self, o: Dd) -> Dd {
+    fn add(self, o: Self) -> Self {
         let (s, e) = two_sum(self.hi, o.hi);
         let (t, f) = two_sum(self.lo, o.lo);
         let (s, e) = fast_two_sum(s, e + t);
         let (hi, lo) = fast_two_sum(s, e + f);
-        Dd { hi, lo }
+        Self { hi, lo }
     }
 }
-impl Sub for Dd {
-    type Output = Dd;
+impl<const FMA: bool> Sub for DdT<FMA> {
+    type Output = Self;
     #[inline]
-    fn sub(self, o: Dd) -> Dd {
-        self + Dd {
+    fn sub(self, o: Self) -> Self {
+        self + Self {
             hi: -o.hi,
             lo: -o.lo,
         }
     }
 }
-impl Mul for Dd {
-    type Output = Dd;
+impl<const FMA: bool> Mul for DdT<FMA> {
+    type Output = Self;
     #[inline]
-    fn mul(self, o: Dd) -> Dd {
-        let (p, e) = two_prod(self.hi, o.hi);
+    fn mul(self, o: Self) -> Self {
+        let (p, e) = two_prod_with::<FMA>(self.hi, o.hi);
         let e = e + (self.hi * o.lo + self.lo * o.hi);
         let (hi, lo) = fast_two_sum(p, e);
-        Dd { hi, lo }
+        Self { hi, lo }
     }
 }
-impl Arith for Dd {
+impl<const FMA: bool> Arith for DdT<FMA> {
     #[inline(always)]
     fn lift(x: f64) -> Self {
-        Dd { hi: x, lo: 0.0 }
+        Self { hi: x, lo: 0.0 }
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {
@@ -209,45 +250,5 @@ mod tests {
     fn mag_turns_differences_into_sums() {
         let m = Mag::lift(-3.0) * Mag::lift(2.0) - Mag::lift(5.0);
         assert_eq!(m.to_f64(), 11.0);
-    }
-}
-
-/// A value and its magnitude side by side: `[x, Σ|terms of x|]`. One evaluation of the
-/// coefficient formulas in this type gives both the `f64` result and its running error bound;
-/// the two lanes map onto one SSE2 register, so the bound costs little beyond the value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct ValMag(pub [f64; 2]);
-
-impl Add for ValMag {
-    type Output = ValMag;
-    #[inline(always)]
-    fn add(self, o: ValMag) -> ValMag {
-        ValMag([self.0[0] + o.0[0], self.0[1] + o.0[1]])
-    }
-}
-impl Sub for ValMag {
-    type Output = ValMag;
-    // Deliberate: the magnitude lane of a − b is |a| + |b|.
-    #[allow(clippy::suspicious_arithmetic_impl)]
-    #[inline(always)]
-    fn sub(self, o: ValMag) -> ValMag {
-        ValMag([self.0[0] - o.0[0], self.0[1] + o.0[1]])
-    }
-}
-impl Mul for ValMag {
-    type Output = ValMag;
-    #[inline(always)]
-    fn mul(self, o: ValMag) -> ValMag {
-        ValMag([self.0[0] * o.0[0], self.0[1] * o.0[1]])
-    }
-}
-impl Arith for ValMag {
-    #[inline(always)]
-    fn lift(x: f64) -> Self {
-        ValMag([x, x.abs()])
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self.0[0]
     }
 }

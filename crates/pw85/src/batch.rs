@@ -1,18 +1,23 @@
 //! Many pairs at once: slices in, slices out, four pairs at a time, and on all cores with the
 //! `rayon` feature.
 //!
-//! The λ iteration of one pair is a chain of dependent operations (two divisions per step), so
-//! a single call spends most of its time waiting on latency. [`contact_functions_into`]
-//! advances the iterations of four independent pairs in lock-step, which lets the processor
-//! overlap their chains; the results are identical to the scalar [`crate::contact_function`]
-//! (same arithmetic, same stopping rule), only computed side by side.
+//! The λ iteration of one pair is a chain of dependent operations (one division per step), so
+//! a single call spends much of its time waiting on latency. [`contact_functions_into`]
+//! advances the iterations of four independent pairs in lock-step, and computes the
+//! coefficients, the normalisation, the orientation, μ² and its error estimate for the four
+//! pairs at once (one 256-bit register per quantity); only validation, the rare refinement
+//! and the fallbacks run lane by lane. The results are identical to the scalar
+//! [`crate::contact_function`] (same arithmetic in each lane, same stopping rule), only
+//! computed side by side.
 
-use crate::arith::Dd;
-use crate::contact::{Prepared, Solution, check_inputs_finite, check_positive_definite, start};
+use crate::REFINE_ABOVE;
+use crate::contact::{
+    Prepared, Scale, Solution, amplification, check_positive_definite, odds_solution,
+};
 use crate::dispatch::multiversion;
 use crate::error::Argument;
-use crate::lanes::{Forms4, LANES, V4, maximise4};
-use crate::poly::{RationalForm, Search, pencil3_lifted};
+use crate::lanes::{LANES, V4, maximise4};
+use crate::poly::{OddsForm, RationalForm, pencil3_lifted};
 use crate::sym::Sym3;
 use crate::{Contact, Error};
 
@@ -116,9 +121,9 @@ pub fn par_overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
 
 multiversion! {
     /// Four pairs in lock-step (see [`crate::lanes`]). Lanes with invalid input, coincident
-    /// centres or a degenerate pencil are answered by the scalar code and carry a stand-in
-    /// pair through the lane arithmetic.
-    fn contact_x4(pairs: &[Pair], out: &mut [Result<Contact, Error>]) -> () => contact_x4_portable;
+    /// centres or a degenerate pencil are answered by the scalar code and carry another
+    /// lane's pair (or a stand-in) through the lane arithmetic.
+    fn contact_x4(pairs: &[Pair], out: &mut [Result<Contact, Error>]) -> () => fused contact_x4_portable;
 }
 
 /// A pair that is valid and well scaled, to fill the lanes of pairs answered separately.
@@ -129,10 +134,23 @@ const STAND_IN: Pair = Pair {
 };
 
 #[inline(always)]
-fn contact_x4_portable(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    let finite: [bool; LANES] = core::array::from_fn(|k| {
-        check_inputs_finite(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2).is_ok()
+fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
+    // The finiteness probe of `check_inputs_finite` (Σ (x − x), NaN for NaN and ±∞), four
+    // lanes at a time; a lane that fails it gets the scalar function and its typed error.
+    let inputs = |p: &Pair| -> [f64; 15] {
+        core::array::from_fn(|i| match i {
+            0..3 => p.r12[i],
+            3..9 => p.q1[i - 3],
+            _ => p.q2[i - 9],
+        })
+    };
+    let all: [[f64; 15]; LANES] = core::array::from_fn(|k| inputs(&pairs[k]));
+    #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
+    let probe = (0..15).fold(V4::from_fn(|_| 0.0), |acc, i| {
+        let x = V4::from_fn(|k| all[k][i]);
+        acc + (x - x)
     });
+    let finite: [bool; LANES] = core::array::from_fn(|k| probe.0[k] == 0.0);
     let lane: [&Pair; LANES] =
         core::array::from_fn(|k| if finite[k] { &pairs[k] } else { &STAND_IN });
     let r: [V4; 3] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].r12[i]));
@@ -143,65 +161,107 @@ fn contact_x4_portable(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
     let bm = b.map(V4::magnitude);
     let c = pencil3_lifted(r, a, b).coefficients;
     let m = pencil3_lifted(rm, am, bm).coefficients;
+    let m = (m.alpha.map(|x| V4(x.0)), m.beta.map(|x| V4(x.0)));
+    let form = |k: usize| RationalForm {
+        alpha: c.alpha.map(|x| x.0[k]),
+        beta: c.beta.map(|x| x.0[k]),
+    };
 
-    // Per lane: validation, normalisation and orientation, exactly as the scalar path.
-    let mut active = [None; LANES];
+    // Per lane, the decisions of the scalar path before its iteration: validation, then
+    // r12 = 0 (no scale). Everything after is computed four lanes at a time.
+    let mut scales: [Option<Scale>; LANES] = [None; LANES];
     for k in 0..LANES {
         let p = &pairs[k];
         if !finite[k] {
             out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
             continue;
         }
-        let prepared = Prepared {
-            rational: RationalForm {
-                alpha: c.alpha.map(|x| x.0[k]),
-                beta: c.beta.map(|x| x.0[k]),
-            },
-            bound: RationalForm {
-                alpha: m.alpha.map(|x| x.0[k]),
-                beta: m.beta.map(|x| x.0[k]),
-            },
-        };
-        let (beta, bound) = (prepared.rational.beta, prepared.bound.beta);
-        let checked = check_positive_definite(Argument::Q1, &p.q1, beta[0], bound[0])
-            .and_then(|()| check_positive_definite(Argument::Q2, &p.q2, beta[3], bound[3]));
+        let checked = check_positive_definite(Argument::Q1, &p.q1, c.beta[0].0[k], m.1[0].0[k])
+            .and_then(|()| {
+                check_positive_definite(Argument::Q2, &p.q2, c.beta[3].0[k], m.1[3].0[k])
+            });
         if let Err(e) = checked {
             out[k] = Err(e);
             continue;
         }
-        match prepared.normalised() {
-            Some((scale, form)) => active[k] = Some((prepared, scale, start(&form))),
-            None => out[k] = Ok(Contact::COINCIDENT),
+        scales[k] = Scale::of(&form(k));
+        if scales[k].is_none() {
+            out[k] = Ok(Contact::COINCIDENT);
         }
     }
-    if active.iter().all(Option::is_none) {
+    let Some(first) = scales.iter().position(Option::is_some) else {
         return;
-    }
-    let stand_in = active.iter().flatten().map(|x| x.2).next();
-    let forms: [RationalForm; LANES] = core::array::from_fn(|k| {
-        active[k].map_or_else(|| stand_in.map_or(RationalForm::UNIT, |s| s.0), |x| x.2.0)
-    });
-    let t0: [f64; LANES] = core::array::from_fn(|k| {
-        active[k].map_or_else(|| stand_in.map_or(0.5, |s| s.1.t), |x| x.2.1.t)
-    });
-    let results = maximise4(&Forms4::new(&forms), t0);
+    };
+    // Lanes answered above carry a live lane's pair through the arithmetic.
+    let source: [usize; LANES] =
+        core::array::from_fn(|k| if scales[k].is_some() { k } else { first });
+    let scale: [Scale; LANES] = core::array::from_fn(|k| scales[source[k]].unwrap_or(Scale::UNIT));
+    let pick = |x: V4| V4::from_fn(|k| x.0[source[k]]);
+    let (alpha, beta) = (c.alpha.map(pick), c.beta.map(pick));
+    let (bound_alpha, bound_beta) = (m.0.map(pick), m.1.map(pick));
+
+    // Scale::apply and orient, lane-wise (the same operations).
+    let inv_a = V4::from_fn(|k| scale[k].inverses().0);
+    let inv_b = V4::from_fn(|k| scale[k].inverses().1);
+    let alpha = alpha.map(|x| V4::from_fn(|k| (x.0[k] * inv_a.0[k]).max(0.0)));
+    let beta = beta.map(|x| V4::from_fn(|k| (x.0[k] * inv_b.0[k]).max(0.0)));
+    let x = alpha[2] * beta[0];
+    let y = alpha[0] * beta[3];
+    let reversed: [bool; LANES] = core::array::from_fn(|k| x.0[k] > y.0[k]);
+    let swap =
+        |keep: V4, other: V4| V4::from_fn(|k| if reversed[k] { other.0[k] } else { keep.0[k] });
+    let alpha = [swap(alpha[0], alpha[2]), alpha[1], swap(alpha[2], alpha[0])];
+    let beta = [
+        swap(beta[0], beta[3]),
+        swap(beta[1], beta[2]),
+        swap(beta[2], beta[1]),
+        swap(beta[3], beta[0]),
+    ];
+    let u0: [f64; LANES] =
+        core::array::from_fn(|k| (x.0[k].min(y.0[k]) / x.0[k].max(y.0[k])).sqrt());
+
+    let results = maximise4::<FMA>(&OddsForm::new(&alpha, &beta), u0);
+
+    // Solution::at and the error estimate of Prepared::finish, lane-wise.
+    let u = V4::from_fn(|k| results[k].u);
+    let [t, s, f, sa, sb] = odds_solution(&alpha, &beta, u);
+    let lambda = swap(t, s);
+    let (pa, pb) = (
+        V4::from_fn(|k| scale[k].powers().0),
+        V4::from_fn(|k| scale[k].powers().1),
+    );
+    let amplification = amplification(&bound_alpha, &bound_beta, [lambda, sa, sb, pa, pb]);
     for k in 0..LANES {
-        let Some((prepared, scale, (form, _, reversed))) = active[k] else {
+        let Some(scale) = scales[k] else {
             continue;
         };
         let p = &pairs[k];
-        out[k] = if results[k].fallback {
-            crate::contact_function(&p.r12, &p.q1, &p.q2)
+        if results[k].fallback {
+            out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
+            continue;
+        }
+        let estimate = Prepared::estimate(amplification.0[k]);
+        out[k] = Ok(if estimate <= REFINE_ABOVE {
+            let solution = Solution {
+                lambda: lambda.0[k],
+                f: f.0[k],
+                a: sa.0[k],
+                b: sb.0[k],
+            };
+            scale.contact(&solution, estimate, false)
         } else {
-            let mut search = Search::new(results[k].t);
-            search.f = results[k].f;
-            search.done = true;
-            Ok(
-                prepared.finish(scale, Solution::of(&form, &search, reversed), || {
-                    crate::poly::coefficients::<Dd>(&p.r12, &p.q1, &p.q2)
-                }),
+            let prepared = Prepared {
+                rational: form(k),
+                bound: RationalForm {
+                    alpha: m.0.map(|x| x.0[k]),
+                    beta: m.1.map(|x| x.0[k]),
+                },
+            };
+            prepared.refine::<FMA>(
+                || crate::contact::exact_coefficients(&p.r12, &p.q1, &p.q2),
+                scale,
             )
-        };
+        });
     }
 }
 

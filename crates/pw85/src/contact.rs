@@ -4,11 +4,16 @@
 //! # Algorithm
 //! 1. The Bernstein coefficients of a(λ) and b(λ) (eq. 16, see [`crate::poly`]) are computed
 //!    in `f64`, together with a running bound on their rounding error (every term replaced by
-//!    its absolute value).
-//! 2. λ₀ is found by a bracketed Newton iteration on λ(1 − λ)(ln f)′, started from the exact
-//!    maximiser for two spheres of the ellipsoids' radial extents along r12
-//!    ([`RationalForm::maximise`]). When λ₀ > ½ the problem is solved in the variable 1 − λ
-//!    (coefficients reversed), so that a maximiser close to 1 keeps its relative precision.
+//!    its absolute value), the formulas of both ends of the pencil side by side in one
+//!    four-lane pass ([`crate::lanes::Ends4`]).
+//! 2. λ₀ is found in the odds u = λ / (1 − λ), as the positive root of the degree-6 polynomial
+//!    p(u), the numerator c(λ) of f′ (eqs. 18–20) in that variable ([`OddsForm`]): a bracketed
+//!    Halley iteration on p / (A B), started from the exact maximiser for two spheres of the
+//!    ellipsoids' radial extents along r12 (2.5 evaluations on average, one division each).
+//!    When the start is above u = 1 the problem is solved for 1 − λ (coefficients reversed),
+//!    so that a maximiser close to 1 keeps its relative precision. Pencils whose polynomials
+//!    span too many decades fall back to the bracketed Newton iteration in λ itself
+//!    ([`RationalForm::maximise`]).
 //! 3. μ² = f(λ₀) is a sum of non-negative terms and is evaluated without cancellation. If the
 //!    error bound of the coefficients says that f lost more than [`REFINE_ABOVE`] to
 //!    cancellation (needles, pancakes, nearly singular pencils), the coefficients are
@@ -25,10 +30,10 @@
 //! - `pw85-theory.rst` (the PW85 library's theory chapter): equation numbers in this crate.
 
 use crate::arith::is_positive;
-use crate::arith::{Arith, Dd, Mag, ValMag};
+use crate::arith::{Arith, Dd, DdT, Mag};
 use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
-use crate::poly::{Coefficients, RationalForm, Search, coefficients_2d, pencil3};
+use crate::poly::{OddsForm, OddsSearch, RationalForm, Search, coefficients_2d, pencil3};
 use crate::sym::{Sym2, Sym3, mat_vec};
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
@@ -107,12 +112,33 @@ multiversion! {
     /// # Ok::<(), pw85::Error>(())
     /// ```
     pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error>
-        => contact_function_portable;
+        => fused contact_function_portable;
 }
 
 #[inline(always)]
-fn contact_function_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
-    Ok(Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2)))
+fn contact_function_portable<const FMA: bool>(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+) -> Result<Contact, Error> {
+    Ok(Prepared::new(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2)))
+}
+
+multiversion! {
+    /// The Bernstein coefficients computed in double-double arithmetic and rounded: the
+    /// refinement's input (in its own dispatched function so that the exact products use the
+    /// hardware FMA, as the refinement itself is kept out of line).
+    pub(crate) fn exact_coefficients(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> RationalForm
+        => fused exact_coefficients_portable;
+}
+
+#[inline(always)]
+fn exact_coefficients_portable<const FMA: bool>(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+) -> RationalForm {
+    crate::poly::coefficients::<DdT<FMA>>(r12, q1, q2).to_f64()
 }
 
 /// [`contact_function`] with the coefficients always recomputed in double-double arithmetic
@@ -125,7 +151,7 @@ fn contact_function_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Con
 pub fn contact_function_refined(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
     let prepared = Prepared::new(r12, q1, q2)?;
     Ok(match prepared.normalised() {
-        Some((scale, _)) => prepared.refine(|| crate::poly::coefficients::<Dd>(r12, q1, q2), scale),
+        Some((scale, _)) => prepared.refine::<false>(|| exact_coefficients(r12, q1, q2), scale),
         None => Contact::COINCIDENT,
     })
 }
@@ -141,26 +167,22 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
+    /// The estimate of the relative error of μ² from the amplification of the coefficients'
+    /// rounding errors (see [`Solution::amplification`]).
+    #[inline(always)]
+    pub(crate) fn estimate(amplification: f64) -> f64 {
+        GAMMA_F64 * amplification + EVAL
+    }
+
     #[inline(always)]
     pub(crate) fn new(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Self, Error> {
         check_inputs_finite(r12, q1, q2)?;
-        // The coefficients and their error bound in one pass (two SIMD lanes).
-        let c = crate::poly::coefficients::<ValMag>(r12, q1, q2);
-        let value = |x: &ValMag| x.0[0];
-        let magnitude = |x: &ValMag| x.0[1];
-        let (beta, beta_bound) = (c.beta.map(|x| value(&x)), c.beta.map(|x| magnitude(&x)));
+        // The coefficients and their error bound in one pass (four SIMD lanes).
+        let (rational, bound) = crate::poly::coefficients_with_bound(r12, q1, q2);
+        let (beta, beta_bound) = (rational.beta, bound.beta);
         check_positive_definite(Argument::Q1, q1, beta[0], beta_bound[0])?;
         check_positive_definite(Argument::Q2, q2, beta[3], beta_bound[3])?;
-        Ok(Self {
-            rational: RationalForm {
-                alpha: c.alpha.map(|x| value(&x)),
-                beta,
-            },
-            bound: RationalForm {
-                alpha: c.alpha.map(|x| magnitude(&x)),
-                beta: beta_bound,
-            },
-        })
+        Ok(Self { rational, bound })
     }
 
     #[inline(always)]
@@ -179,9 +201,9 @@ impl Prepared {
     /// Solves, checks the error bound and refines when needed: the whole contact function
     /// after validation.
     #[inline(always)]
-    pub(crate) fn contact(&self, exact: impl FnOnce() -> Coefficients<Dd>) -> Contact {
+    pub(crate) fn contact<const FMA: bool>(&self, exact: impl FnOnce() -> RationalForm) -> Contact {
         match self.normalised() {
-            Some((scale, form)) => self.finish(scale, solve(&form), exact),
+            Some((scale, form)) => self.finish::<FMA>(scale, solve::<FMA>(&form), exact),
             None => Contact::COINCIDENT,
         }
     }
@@ -195,27 +217,31 @@ impl Prepared {
     /// μ² from the solution, after checking the error bound and, when it is too large,
     /// re-solving with the double-double coefficients from `exact`.
     #[inline(always)]
-    pub(crate) fn finish(
+    pub(crate) fn finish<const FMA: bool>(
         &self,
         scale: Scale,
         solution: Solution,
-        exact: impl FnOnce() -> Coefficients<Dd>,
+        exact: impl FnOnce() -> RationalForm,
     ) -> Contact {
-        let estimate = GAMMA_F64 * solution.amplification(&self.bound, scale) + EVAL;
+        let estimate = Self::estimate(solution.amplification(&self.bound, scale));
         if estimate <= REFINE_ABOVE {
             return scale.contact(&solution, estimate, false);
         }
-        self.refine(exact, scale)
+        self.refine::<FMA>(exact, scale)
     }
 
     /// The rare path: re-solve with double-double coefficients. Kept out of line so that the
     /// common path stays small.
     #[cold]
     #[inline(never)]
-    fn refine(&self, exact: impl FnOnce() -> Coefficients<Dd>, fallback: Scale) -> Contact {
-        let refined = exact().to_f64();
+    pub(crate) fn refine<const FMA: bool>(
+        &self,
+        exact: impl FnOnce() -> RationalForm,
+        fallback: Scale,
+    ) -> Contact {
+        let refined = exact();
         let scale = Scale::of(&refined).unwrap_or(fallback);
-        let solution = solve(&scale.apply(&refined));
+        let solution = solve::<FMA>(&scale.apply(&refined));
         let estimate = GAMMA_DD * solution.amplification(&self.bound, scale) + EVAL;
         scale.contact(&solution, estimate, true)
     }
@@ -236,12 +262,17 @@ multiversion! {
     /// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
     /// version).
     pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
-        => contact_function_2d_portable;
+        => fused contact_function_2d_portable;
 }
 
 #[inline(always)]
-fn contact_function_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error> {
-    Ok(Prepared::new_2d(r12, q1, q2)?.contact(|| coefficients_2d::<Dd>(r12, q1, q2)))
+fn contact_function_2d_portable<const FMA: bool>(
+    r12: &[f64; 2],
+    q1: &Sym2,
+    q2: &Sym2,
+) -> Result<Contact, Error> {
+    Ok(Prepared::new_2d(r12, q1, q2)?
+        .contact::<FMA>(|| coefficients_2d::<Dd>(r12, q1, q2).to_f64()))
 }
 
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
@@ -250,8 +281,8 @@ fn contact_function_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDetails, Error> {
-    let contact =
-        Prepared::new(r12, q1, q2)?.contact(|| crate::poly::coefficients::<Dd>(r12, q1, q2));
+    // The dispatched entry point, so that the details agree with `contact_function` bit for bit.
+    let contact = crate::contact_function(r12, q1, q2)?;
     let p = pencil3::<f64>(r12, q1, q2);
     // adj Q(λ) = s² adj Q1 + st M + t² adj Q2, from the same (possibly refined) arithmetic as
     // the coefficients, so that s = adj Q(λ) r / b(λ) is as accurate as μ².
@@ -297,8 +328,10 @@ pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDe
     })
 }
 
-/// Relative rounding error of evaluating f from exact non-negative Bernstein coefficients
-/// (a handful of operations, each within u = 2⁻⁵³).
+/// Relative rounding error of evaluating f from exact non-negative coefficients (a dozen
+/// roundings of non-negative quantities, each within u = 2⁻⁵³: 12 in [`Solution::at`], 13 in
+/// the λ form of the fallback; their worst cases do not coincide, and 8 u is the allowance
+/// this crate has used since its calibration).
 const EVAL: f64 = 8.0 * 0.5 * f64::EPSILON;
 
 /// The normalisation that keeps the solver's arithmetic away from overflow: α and β are
@@ -307,6 +340,10 @@ const EVAL: f64 = 8.0 * 0.5 * f64::EPSILON;
 pub(crate) struct Scale {
     alpha: f64,
     beta: f64,
+    /// 1 / alpha and 1 / beta, from the exponent bits: the division would sit on the latency
+    /// chain between the coefficients and the first iterate.
+    inv_alpha: f64,
+    inv_beta: f64,
 }
 
 /// The maximiser found by [`solve`], with a(λ₀) and b(λ₀) of the normalised form.
@@ -322,34 +359,128 @@ impl Solution {
     /// Σ|terms| / value for a and b at λ₀, added: how much a relative error of the
     /// coefficients (measured against `bound`, their Σ|terms|, unnormalised) is amplified in f.
     fn amplification(&self, bound: &RationalForm, scale: Scale) -> f64 {
-        bound.a(self.lambda) / (self.a * scale.alpha) + bound.b(self.lambda) / (self.b * scale.beta)
+        amplification(
+            &bound.alpha,
+            &bound.beta,
+            [self.lambda, self.a, self.b, scale.alpha, scale.beta],
+        )
     }
 }
 
-/// The maximiser of a normalised rational form (coefficients non-negative, not all zero).
+/// [`Solution::amplification`] in any arithmetic (the batch evaluates four lanes at once).
 #[inline(always)]
-pub(crate) fn solve(r: &RationalForm) -> Solution {
-    let (form, mut search, reversed) = start(r);
+pub(crate) fn amplification<T: Arith + core::ops::Div<Output = T>>(
+    bound_alpha: &[T; 3],
+    bound_beta: &[T; 4],
+    [lambda, a, b, scale_alpha, scale_beta]: [T; 5],
+) -> T {
+    let [ba, _, _, bb, _, _] = crate::poly::pencil_values(bound_alpha, bound_beta, lambda);
+    ba / (a * scale_alpha) + bb / (b * scale_beta)
+}
+
+/// [`Solution::at`] in any arithmetic: [λ, 1 − λ, f, a, b] at the odds u of an oriented form.
+///
+/// With A(u) = α₀ + α₁u + α₂u², B(u) = β₀ + β₁u + β₂u² + β₃u³ (non-negative coefficients and
+/// u ≥ 0, so evaluated without cancellation): λ = u / (1 + u), f = u A / ((1 + u) B) (eq. 15),
+/// a = A / (1 + u)² and b = B / (1 + u)³ (eq. 16).
+#[inline(always)]
+pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
+    alpha: &[T; 3],
+    beta: &[T; 4],
+    u: T,
+) -> [T; 5] {
+    let [a0, a1, a2] = *alpha;
+    let [b0, b1, b2, b3] = *beta;
+    let one = T::lift(1.0);
+    // Grouped (Estrin) rather than Horner: fewer roundings on the longest path (3 in A,
+    // 5 in B) and a shorter dependency chain.
+    let u2 = u * u;
+    let big_a = (a0 + a1 * u) + a2 * u2;
+    let big_b = (b0 + b1 * u) + (b2 + b3 * u) * u2;
+    // 1 − λ directly, not by subtraction: when reversed it is the returned λ.
+    let s = one / (one + u);
+    [
+        u * s,
+        s,
+        u * big_a / ((one + u) * big_b),
+        s * s * big_a,
+        s * s * s * big_b,
+    ]
+}
+
+/// The maximiser of a normalised rational form (coefficients non-negative, not all zero):
+/// Halley's iteration on the odds u = λ / (1 − λ) ([`OddsForm`]), from the exact maximiser for
+/// two spheres of the ellipsoids' radial extents along r12.
+#[inline(always)]
+pub(crate) fn solve<const FMA: bool>(r: &RationalForm) -> Solution {
+    let (form, u0, reversed) = orient(r);
+    let odds = OddsForm::new(&form.alpha, &form.beta);
+    let mut search = OddsSearch::new(u0);
+    while !search.done {
+        search.advance(odds.halley_terms::<FMA>(search.u));
+    }
+    if search.fallback {
+        return solve_lambda(r);
+    }
+    Solution::at(&form, search.u, reversed)
+}
+
+/// The bracketed Newton iteration in λ itself ([`RationalForm::search_step`]), for the pencils
+/// whose polynomials in u span too many decades for [`solve`] (the products of its step
+/// would underflow); it divides by a and b at every step instead.
+#[cold]
+#[inline(never)]
+pub(crate) fn solve_lambda(r: &RationalForm) -> Solution {
+    let t0 = r.initial_guess();
+    let (form, mut search, reversed) = if t0 > 0.5 {
+        (r.reversed(), Search::new(1.0 - t0), true)
+    } else {
+        (*r, Search::new(t0), false)
+    };
     while !search.done {
         form.search_step(&mut search);
     }
     Solution::of(&form, &search, reversed)
 }
 
-/// Where to start: solve in whichever of λ and 1 − λ is small at the maximiser, so that it
-/// keeps its relative precision (λ₀ = 1 − 1e-12 is not representable to better than 1e-4
-/// relative in its distance to 1).
+/// Where to start: the exact maximiser for two spheres whose radii are the radial extents
+/// ρᵢ = (r̂ᵀ Qᵢ⁻¹ r̂)^(−1/2) of the ellipsoids along r12, u = ρ₁ / ρ₂ = √(α₂β₀ / (α₀β₃)). When it
+/// exceeds 1 the reversed form (Q1 and Q2 swapped, λ ↔ 1 − λ) is solved instead, so that the
+/// variable is small at whichever end the maximiser lies near and keeps its relative precision
+/// (λ₀ = 1 − 1e-12 is not representable to better than 1e-4 relative in its distance to 1).
+/// Returns the form to solve, u at the start and whether it is reversed.
 #[inline(always)]
-pub(crate) fn start(r: &RationalForm) -> (RationalForm, Search, bool) {
-    let t0 = r.initial_guess();
-    if t0 > 0.5 {
-        (r.reversed(), Search::new(1.0 - t0), true)
-    } else {
-        (*r, Search::new(t0), false)
-    }
+pub(crate) fn orient(r: &RationalForm) -> (RationalForm, f64, bool) {
+    let (x, y) = (r.alpha[2] * r.beta[0], r.alpha[0] * r.beta[3]);
+    // Selects rather than a branch: the side is a coin toss on ordinary input, and a
+    // mispredicted branch here costs as much as the selects and the reversal together.
+    let reversed = x > y;
+    let pick = |keep: f64, swap: f64| if reversed { swap } else { keep };
+    let [a0, a1, a2] = r.alpha;
+    let [b0, b1, b2, b3] = r.beta;
+    let form = RationalForm {
+        alpha: [pick(a0, a2), a1, pick(a2, a0)],
+        beta: [pick(b0, b3), pick(b1, b2), pick(b2, b1), pick(b3, b0)],
+    };
+    (form, (x.min(y) / x.max(y)).sqrt(), reversed)
 }
 
 impl Solution {
+    /// The solution at the odds u of the (oriented) `form`: λ = u / (1 + u), and with
+    /// A(u) = α₀ + α₁u + α₂u², B(u) = β₀ + β₁u + β₂u² + β₃u³ (non-negative coefficients and
+    /// u ≥ 0, so evaluated without cancellation), f = u A / ((1 + u) B) (eq. 15), a = A / (1 + u)² and
+    /// b = B / (1 + u)³ (eq. 16).
+    #[inline(always)]
+    pub(crate) fn at(form: &RationalForm, u: f64, reversed: bool) -> Self {
+        let [t, s, f, a, b] = odds_solution(&form.alpha, &form.beta, u);
+        Solution {
+            lambda: if reversed { s } else { t },
+            f,
+            a,
+            b,
+        }
+    }
+
     #[inline(always)]
     pub(crate) fn of(form: &RationalForm, search: &Search, reversed: bool) -> Self {
         let t = search.t;
@@ -363,23 +494,55 @@ impl Solution {
 }
 
 impl Scale {
+    /// No scaling: a placeholder for lanes that carry no pair.
+    pub(crate) const UNIT: Scale = Scale {
+        alpha: 1.0,
+        beta: 1.0,
+        inv_alpha: 1.0,
+        inv_beta: 1.0,
+    };
+
     /// Powers of two near the largest α and β: multiplying by their reciprocals is exact, so
     /// normalising changes no digit, and costs no division.
     #[inline(always)]
     pub(crate) fn of(r: &RationalForm) -> Option<Self> {
         let alpha = r.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
         let beta = r.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
-        (alpha > 0.0 && beta > 0.0).then(|| Self {
-            alpha: power_of_two_below(alpha),
-            beta: power_of_two_below(beta),
+        (alpha > 0.0 && beta > 0.0).then(|| {
+            let (alpha, inv_alpha) = power_of_two_below(alpha);
+            let (beta, inv_beta) = power_of_two_below(beta);
+            Self {
+                alpha,
+                beta,
+                inv_alpha,
+                inv_beta,
+            }
         })
+    }
+
+    /// The powers of two that α and β were divided by.
+    #[inline(always)]
+    pub(crate) fn powers(&self) -> (f64, f64) {
+        (self.alpha, self.beta)
+    }
+
+    /// Their reciprocals.
+    #[inline(always)]
+    pub(crate) fn inverses(&self) -> (f64, f64) {
+        (self.inv_alpha, self.inv_beta)
+    }
+
+    /// α / β: f of the normalised form times this is f of the original one.
+    #[inline(always)]
+    pub(crate) fn ratio(&self) -> f64 {
+        self.alpha * self.inv_beta
     }
 
     #[inline(always)]
     pub(crate) fn apply(&self, r: &RationalForm) -> RationalForm {
         // Mixed coefficients are non-negative in exact arithmetic; rounding may leave a tiny
         // negative value, which the error bound accounts for.
-        let (ia, ib) = (1.0 / self.alpha, 1.0 / self.beta);
+        let (ia, ib) = (self.inv_alpha, self.inv_beta);
         RationalForm {
             alpha: r.alpha.map(|x| (x * ia).max(0.0)),
             beta: r.beta.map(|x| (x * ib).max(0.0)),
@@ -387,9 +550,9 @@ impl Scale {
     }
 
     #[inline(always)]
-    fn contact(&self, s: &Solution, error_estimate: f64, refined: bool) -> Contact {
+    pub(crate) fn contact(&self, s: &Solution, error_estimate: f64, refined: bool) -> Contact {
         Contact {
-            mu2: s.f * (self.alpha / self.beta),
+            mu2: s.f * self.ratio(),
             lambda: s.lambda,
             error_estimate,
             refined,
@@ -397,16 +560,20 @@ impl Scale {
     }
 }
 
-/// The largest power of two ≤ x, for positive finite x; x itself for subnormal or huge x (where
-/// the reciprocal of the power would not be representable), which only costs exactness of the
-/// normalisation there.
+/// The largest power of two ≤ x and its reciprocal, for positive finite x; x itself and 1 / x
+/// for subnormal or huge x (where the reciprocal of the power would not be representable),
+/// which only costs exactness of the normalisation there.
 #[inline(always)]
-fn power_of_two_below(x: f64) -> f64 {
+fn power_of_two_below(x: f64) -> (f64, f64) {
     let exponent = (x.to_bits() >> 52) & 0x7ff;
     if (1..2046).contains(&exponent) {
-        f64::from_bits(exponent << 52)
+        // 2^(e − 1023) and 2^(1023 − e): biased exponents e and 2046 − e, both in 1..=2045.
+        (
+            f64::from_bits(exponent << 52),
+            f64::from_bits((2046 - exponent) << 52),
+        )
     } else {
-        x
+        (x, 1.0 / x)
     }
 }
 
@@ -527,12 +694,12 @@ mod calibration {
             let r = [next() - 0.5, next() - 0.5, next() - 0.5];
             let fast = coefficients::<f64>(&r, &q1, &q2).to_f64();
             let scale = Scale::of(&fast).unwrap();
-            let s1 = solve(&scale.apply(&fast));
+            let s1 = solve::<false>(&scale.apply(&fast));
             let bound = coefficients::<Mag>(&r, &q1, &q2).to_f64();
             let est = GAMMA_F64 * s1.amplification(&bound, scale) + EVAL;
             let exact = coefficients::<Dd>(&r, &q1, &q2).to_f64();
             let scale2 = Scale::of(&exact).unwrap();
-            let s2 = solve(&scale2.apply(&exact));
+            let s2 = solve::<false>(&scale2.apply(&exact));
             let (m1, m2) = (
                 scale.contact(&s1, 0.0, false).mu2,
                 scale2.contact(&s2, 0.0, true).mu2,

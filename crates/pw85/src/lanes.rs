@@ -1,4 +1,5 @@
-//! Four pairs side by side, lane by lane, for the batched path.
+//! Four pairs side by side, lane by lane, for the batched path (and, in [`Ends4`], the two ends
+//! of one pair's pencil with their magnitudes, for the scalar path).
 //!
 //! [`V4`] holds one `f64` per pair and does every operation lane-wise: written this way, the
 //! compiler keeps the four lanes in one 256-bit register where AVX is available (two 128-bit
@@ -7,7 +8,7 @@
 //! when they stop, and a lane that has stopped keeps its state (selects, not branches).
 
 use crate::arith::Arith;
-use crate::poly::RationalForm;
+use crate::poly::{OddsForm, OddsSearch};
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Number of lanes.
@@ -43,6 +44,13 @@ impl Neg for V4 {
     #[inline(always)]
     fn neg(self) -> V4 {
         V4(self.0.map(|x| -x))
+    }
+}
+
+impl crate::arith::Fused for V4 {
+    #[inline(always)]
+    fn fused_mul_add(self, b: V4, c: V4) -> V4 {
+        V4::from_fn(|k| self.0[k].mul_add(b.0[k], c.0[k]))
     }
 }
 
@@ -95,11 +103,62 @@ impl Arith for M4 {
     }
 }
 
-impl V4 {
+/// One pair's two ellipsoids side by side, with their magnitudes: lanes
+/// [x(Q1), x(Q2), Σ|terms| of x(Q1), Σ|terms| of x(Q2)] for a formula x written once (the
+/// [`crate::arith::Mag`] arithmetic in the last two lanes). The coefficient formulas of the
+/// two ends of the pencil (adj Qᵢ, det Qᵢ, rᵀ adj Qᵢ r, tr(adj Qᵢ Qⱼ)) are the same formula
+/// on Q1 and on Q2, so one evaluation gives four results in one 256-bit register; every lane
+/// performs exactly the operations of the scalar `f64` (or `Mag`) evaluation, so the results
+/// are the same bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Ends4(pub V4);
+
+/// a − b is a + (−1) b in the value lanes and a + b in the magnitude lanes: multiplying by
+/// ±1 is exact, so each lane rounds exactly as its own subtraction or addition would.
+const SUB_SIGNS: V4 = V4([-1.0, -1.0, 1.0, 1.0]);
+
+impl Add for Ends4 {
+    type Output = Ends4;
     #[inline(always)]
-    pub(crate) fn splat(x: f64) -> Self {
-        V4([x; LANES])
+    fn add(self, o: Ends4) -> Ends4 {
+        Ends4(self.0 + o.0)
     }
+}
+impl Sub for Ends4 {
+    type Output = Ends4;
+    #[allow(clippy::suspicious_arithmetic_impl)] // see SUB_SIGNS
+    #[inline(always)]
+    fn sub(self, o: Ends4) -> Ends4 {
+        Ends4(self.0 + o.0 * SUB_SIGNS)
+    }
+}
+impl Mul for Ends4 {
+    type Output = Ends4;
+    #[inline(always)]
+    fn mul(self, o: Ends4) -> Ends4 {
+        Ends4(self.0 * o.0)
+    }
+}
+impl Arith for Ends4 {
+    #[inline(always)]
+    fn lift(x: f64) -> Self {
+        Ends4(V4([x, x, x.abs(), x.abs()]))
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self.0.0[0]
+    }
+}
+
+impl Ends4 {
+    /// [a, b, |a|, |b|].
+    #[inline(always)]
+    pub(crate) fn of(a: f64, b: f64) -> Self {
+        Ends4(V4([a, b, a.abs(), b.abs()]))
+    }
+}
+
+impl V4 {
     /// |x| lane-wise, as the magnitude arithmetic's input.
     #[inline(always)]
     pub(crate) fn magnitude(self) -> M4 {
@@ -111,130 +170,29 @@ impl V4 {
     }
 }
 
-/// The rational forms of four pairs, coefficient by coefficient.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Forms4 {
-    alpha: [V4; 3],
-    beta: [V4; 4],
-}
-
-impl Forms4 {
-    #[inline(always)]
-    pub(crate) fn new(forms: &[RationalForm; LANES]) -> Self {
-        Self {
-            alpha: core::array::from_fn(|i| V4::from_fn(|k| forms[k].alpha[i])),
-            beta: core::array::from_fn(|i| V4::from_fn(|k| forms[k].beta[i])),
-        }
-    }
-
-    /// [`RationalForm::newton_terms`], lane-wise (the same generic formulas).
-    #[inline(always)]
-    fn newton_terms(&self, lambda: V4) -> (V4, V4, V4) {
-        crate::poly::newton_terms(&self.alpha, &self.beta, lambda)
-    }
-
-    /// [`RationalForm::f`], lane-wise.
-    #[inline(always)]
-    fn f(&self, lambda: V4) -> V4 {
-        crate::poly::f_value(&self.alpha, &self.beta, lambda)
-    }
-}
-
-/// The outcome of one lane of [`maximise4`].
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct LaneResult {
-    /// λ₀ in the lane's own orientation.
-    pub t: f64,
-    /// f(λ₀).
-    pub f: f64,
-    /// The lane met a pencil so small that the scalar iteration switches to its divided form:
-    /// the caller must solve this lane with the scalar code.
-    pub fallback: bool,
-}
-
-/// [`RationalForm::maximise`] on four forms at once, from the starting points `t0`.
+/// The odds iteration of [`crate::contact_function`] ([`OddsSearch`]) on four pairs at once,
+/// from the starting points `u0`.
 ///
-/// Each lane follows the scalar iteration step for step: the Newton terms and the step are
-/// computed for all lanes together, then each lane applies the scalar bracket, stopping and
-/// safeguard rules to its own state. A stopped lane's state is frozen.
+/// The Halley terms are computed for all lanes together (the same generic formulas as the
+/// scalar code, so the same bits), then each lane applies the scalar bracket and stopping rule
+/// to its own state. A stopped lane's state is frozen.
 #[inline(always)]
-pub(crate) fn maximise4(forms: &Forms4, t0: [f64; LANES]) -> [LaneResult; LANES] {
-    let mut t = V4(t0);
-    let mut lo = [0.0_f64; LANES];
-    let mut hi = [1.0_f64; LANES];
-    let mut iterations = [0u32; LANES];
-    let mut done = [false; LANES];
-    let mut fallback = [false; LANES];
-    // Where each lane stopped, and whether it took the last Newton step.
-    let mut stop = [0.0_f64; LANES];
-    let mut next_at_stop = [0.0_f64; LANES];
-    let mut take_next = [false; LANES];
-    while done.iter().any(|d| !d) {
-        let (n1, n2, pab) = forms.newton_terms(t);
-        let p = t * (V4::splat(1.0) - t);
-        let next = t - p * n1 * pab / ((V4::splat(1.0) - V4::splat(2.0) * t) * n1 * pab + p * n2);
+pub(crate) fn maximise4<const FMA: bool>(
+    odds: &OddsForm<V4>,
+    u0: [f64; LANES],
+) -> [OddsSearch; LANES] {
+    let mut search = u0.map(OddsSearch::new);
+    while search.iter().any(|s| !s.done) {
+        let (p, n, v, step) = odds.halley_terms::<FMA>(V4::from_fn(|k| search[k].u));
         // Left to itself the optimiser sinks these lane-wise computations into the per-lane
         // loop below (a stopped lane does not use its values) and computes them one lane at a
         // time, undoing the vectorisation; materialising them keeps the four lanes together.
-        let (n1, n2, pab, next) = core::hint::black_box((n1, n2, pab, next));
-        for k in 0..LANES {
-            if done[k] {
-                continue;
+        let (p, n, v, step) = core::hint::black_box((p, n, v, step));
+        for (k, s) in search.iter_mut().enumerate() {
+            if !s.done {
+                s.advance((p.0[k], n.0[k], v.0[k], step.0[k]));
             }
-            let tk = t.0[k];
-            iterations[k] += 1;
-            if !crate::arith::is_positive(pab.0[k] - 1e-60) {
-                done[k] = true;
-                fallback[k] = true;
-                continue;
-            }
-            let (n1, n2) = (n1.0[k], n2.0[k]);
-            if n1 > 0.0 {
-                lo[k] = tk;
-            } else {
-                hi[k] = tk;
-            }
-            let nx = next.0[k];
-            let inside = nx > lo[k] && nx < hi[k];
-            let converged = n1 * n1 < -2e-12 * n2;
-            if converged || !crate::arith::is_positive(-n2) || iterations[k] >= 200 {
-                done[k] = true;
-                stop[k] = tk;
-                next_at_stop[k] = nx;
-                take_next[k] = inside && converged;
-                continue;
-            }
-            let nx = if inside {
-                nx
-            } else if lo[k] > 0.0 && hi[k] > 16.0 * lo[k] {
-                (lo[k] * hi[k]).sqrt()
-            } else {
-                0.5 * (lo[k] + hi[k])
-            };
-            if nx == tk || hi[k] - lo[k] <= 4.0 * f64::EPSILON * tk {
-                done[k] = true;
-                stop[k] = tk;
-                next_at_stop[k] = tk;
-                continue;
-            }
-            t.0[k] = nx;
         }
     }
-    let f_stop = forms.f(V4(stop));
-    let f_next = forms.f(V4(next_at_stop));
-    core::array::from_fn(|k| {
-        if take_next[k] {
-            LaneResult {
-                t: next_at_stop[k],
-                f: f_next.0[k].max(f_stop.0[k]),
-                fallback: fallback[k],
-            }
-        } else {
-            LaneResult {
-                t: stop[k],
-                f: f_stop.0[k],
-                fallback: fallback[k],
-            }
-        }
-    })
+    search
 }

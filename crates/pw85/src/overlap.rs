@@ -16,10 +16,15 @@
 
 use crate::arith::Mag;
 use crate::arith::is_positive;
-use crate::contact::{check_finite, check_positive_definite, check_positive_definite_2d};
+use crate::contact::{
+    Scale, check_finite, check_inputs_finite, check_positive_definite, check_positive_definite_2d,
+    orient,
+};
 use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
-use crate::poly::{Coefficients, RationalForm, coefficients_2d};
+use crate::poly::{
+    OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at,
+};
 use crate::sym::{
     Sym2, Sym3, adjugate_generic, det_generic, frobenius_generic, mixed_adjugate_generic,
     outer_generic, quadratic_form_generic,
@@ -53,14 +58,12 @@ multiversion! {
     /// # Ok::<(), pw85::Error>(())
     /// ```
     pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
-        => overlap_portable;
+        => fused overlap_portable;
 }
 
 #[inline(always)]
-fn overlap_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    check_finite(Argument::R12, r12)?;
-    check_finite(Argument::Q1, q1)?;
-    check_finite(Argument::Q2, q2)?;
+fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
+    check_inputs_finite(r12, q1, q2)?;
     let adj1 = adjugate_generic(q1);
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
@@ -80,7 +83,7 @@ fn overlap_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
 
     let rr = outer_generic::<f64>(r12);
     let mixed = mixed_adjugate_generic(q1, q2);
-    let fast = Coefficients {
+    let fast = RationalForm {
         alpha: [
             quadratic_form_generic(&rr, &adj1),
             quadratic_form_generic(&rr, &mixed),
@@ -101,7 +104,7 @@ fn overlap_portable(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
         k_a: 6.0,
         dim: 3,
     };
-    match bounded_search(&fast.to_f64(), &bound) {
+    match bounded_search::<FMA>(&fast, &bound) {
         Some(verdict) => Ok(verdict),
         None => Ok(crate::contact_function(r12, q1, q2)?.mu2 < 1.0),
     }
@@ -113,11 +116,15 @@ multiversion! {
     /// # Errors
     /// As [`crate::contact_function_2d`].
     pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error>
-        => overlap_2d_portable;
+        => fused overlap_2d_portable;
 }
 
 #[inline(always)]
-fn overlap_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
+fn overlap_2d_portable<const FMA: bool>(
+    r12: &[f64; 2],
+    q1: &Sym2,
+    q2: &Sym2,
+) -> Result<bool, Error> {
     check_finite(Argument::R12, r12)?;
     check_finite(Argument::Q1, q1)?;
     check_finite(Argument::Q2, q2)?;
@@ -142,7 +149,7 @@ fn overlap_2d_portable(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Err
         k_a: 2.0,
         dim: 2,
     };
-    match bounded_search(&fast.to_f64(), &bound) {
+    match bounded_search::<FMA>(&fast.to_f64(), &bound) {
         Some(verdict) => Ok(verdict),
         None => Ok(crate::contact_function_2d(r12, q1, q2)?.mu2 < 1.0),
     }
@@ -192,12 +199,27 @@ struct CrudeBound {
 }
 
 impl CrudeBound {
-    /// Relative error bound of f(λ) given the unnormalised a(λ) and b(λ).
-    fn relative(&self, lambda: f64, a: f64, b: f64) -> f64 {
-        let d = (1.0 - lambda) * self.d1 + lambda * self.d2;
-        let dn = d.powi(self.dim - 1);
+    /// Relative error bound of f at the odds u (see [`crate::poly::OddsForm`]) of the oriented
+    /// pencil, given the unnormalised A(u) and B(u). With s = 1/(1 + u), a = s²A, b = s³B and
+    /// D = s E, E = d₁ + u d₂ (d₁, d₂ swapped when the pencil is reversed), the bound
+    /// k_b D^dim / b + k_a |r|² D^(dim−1) / a is s^(dim−3) (k_b E^dim / B + k_a |r|² E^(dim−1) / A):
+    /// one division.
+    #[inline(always)]
+    fn relative(&self, u: f64, reversed: bool, a: f64, b: f64) -> f64 {
+        let (d1, d2) = if reversed {
+            (self.d2, self.d1)
+        } else {
+            (self.d1, self.d2)
+        };
+        let e = d1 + u * d2;
+        let (en, w) = if self.dim == 3 {
+            (e * e, 1.0)
+        } else {
+            (e, 1.0 + u)
+        };
         const GAMMA: f64 = 10.0 * 0.5 * f64::EPSILON;
-        GAMMA * (self.k_b * dn * d / b + self.k_a * self.r2 * dn / a) + 8.0 * 0.5 * f64::EPSILON
+        GAMMA * w * (self.k_b * en * e * a + self.k_a * self.r2 * en * b) / (a * b)
+            + 8.0 * 0.5 * f64::EPSILON
     }
 }
 
@@ -213,6 +235,9 @@ struct Tangent {
 /// of the two lines, or the one line at the far end of the interval.
 fn tangent_bound(lo: Option<Tangent>, hi: Option<Tangent>) -> f64 {
     match (lo, hi) {
+        // Rounding noise in the sign of f′ next to the maximiser can leave the two sides out
+        // of order; no bound is claimed then.
+        (Some(l), Some(h)) if l.lambda > h.lambda => f64::INFINITY,
         (Some(l), Some(h)) => {
             // f_l + s_l (x − λ_l) = f_h + s_h (x − λ_h), s_l > 0 > s_h.
             let x = (h.f - l.f + l.slope * l.lambda - h.slope * h.lambda) / (l.slope - h.slope);
@@ -224,59 +249,85 @@ fn tangent_bound(lo: Option<Tangent>, hi: Option<Tangent>) -> f64 {
     }
 }
 
-/// The bracketed Newton iteration of [`RationalForm::maximise`], stopped as soon as a lower
-/// bound f(λ) exceeds 1 or the tangent upper bound falls below 1, beyond the rounding margin.
-/// `None` when neither happens: the caller must compute μ² accurately.
+/// The Halley iteration of [`crate::contact_function`] (on the odds u = λ / (1 − λ), see
+/// [`crate::poly::OddsForm`]), stopped as soon as a lower bound f(λ) exceeds 1 or the tangent
+/// upper bound falls below 1, beyond the rounding margin. `None` when neither happens: the
+/// caller must compute μ² accurately.
+///
+/// At each iterate the terms of the step give the bounds almost for free: f = u A / ((1 + u) B)
+/// (eq. 15) and, since p = u (1 + u) A B (ln f)′(u) and dλ/du = (1 + u)⁻², the slope in λ is
+/// df/dλ = p / B². The tangent lines are taken in the solver's orientation (λ or 1 − λ), in
+/// which f is concave as well.
 #[inline(always)]
-fn bounded_search(rational: &RationalForm, bound: &CrudeBound) -> Option<bool> {
-    let alpha = rational.alpha.iter().fold(0.0_f64, |m, &x| m.max(x));
-    let beta = rational.beta.iter().fold(0.0_f64, |m, &x| m.max(x));
-    if !is_positive(alpha) {
+fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) -> Option<bool> {
+    if !is_positive(rational.alpha.iter().fold(0.0_f64, |m, &x| m.max(x))) {
         // r12 = 0: μ² = 0.
         return Some(true);
     }
-    let n = RationalForm {
-        alpha: rational.alpha.map(|x| (x / alpha).max(0.0)),
-        beta: rational.beta.map(|x| (x / beta).max(0.0)),
-    };
-    let scale = alpha / beta;
+    let scale = Scale::of(rational)?;
+    let (form, u0, reversed) = orient(&scale.apply(rational));
+    // The step's polynomials are formed only if the first iterate does not decide (most
+    // verdicts need only p there).
+    let p_coefficients = odds_numerator(&form.alpha, &form.beta);
+    let mut odds: Option<OddsForm<f64>> = None;
+    let mut search = OddsSearch::new(u0);
+    let [a0, a1, a2] = form.alpha;
+    let [b0, b1, b2, b3] = form.beta;
+    let ratio = scale.ratio();
+    let (a_scale, b_scale) = scale.powers();
     let (mut lo, mut hi): (Option<Tangent>, Option<Tangent>) = (None, None);
-    let mut t = n.initial_guess();
-    for _ in 0..MAX_ITERATIONS {
-        let d = n.log_derivatives(t);
-        let f = d.f * scale;
-        let err = bound.relative(t, n.a(t) * alpha, n.b(t) * beta);
-        if err > 1e-3 {
+    for iteration in 0..MAX_ITERATIONS {
+        let u = search.u;
+        let p = odds_numerator_at::<FMA>(&p_coefficients, u);
+        let u2 = u * u;
+        let big_a = (a0 + a1 * u) + a2 * u2;
+        let big_b = (b0 + b1 * u) + (b2 + b3 * u) * u2;
+        let s = 1.0 / (1.0 + u);
+        let f = u * big_a / ((1.0 + u) * big_b) * ratio;
+        let err = bound.relative(u, reversed, big_a * a_scale, big_b * b_scale);
+        // NaN (a degenerate pencil) gives up too.
+        if !is_positive(1e-3 - err) {
             return None;
-        }
-        if f * (1.0 - err) > 1.0 {
-            return Some(false);
         }
         let tangent = Tangent {
-            lambda: t,
+            lambda: u * s,
             f,
-            slope: f * d.g1,
+            slope: p / (big_b * big_b) * ratio,
         };
-        if d.g1 > 0.0 {
-            lo = Some(tangent);
+        let upper = if iteration == 0 {
+            // The first tangent alone bounds f at the far end of [0, 1]: at 1 where f rises
+            // (p > 0), at 0 where it falls; what [`tangent_bound`] computes, written as a
+            // select so that the side, a coin toss, costs no mispredicted branch.
+            let end = if p > 0.0 { 1.0 } else { 0.0 };
+            tangent.f + tangent.slope * (end - tangent.lambda)
         } else {
-            hi = Some(tangent);
+            if p > 0.0 {
+                lo = Some(tangent);
+            } else {
+                hi = Some(tangent);
+            }
+            tangent_bound(lo, hi)
+        };
+        // A lower bound above 1 proves separation, an upper bound below 1 overlap (the slope
+        // carries a larger relative error than f; 10× the margin of f covers it). Both tests
+        // before one branch: the verdict itself is data, not control flow.
+        let separated = f * (1.0 - err) > 1.0;
+        let overlapping = upper + 10.0 * err * (f + upper) < 1.0;
+        if separated || overlapping {
+            return Some(!separated);
         }
-        let upper = tangent_bound(lo, hi);
-        // The slope carries a larger relative error than f; 10× the margin of f covers it.
-        if upper + 10.0 * err * (f + upper) < 1.0 {
-            return Some(true);
+        if iteration == 0 {
+            if p > 0.0 {
+                lo = Some(tangent);
+            } else {
+                hi = Some(tangent);
+            }
         }
-        let (lo_t, hi_t) = (lo.map_or(0.0, |l| l.lambda), hi.map_or(1.0, |h| h.lambda));
-        let ts = t * (1.0 - t);
-        let mut next = t - ts * d.g1 / ((1.0 - 2.0 * t) * d.g1 + ts * d.g2);
-        if !(next > lo_t && next < hi_t) {
-            next = 0.5 * (lo_t + hi_t);
-        }
-        if next == t {
+        if search.done {
             return None;
         }
-        t = next;
+        let odds = odds.get_or_insert_with(|| OddsForm::new(&form.alpha, &form.beta));
+        search.advance(odds.halley_terms::<FMA>(u));
     }
     None
 }
