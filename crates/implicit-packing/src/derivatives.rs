@@ -39,7 +39,8 @@
 
 use crate::linalg::torque;
 use crate::pair::{
-    PairSolution, bounding_spheres_apart, separated_along_centre_line, solve_pair, solve_pair_with,
+    PairSolution, bounding_spheres_apart, centre_line, certified_separated, direct_solution,
+    setup_from, solve_direct, solve_pair_with, solve_svd,
 };
 use crate::shape::{Body, angular_velocities_3d};
 
@@ -69,6 +70,7 @@ impl<const N: usize> PairGradient<N> {
         torque_j: [0.0; 3],
     };
 
+    #[inline(always)]
     fn axpy(&mut self, a: f64, other: &Self) {
         for k in 0..N {
             self.centre_i[k] += a * other.centre_i[k];
@@ -169,6 +171,7 @@ fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Fr
     Frames { delta, y, force }
 }
 
+#[inline(always)]
 fn grad_d2<const N: usize>(fr: &Frames<N>) -> PairGradient<N> {
     let mut lever_i = [0.0; N];
     for k in 0..N {
@@ -272,11 +275,67 @@ pub fn pair_derivatives<const N: usize>(i: &Body<N>, j: &Body<N>) -> PairDerivat
 /// The pair term `f` and its gradient, doing only the work that is needed: nothing when the
 /// bounding spheres are apart or the centre-line plane separates the pair, no `∇U` unless
 /// `U < ε`, no gradient at all when `f = 0`.
+#[inline]
 pub fn pair_gradient<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>) {
-    if bounding_spheres_apart(i, j) || separated_along_centre_line(i, j) {
+    // The bounding-sphere exit ahead of the dispatch, as in `overlap_measure`.
+    if bounding_spheres_apart(i, j) {
         return (0.0, PairGradient::ZERO);
     }
-    let sol = solve_pair(i, j);
+    crate::linalg::multiversion!(
+        pair_gradient_impl::<N>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>)
+    )
+}
+
+/// [`pair_gradient`], compiled twice (see `linalg::multiversion`): everything on its fast path
+/// is `#[inline(always)]` so that it is compiled with the caller's instruction set.
+#[inline(always)]
+fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>) {
+    let line = centre_line(i, j);
+    if certified_separated(i, j, &line) {
+        return (0.0, PairGradient::ZERO);
+    }
+    let st = setup_from(i, j, &line);
+    // The common case in a packing, on the direct route with U ≥ ε: only ∇d² is needed, and
+    // it is assembled straight from the direct solution (the eigenbasis is the i-frame) as
+    // `frames` and `grad_d2` below do, without building a `PairSolution`.
+    let direct = solve_direct(&st);
+    if let Some(d) = &direct
+        && d.u >= st.eps
+    {
+        let a = (1.0 - d.d2).max(0.0);
+        if a == 0.0 {
+            return (0.0, PairGradient::ZERO);
+        }
+        let q = i.rotation();
+        let l = i.semi_axes();
+        let ci = i.centre();
+        let cj = j.centre();
+        let mut fr = Frames {
+            delta: [0.0; N],
+            y: [0.0; N],
+            force: [0.0; N],
+        };
+        let mut ys = [0.0; N];
+        let mut fs = [0.0; N];
+        for m in 0..N {
+            fr.delta[m] = ci[m] - cj[m];
+            ys[m] = d.x[m] * l[m];
+            fs[m] = 2.0 * d.c_minus_x[m] * st.inv_li[m];
+        }
+        for r in 0..N {
+            for m in 0..N {
+                fr.y[r] += q[r][m] * ys[m];
+                fr.force[r] += q[r][m] * fs[m];
+            }
+        }
+        let mut gf = PairGradient::ZERO;
+        gf.axpy(-2.0 * a, &grad_d2(&fr));
+        return (a * a, gf);
+    }
+    let sol = match direct {
+        Some(d) => direct_solution(&st, &d),
+        None => solve_svd(&st),
+    };
     let a = (1.0 - sol.proj.d2).max(0.0);
     let b = (sol.eps - sol.proj.u).max(0.0);
     if a == 0.0 && b == 0.0 {

@@ -18,11 +18,43 @@
 //! 13 (1992). J. Demmel et al., *Computing the singular value decomposition with high relative
 //! accuracy*, Linear Algebra Appl. 299 (1999). Z. Drmač, *A QR-preconditioned QR SVD method*, 1997.
 
+/// Evaluates `$f::<N>($args)` compiled with AVX2 and FMA when the processor has them, else for
+/// the baseline x86-64 (SSE2); `$f` must be `#[inline(always)]` (and so must what it calls on
+/// its hot path) to be compiled with the caller's instruction set.
+///
+/// Why: the kernels are chains of dependent 3×3 products; the AVX encoding's three-operand
+/// instructions remove the register copies that the two-operand SSE2 form needs. The
+/// arithmetic is the same: no fused multiply–add is introduced (Rust does not contract
+/// `a * b + c`), so both builds give the same bits. The same scheme as `pw85`'s `dispatch`.
+macro_rules! multiversion {
+    ($f:ident::<$n:ident>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx2,fma")]
+            fn with_avx2<const $n: usize>($($arg: $ty),*) -> $ret {
+                $f::<$n>($($arg),*)
+            }
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: `with_avx2` only needs AVX2 and FMA, and the processor was just
+                // checked to have both.
+                return unsafe { with_avx2::<$n>($($arg),*) };
+            }
+        }
+        $f::<$n>($($arg),*)
+    }};
+}
+pub(crate) use multiversion;
+
 /// Dot product.
 #[inline(always)]
 pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
-    let mut s = 0.0;
-    for k in 0..N {
+    // Started from the first product, not from 0.0: `0.0 + x` cannot be folded (it turns
+    // −0 into +0), and that one extra addition lengthened every dependent 3×3 product of the
+    // pair kernel by a third.
+    let mut s = a[0] * b[0];
+    for k in 1..N {
         s += a[k] * b[k];
     }
     s
@@ -33,8 +65,8 @@ pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
 pub(crate) fn mat_t_vec<const N: usize>(q: &[[f64; N]; N], v: &[f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     for k in 0..N {
-        let mut s = 0.0;
-        for m in 0..N {
+        let mut s = q[0][k] * v[0];
+        for m in 1..N {
             s += q[m][k] * v[m];
         }
         out[k] = s;

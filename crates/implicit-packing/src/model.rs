@@ -25,8 +25,13 @@
 //! call no memory is allocated unless `m` grows (serial path; with the `rayon` feature each task
 //! collects its pair gradients in a vector of its own, scattered serially afterwards). A
 //! value-only call does no gradient work. Pairs are skipped at once when their enclosing balls
-//! are apart (the grid) or the plane orthogonal to the centre line separates them; the rest take
-//! the fast direct solve when it applies ([`crate::pair`]).
+//! are apart (the grid) or the plane orthogonal to the centre line separates them with a margin
+//! (an exact certificate: the pair term is then exactly zero, value and gradient, see
+//! [`crate::pair::separated_along_centre_line`]); the rest take the fast direct solve when it
+//! applies ([`crate::pair`]). Each ellipsoid's rotation and the angular velocities of its angles
+//! are computed once per evaluation, from one set of sines and cosines; pair gradients add
+//! forces to the centres and torques to a per-ellipsoid buffer, which is turned into angle
+//! derivatives once per ellipsoid at the end.
 //!
 //! # References
 //! Birgin, Lobato, Martínez (2016), eqs. (18)–(19), (33)–(34), (37), Section 5.2.
@@ -43,7 +48,7 @@ use crate::error::Error;
 use crate::pair::overlap_measure;
 use crate::shape::{
     Body, MAX_MAGNITUDE, angles_from_rotation, angular_velocities_3d, check_semi_axes, rotation_2d,
-    rotation_3d,
+    rotation_and_velocities_3d,
 };
 
 /// Values of the model at one point.
@@ -137,6 +142,12 @@ pub struct Problem<const N: usize> {
     kind: ContainerKind,
     bodies: Vec<Body<N>>,
     centres: Vec<[f64; N]>,
+    // Per ellipsoid, computed once per evaluation by `load`: the angular velocities ω_α of its
+    // angles (eq. 1/2; row α, world frame), which turn a torque into angle derivatives. The
+    // pair gradients only accumulate torques (`torques`), and each ellipsoid's are turned into
+    // angle derivatives once, instead of once per pair (that cost two `sin_cos` per side).
+    spins: Vec<[[f64; 3]; 3]>,
+    torques: Vec<[f64; 3]>,
     grid: Option<cell_grid::Grid<N>>,
 }
 
@@ -168,6 +179,8 @@ impl<const N: usize> Problem<N> {
             kind,
             bodies: Vec::new(),
             centres: Vec::new(),
+            spins: Vec::new(),
+            torques: Vec::new(),
             grid: None,
         })
     }
@@ -228,11 +241,13 @@ impl<const N: usize> Problem<N> {
             Container::from_dimensions(self.kind, &x[self.len() * Self::vars_per_body()..])?;
         self.bodies.clear();
         self.centres.clear();
+        self.spins.clear();
         let stride = Self::vars_per_body();
         for (i, l) in self.semi_axes.iter().enumerate() {
-            let body = make_body(l, &x[i * stride..(i + 1) * stride]);
+            let (body, spin) = make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
             self.centres.push(body.centre());
             self.bodies.push(body);
+            self.spins.push(spin);
         }
         match self.grid.as_mut() {
             Some(g) => g
@@ -246,30 +261,6 @@ impl<const N: usize> Problem<N> {
             }
         }
         Ok(container)
-    }
-
-    /// Scatters a pair or containment gradient of body `i` into `out`.
-    fn scatter_body(
-        x: &[f64],
-        out: &mut [f64],
-        i: usize,
-        centre: &[f64; N],
-        torque: &[f64; 3],
-        weight: f64,
-    ) {
-        let stride = Self::vars_per_body();
-        let base = i * stride;
-        for k in 0..N {
-            out[base + k] += weight * centre[k];
-        }
-        if N == 2 {
-            out[base + 2] += weight * torque[2];
-        } else {
-            let g = angle_gradient_3d([x[base + 3], x[base + 4], x[base + 5]], torque);
-            for k in 0..3 {
-                out[base + 3 + k] += weight * g[k];
-            }
-        }
     }
 
     /// Evaluates the model at `x`; fills `gradient` (resized to the variable count) when given.
@@ -292,6 +283,7 @@ impl<const N: usize> Problem<N> {
         let nb = self.len() * Self::vars_per_body();
         let grid = self.grid.as_ref().ok_or(Error::Empty)?;
         let bodies = &self.bodies;
+        let spins = &self.spins;
         match gradient {
             None => {
                 let (sum, count) = pair_sum_value(grid, bodies);
@@ -304,7 +296,8 @@ impl<const N: usize> Problem<N> {
             }
             Some(g) => {
                 g.reset(x.len());
-                let (sum, count) = pair_sum_gradient(grid, bodies, x, &mut g.overlap);
+                let (sum, count) =
+                    pair_sum_gradient(grid, bodies, spins, &mut self.torques, &mut g.overlap);
                 ev.overlap = sum;
                 ev.pairs = count;
                 for (i, b) in bodies.iter().enumerate() {
@@ -313,7 +306,7 @@ impl<const N: usize> Problem<N> {
                         continue;
                     }
                     ev.containment += r;
-                    Self::scatter_body(x, &mut g.containment, i, &cg.centre, &cg.torque, 1.0);
+                    scatter_force_torque(&mut g.containment, i, &cg.centre, &cg.torque, &spins[i]);
                     for k in 0..self.kind.dimension_count(N) {
                         g.containment[nb + k] += cg.container[k];
                     }
@@ -655,18 +648,69 @@ fn pair_sum_value<const N: usize>(grid: &cell_grid::Grid<N>, bodies: &[Body<N>])
     )
 }
 
-fn add_pair<const N: usize>(x: &[f64], out: &mut [f64], i: usize, j: usize, g: &PairGradient<N>) {
-    Problem::<N>::scatter_body(x, out, i, &g.centre_i, &g.torque_i, 1.0);
-    Problem::<N>::scatter_body(x, out, j, &g.centre_j, &g.torque_j, 1.0);
+/// Adds a force and a torque on body `b` to `out`: the force on its centre, and on its angle
+/// `α` the derivative `ω_α · τ` (`spin` holds the rows `ω_α`, precomputed by `load`).
+#[inline(always)]
+fn scatter_force_torque<const N: usize>(
+    out: &mut [f64],
+    b: usize,
+    force: &[f64; N],
+    torque: &[f64; 3],
+    spin: &[[f64; 3]; 3],
+) {
+    let stride = Problem::<N>::vars_per_body();
+    let base = b * stride;
+    for k in 0..N {
+        out[base + k] += force[k];
+    }
+    for a in 0..angle_count(N) {
+        out[base + N + a] +=
+            spin[a][0] * torque[0] + spin[a][1] * torque[1] + spin[a][2] * torque[2];
+    }
+}
+
+/// Adds a pair gradient to `out` (centres) and `torques` (per body, turned into angle
+/// derivatives by [`torques_to_angles`] once all pairs are summed).
+#[inline(always)]
+fn add_pair<const N: usize>(
+    out: &mut [f64],
+    torques: &mut [[f64; 3]],
+    i: usize,
+    j: usize,
+    g: &PairGradient<N>,
+) {
+    let stride = Problem::<N>::vars_per_body();
+    for k in 0..N {
+        out[i * stride + k] += g.centre_i[k];
+        out[j * stride + k] += g.centre_j[k];
+    }
+    for k in 0..3 {
+        torques[i][k] += g.torque_i[k];
+        torques[j][k] += g.torque_j[k];
+    }
+}
+
+/// `∂/∂α_b = ω_α · Σ_pairs τ_b` for every body: the angle part of the overlap gradient.
+fn torques_to_angles<const N: usize>(
+    out: &mut [f64],
+    torques: &[[f64; 3]],
+    spins: &[[[f64; 3]; 3]],
+) {
+    for (b, (t, spin)) in torques.iter().zip(spins).enumerate() {
+        scatter_force_torque::<N>(out, b, &[0.0; N], t, spin);
+    }
 }
 
 #[cfg(not(feature = "rayon"))]
 fn pair_sum_gradient<const N: usize>(
     grid: &cell_grid::Grid<N>,
     bodies: &[Body<N>],
-    x: &[f64],
+    spins: &[[[f64; 3]; 3]],
+    torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> (f64, usize) {
+    torques.clear();
+    torques.resize(bodies.len(), [0.0; 3]);
     let mut sum = 0.0;
     let mut count = 0;
     grid.for_each_close_pair(|i, j, _, _| {
@@ -674,9 +718,10 @@ fn pair_sum_gradient<const N: usize>(
         let (f, g) = pair_gradient(&bodies[i], &bodies[j]);
         if f > 0.0 {
             sum += f;
-            add_pair(x, out, i, j, &g);
+            add_pair(out, torques, i, j, &g);
         }
     });
+    torques_to_angles::<N>(out, torques, spins);
     (sum, count)
 }
 
@@ -684,7 +729,8 @@ fn pair_sum_gradient<const N: usize>(
 fn pair_sum_gradient<const N: usize>(
     grid: &cell_grid::Grid<N>,
     bodies: &[Body<N>],
-    x: &[f64],
+    spins: &[[[f64; 3]; 3]],
+    torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> (f64, usize) {
     // Each task collects its non-zero pair gradients; they are scattered serially, so the
@@ -706,17 +752,27 @@ fn pair_sum_gradient<const N: usize>(
             a
         },
     );
+    torques.clear();
+    torques.resize(bodies.len(), [0.0; 3]);
     for (i, j, g) in &terms {
-        add_pair(x, out, *i, *j, g);
+        add_pair(out, torques, *i, *j, g);
     }
+    torques_to_angles::<N>(out, torques, spins);
     (sum, count)
 }
 
 /// A body from its variables `[c, Ω]` (crate-built rotation, orthogonal by construction).
 fn make_body<const N: usize>(l: &[f64; N], vars: &[f64]) -> Body<N> {
+    make_body_and_spins(l, vars).0
+}
+
+/// A body from its variables `[c, Ω]` and the angular velocities `ω_α` of its angles (rows;
+/// 2D: `ω_θ = e_z`), from one set of sines and cosines.
+fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, [[f64; 3]; 3]) {
     let mut c = [0.0; N];
     c.copy_from_slice(&vars[..N]);
     let mut q = [[0.0; N]; N];
+    let mut spin = [[0.0; 3]; 3];
     if N == 2 {
         let r = rotation_2d(vars[2]);
         for a in 0..2 {
@@ -724,15 +780,17 @@ fn make_body<const N: usize>(l: &[f64; N], vars: &[f64]) -> Body<N> {
                 q[a][b] = r[a][b];
             }
         }
+        spin[0][2] = 1.0;
     } else {
-        let r = rotation_3d([vars[3], vars[4], vars[5]]);
+        let (r, w) = rotation_and_velocities_3d([vars[3], vars[4], vars[5]]);
         for a in 0..N {
             for b in 0..N {
                 q[a][b] = r[a][b];
             }
         }
+        spin = w;
     }
-    Body::from_parts_unchecked(c, *l, q)
+    (Body::from_parts_unchecked(c, *l, q), spin)
 }
 
 /// The pair direction of `v` for the bodies `i`, `j`: centre velocities and world angular

@@ -291,3 +291,72 @@ proptest! {
         prop_assert!(p.f.is_finite() && p.f >= 0.0 && p.u.is_finite() && p.d2.is_finite(), "{:?}", p);
     }
 }
+
+/// Pairs with a common rotation, centres along a common principal axis `k`: `c` lies on an
+/// eigenvector of `S` and the projection is the vertex, `U = l_jk (D − l_jk) / l_ik²`,
+/// `d = (D − l_jk) / l_ik`. The root of the secular equation is then at the end of its initial
+/// bracket, `(|b| − 1)/s_k`, where the safeguarded Newton once stopped 1e-9 short (found by
+/// the separation-certificate test, `tests/separation.rs`). Both routes, 2D and 3D.
+#[test]
+fn aligned_pairs_match_the_closed_form() {
+    use implicit_packing::{Route, pair_term_by};
+    let mut rng = Rng(47);
+    let mut worst = 0.0f64;
+    for n in 0..4000 {
+        // j down to 1e-3 times the size of i, where the bracket-end root was found; not much
+        // larger than i, where |c| ≫ d and the rounding of the centres alone moves d² by
+        // |c| ε (input conditioning, not the solver).
+        let size = 10f64.powf(rng.range(-3.0, 0.5));
+        let li = [
+            rng.range(0.3, 1.0),
+            rng.range(0.3, 1.0),
+            rng.range(0.3, 1.0),
+        ];
+        let lj = [
+            size * rng.range(0.3, 1.0),
+            size * rng.range(0.3, 1.0),
+            size * rng.range(0.3, 1.0),
+        ];
+        let k = n % 3;
+        let dist = (li[k] + lj[k]) * (1.0 + 10f64.powf(rng.range(-12.0, 0.0)));
+        let u_exact = lj[k] * (dist - lj[k]) / (li[k] * li[k]);
+        let d2_exact = ((dist - lj[k]) / li[k]).powi(2);
+        let angles = [
+            rng.range(-3.0, 3.0),
+            rng.range(-1.5, 1.5),
+            rng.range(-3.0, 3.0),
+        ];
+        let i = Body::from_angles([0.0; 3], li, angles).unwrap();
+        let q = i.rotation();
+        let j = Body::from_angles([q[0][k] * dist, q[1][k] * dist, q[2][k] * dist], lj, angles)
+            .unwrap();
+        let i2 = Ellipse::ellipse([0.0; 2], [li[0], li[1]], angles[0]).unwrap();
+        let q2 = i2.rotation();
+        let k2 = n % 2;
+        let dist2 = (li[k2] + lj[k2]) * (1.0 + 10f64.powf(rng.range(-12.0, 0.0)));
+        let j2 = Ellipse::ellipse(
+            [q2[0][k2] * dist2, q2[1][k2] * dist2],
+            [lj[0], lj[1]],
+            angles[0],
+        )
+        .unwrap();
+        let u2_exact = lj[k2] * (dist2 - lj[k2]) / (li[k2] * li[k2]);
+        let d22_exact = ((dist2 - lj[k2]) / li[k2]).powi(2);
+        for route in [Route::Auto, Route::Svd] {
+            let t = pair_term_by(&i, &j, route);
+            let e = common::scaled_err(t.u, u_exact).max(common::scaled_err(t.d2, d2_exact));
+            assert!(
+                e <= 1e-13,
+                "3D {route:?} pair {n}: {t:?}, U {u_exact}, d² {d2_exact}"
+            );
+            let t2 = pair_term_by(&i2, &j2, route);
+            let e2 = common::scaled_err(t2.u, u2_exact).max(common::scaled_err(t2.d2, d22_exact));
+            assert!(
+                e2 <= 1e-13,
+                "2D {route:?} pair {n}: {t2:?}, U {u2_exact}, d² {d22_exact}"
+            );
+            worst = worst.max(e).max(e2);
+        }
+    }
+    println!("aligned pairs: worst error against the closed form {worst:.2e}");
+}
