@@ -144,15 +144,7 @@ impl<const N: usize> LatticeStart<N> {
 pub fn lattice_start_of<const N: usize>(problem: &Problem<N>, start: &LatticeStart<N>) -> Vec<f64> {
     let m = problem.len();
     let kind = problem.container_kind();
-    let mut l = [0.0_f64; N];
-    for axes in problem.semi_axes() {
-        for k in 0..N {
-            l[k] = l[k].max(axes[k]);
-        }
-    }
-    // Lattice neighbours are exactly tangent; a relative gap of 1e-9 keeps the start feasible
-    // under rounding.
-    let l = l.map(|v| v * (1.0 + 1e-9));
+    let l = crate::pack::lattice_semi_axes(problem);
     let reach = l.iter().fold(0.0_f64, |a, &b| a.max(b));
     let aspect = if kind == ContainerKind::Ball {
         [1.0; N]
