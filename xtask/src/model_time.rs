@@ -59,7 +59,9 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     }
     let l = [axes[0], axes[1], axes[2]];
     let w = s.workload(run.quick);
-    let counts: Vec<usize> = s.scene.item_counts.clone();
+    let counts: Vec<usize> = (s.scene.item_counts.iter().copied())
+        .filter(|&m| w.max_items == 0 || m <= w.max_items)
+        .collect();
     if counts.is_empty() {
         return Err(s.value_error("item_counts", 0..0, "needs a non-empty list"));
     }

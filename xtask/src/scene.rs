@@ -110,6 +110,10 @@ pub struct Workload {
     /// Largest m for which the all-pairs sum is evaluated (it costs m²/2 pair terms).
     #[serde(default)]
     pub all_pairs_up_to: usize,
+    /// Largest number of items a study sweeps (0: no limit), so that quick runs skip the
+    /// largest scenes.
+    #[serde(default)]
+    pub max_items: usize,
     /// Wall-time limit in seconds (multi-start runs).
     #[serde(default)]
     pub seconds: f64,

@@ -107,10 +107,19 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             }
         }
     };
+    // One row per finished local minimisation, written beside the packing as history.csv.
+    let mut history = String::from("local_minimisation,seconds,density,best_density\n");
     let outcome = run(
         &scene,
         &options,
         &mut |p| {
+            history.push_str(&format!(
+                "{},{:.3},{:.9},{:.9}\n",
+                p.local_minimisations,
+                p.elapsed.as_secs_f64(),
+                p.last_density,
+                p.best_density
+            ));
             best.store(p.best_density.to_bits(), Ordering::Relaxed);
             bar.set_message(format!(
                 "{} local minimisations, last density {:.5}, best certified density {:.5}",
@@ -123,6 +132,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     bar.finish_and_clear();
 
     write_files(&out, &outcome.packing, &outcome.summary, scene.output.xyz)?;
+    ellipack::output::write_atomically(&out.join("history.csv"), history.as_bytes())?;
     if scene.output.pictures {
         let options = RenderOptions {
             width: scene.output.image_width,

@@ -113,6 +113,16 @@ fn run_n<const N: usize>(
         },
         perturbation: scene.solver.perturbation,
         seed: options.seed.unwrap_or(scene.seed),
+        // A resumed run continues from its packing; its lattice starts were tried before.
+        lattice_starts: if options.resume_from.is_some() {
+            0
+        } else {
+            usize::try_from(scene.solver.lattice_starts).unwrap_or(usize::MAX)
+        },
+        from_best: scene.solver.from_best,
+        perturbation_levels: scene.solver.perturbation_levels,
+        fresh_lattice_every: usize::try_from(scene.solver.fresh_lattice_every)
+            .unwrap_or(usize::MAX),
         threads,
         max_local_minimisations: scene
             .solver

@@ -27,6 +27,10 @@
 //! inner_solver = "projected-lbfgs"    # or "spg"
 //! perturbation = 0.025                # multi-start perturbation, relative (paper: 2.5 % in 2D,
 //!                                     # 10 % in 3D: the default follows the dimension)
+//! lattice_starts = 16                 # dense lattice starts before the perturbations
+//! from_best = true                    # perturb the best packing (false: the latest, as the paper)
+//! perturbation_levels = 3             # amplitudes perturbation, /2, /4 in turn (1: the paper's)
+//! fresh_lattice_every = 8             # every 8th later start a new lattice start (0: never)
 //!
 //! [output]                            # optional; the defaults are shown
 //! # directory = "out"                 # default directory (--out overrides it)
@@ -176,7 +180,21 @@ pub struct SolverSettings {
     /// Largest relative perturbation of centres and angles between multi-start iterations, in
     /// [0, 1) (default: 0.025 in 2D, 0.10 in 3D, the paper's Section 6).
     pub perturbation: f64,
+    /// Dense lattice starts (hexagonal / face-centred cubic, several orientations, shifts and
+    /// container aspects) tried after the first start and before any perturbation.
+    pub lattice_starts: u64,
+    /// Perturb the best packing so far (default) rather than, as the paper, the latest one.
+    pub from_best: bool,
+    /// Perturbations cycle through the amplitudes `perturbation / 2^k`, k < this (1: always
+    /// the full amplitude, as the paper).
+    pub perturbation_levels: u32,
+    /// Every this many later starts, one is a new dense lattice start (0: never).
+    pub fresh_lattice_every: u64,
 }
+
+/// Dense lattice starts of a run unless the scene says otherwise: four rounds of every
+/// lattice orientation in 3D, eight in 2D.
+pub const DEFAULT_LATTICE_STARTS: u64 = 16;
 
 /// Default wall-clock limit of a run.
 pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(60);
@@ -192,6 +210,10 @@ impl SolverSettings {
             local_minimisations: None,
             inner_solver: InnerSolver::default(),
             perturbation: default_perturbation(dimension),
+            lattice_starts: DEFAULT_LATTICE_STARTS,
+            from_best: true,
+            perturbation_levels: 3,
+            fresh_lattice_every: 8,
         }
     }
 }
@@ -282,6 +304,10 @@ struct RawSolver {
     local_minimisations: Option<Spanned<i64>>,
     inner_solver: Option<InnerSolver>,
     perturbation: Option<Spanned<f64>>,
+    lattice_starts: Option<Spanned<i64>>,
+    from_best: Option<bool>,
+    perturbation_levels: Option<Spanned<i64>>,
+    fresh_lattice_every: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -431,6 +457,18 @@ impl Scene {
         }
         line(&mut out, "inner_solver", toml_string(s.inner_solver.name()));
         line(&mut out, "perturbation", toml_float(s.perturbation));
+        line(&mut out, "lattice_starts", s.lattice_starts.to_string());
+        line(&mut out, "from_best", s.from_best.to_string());
+        line(
+            &mut out,
+            "perturbation_levels",
+            s.perturbation_levels.to_string(),
+        );
+        line(
+            &mut out,
+            "fresh_lattice_every",
+            s.fresh_lattice_every.to_string(),
+        );
         let o = &self.output;
         out.push_str("\n[output]\n");
         if let Some(dir) = &o.directory {
@@ -670,7 +708,33 @@ impl Validator<'_> {
             }
             s.perturbation = v;
         }
+        if let Some(n) = &raw.lattice_starts {
+            s.lattice_starts = self.count(n, "solver.lattice_starts", 0)?;
+        }
+        if let Some(n) = &raw.fresh_lattice_every {
+            s.fresh_lattice_every = self.count(n, "solver.fresh_lattice_every", 0)?;
+        }
+        if let Some(n) = &raw.perturbation_levels {
+            let v = self.count(n, "solver.perturbation_levels", 1)?;
+            s.perturbation_levels = u32::try_from(v.min(64)).unwrap_or(64);
+        }
+        if let Some(b) = raw.from_best {
+            s.from_best = b;
+        }
         Ok(s)
+    }
+
+    /// A whole number of at least `least` from the scene, or an error naming `key`.
+    fn count(&self, n: &Spanned<i64>, key: &str, least: i64) -> Result<u64, SceneError> {
+        let v = *n.get_ref();
+        if v < least {
+            return Err(self.error(
+                n.span(),
+                key,
+                format!("must be a whole number of at least {least}, not {v}"),
+            ));
+        }
+        Ok(v.unsigned_abs())
     }
 
     fn output(&self, raw: Option<RawOutput>) -> Result<OutputOptions, SceneError> {

@@ -262,6 +262,18 @@ fn impossible_values_are_named_with_their_line() {
         "[0, 1)",
     );
     assert_error(
+        &minimal_2d("[solver]\nperturbation_levels = 0\n"),
+        "solver.perturbation_levels",
+        8,
+        "at least 1",
+    );
+    assert_error(
+        &minimal_2d("[solver]\nlattice_starts = -2\n"),
+        "solver.lattice_starts",
+        8,
+        "at least 0",
+    );
+    assert_error(
         &minimal_2d("[solver]\nthreads = -1\n"),
         "solver.threads",
         8,

@@ -1,7 +1,9 @@
-//! One local minimisation from the paper's lattice start, certified and repaired:
-//! `cargo run --release -p implicit-packing --example local_minimisation -- 3 ball 100`.
+//! One local minimisation from the paper's lattice start (or, with a fourth argument `dense`,
+//! the face-centred cubic / hexagonal start of `implicit_packing::lattice`), certified and
+//! repaired: `cargo run --release -p implicit-packing --example local_minimisation -- 3 ball 100`.
 
 use implicit_packing::containment::ContainerKind;
+use implicit_packing::lattice::{LatticeStart, lattice_start_of};
 use implicit_packing::model::Problem;
 use implicit_packing::pack::{LocalSettings, lattice_start, local_minimisation};
 use std::time::Instant;
@@ -16,12 +18,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         other => return Err(format!("unknown container `{other}`").into()),
     };
     let m: usize = args.get(3).map_or(Ok(100), |s| s.parse())?;
+    let dense = match args.get(4).map_or("paper", String::as_str) {
+        "paper" => false,
+        "dense" => true,
+        other => return Err(format!("unknown start `{other}` (paper or dense)").into()),
+    };
     let settings = LocalSettings::default();
     let start = Instant::now();
+    // Outer iterations on stderr: a large m takes minutes.
+    let mut observe = |p: &auglag::Progress<'_>| {
+        if let auglag::Event::Outer {
+            objective,
+            infeasibility,
+            ..
+        } = p.event
+        {
+            eprintln!(
+                "{:8.1} s  outer {:3}  inner {:6}  evaluations {:7}  objective {objective:.6e}  \
+                 infeasibility {infeasibility:.2e}",
+                start.elapsed().as_secs_f64(),
+                p.outer_iteration,
+                p.total_inner_iterations,
+                p.evaluations
+            );
+        }
+        false
+    };
     let (density, before, factor, report, check) = if dim == 2 {
         let mut p = Problem::<2>::new(vec![[2.0, 1.0]; m], kind)?;
-        let x0 = lattice_start(&p);
-        let r = local_minimisation(&mut p, &x0, &settings, &mut |_| false)?;
+        let x0 = if dense {
+            lattice_start_of(&p, &LatticeStart::centred())
+        } else {
+            lattice_start(&p)
+        };
+        let r = local_minimisation(&mut p, &x0, &settings, &mut observe)?;
         let check = independent_check(&mut p, &r.x)?;
         (
             r.density,
@@ -32,8 +62,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
     } else {
         let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
-        let x0 = lattice_start(&p);
-        let r = local_minimisation(&mut p, &x0, &settings, &mut |_| false)?;
+        let x0 = if dense {
+            lattice_start_of(&p, &LatticeStart::centred())
+        } else {
+            lattice_start(&p)
+        };
+        let r = local_minimisation(&mut p, &x0, &settings, &mut observe)?;
         let check = independent_check(&mut p, &r.x)?;
         (
             r.density,

@@ -1,6 +1,8 @@
 //! A multi-start run on one of the paper's instances:
 //! `cargo run --release -p implicit-packing --example multistart -- 3 ball 100 60 2`
-//! (dimension, container, items, seconds, threads).
+//! (dimension, container, items, seconds, threads), then optionally: local minimisations
+//! (0: no cap), lattice starts, from best (0/1), perturbation levels, a fresh lattice start
+//! every n perturbations (0: never).
 
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::multistart::{MultiStartSettings, multistart, paper_start};
@@ -21,7 +23,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let threads: usize = arg(5, "2").parse()?;
     let mut settings = MultiStartSettings::paper(dim, 1);
     settings.threads = threads;
-    settings.max_local_minimisations = usize::MAX;
+    settings.max_local_minimisations = match arg(6, "0").parse()? {
+        0 => usize::MAX,
+        n => n,
+    };
+    settings.lattice_starts = arg(7, "0").parse()?;
+    settings.from_best = arg(8, "0").parse::<u8>()? == 1;
+    settings.perturbation_levels = arg(9, "1").parse()?;
+    settings.fresh_lattice_every = arg(10, "0").parse()?;
     settings.time_limit = Some(Duration::from_secs_f64(seconds));
     let mut report = |p: &implicit_packing::multistart::MultiStartProgress| {
         eprintln!(

@@ -15,6 +15,8 @@
 //!   and exact Hessian–vector products;
 //! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first
 //!   derivatives and exact Hessian–vector products;
+//! * [`lattice`]: dense lattice starts (hexagonal and face-centred cubic, cut to the
+//!   container);
 //! * [`model`]: the whole sum over the grid's candidate pairs (Section 5.2), containment and
 //!   objective, with gradients, Hessian–vector products and a PW85 certificate.
 //!
@@ -29,6 +31,7 @@
 pub mod containment;
 pub mod derivatives;
 pub mod error;
+pub mod lattice;
 pub(crate) mod linalg;
 pub mod model;
 pub mod multistart;

@@ -2,13 +2,18 @@
 //! solution, run in parallel rounds, keeping the best certified packing (paper Section 6.1.1 and
 //! 6.2).
 //!
-//! Each round runs one start per thread; start `k` perturbs the current solution with its own
+//! Each round runs one start per thread. Start 0 is the given point. The next
+//! [`MultiStartSettings::lattice_starts`] starts are dense lattice starts
+//! ([`LatticeStart::sequence`]: hexagonal and face-centred cubic lattices in several
+//! orientations, shifts and container aspects), which reach structures that perturbations of
+//! one solution rarely find. Every later start `k` perturbs the current solution with its own
 //! generator seeded by `(seed, k)`: centres move by up to `fraction × container extent` per
-//! coordinate, angles by up to `fraction × π` (the paper: 2.5 % in 2D, 10 % in 3D). The round's
-//! best certified packing becomes the current solution (every result is feasible after the
-//! repair), and the best over all rounds is kept. Rounds are deterministic, so the same seed
-//! and thread count give the same packings, whatever the timing; only how many rounds fit in a
-//! time limit depends on the machine.
+//! coordinate, angles by up to `fraction × π` (the paper: 2.5 % in 2D, 10 % in 3D). The current
+//! solution is the best packing so far ([`MultiStartSettings::from_best`], a monotonic basin
+//! hopping) or, as in the paper, the best packing of the latest round (every result is
+//! feasible after the repair). Rounds are deterministic, so the same seed and thread count
+//! give the same packings, whatever the timing; only how many rounds fit in a time limit
+//! depends on the machine.
 //!
 //! # References
 //! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
@@ -16,6 +21,7 @@
 
 use crate::containment::ContainerKind;
 use crate::error::Error;
+use crate::lattice::{LatticeStart, lattice_start_of};
 use crate::model::Problem;
 use crate::pack::{LocalResult, LocalSettings, lattice_start, local_minimisation};
 use std::time::{Duration, Instant};
@@ -29,6 +35,18 @@ pub struct MultiStartSettings {
     pub perturbation: f64,
     /// Seed of the perturbations.
     pub seed: u64,
+    /// Dense lattice starts run after the given start and before any perturbation (0: none,
+    /// as in the paper).
+    pub lattice_starts: usize,
+    /// Perturb the best packing so far (`true`) or, as the paper, the best packing of the
+    /// latest round (`false`).
+    pub from_best: bool,
+    /// Amplitude levels of the perturbations: start `j` of the perturbation phase moves by up
+    /// to `perturbation / 2^(j mod levels)` (1: always the full amplitude, as the paper).
+    pub perturbation_levels: u32,
+    /// Every this many starts of the perturbation phase, one is a further dense lattice start
+    /// instead, continuing the sequence (0: never).
+    pub fresh_lattice_every: usize,
     /// Starts per round, run in parallel (one thread each).
     pub threads: usize,
     /// Stop after this many local minimisations (the first, from the given start, included).
@@ -39,12 +57,17 @@ pub struct MultiStartSettings {
 }
 
 impl MultiStartSettings {
-    /// The paper's perturbation for dimension `n`, one thread, 100 local minimisations.
+    /// The paper's method for dimension `n`: its perturbation of the latest solution, no
+    /// lattice starts, one thread, 100 local minimisations.
     pub fn paper(n: usize, seed: u64) -> Self {
         Self {
             local: LocalSettings::default(),
             perturbation: if n == 2 { 0.025 } else { 0.1 },
             seed,
+            lattice_starts: 0,
+            from_best: false,
+            perturbation_levels: 1,
+            fresh_lattice_every: 0,
             threads: 1,
             max_local_minimisations: 100,
             time_limit: None,
@@ -119,21 +142,31 @@ pub fn multistart<const N: usize>(
     });
     let mut current = first.x.clone();
     let mut failed_starts = 0;
+    // Starts cut off by the time limit or an interrupt; they still advance the start index.
+    let mut cut_off = 0;
     let mut best = first;
     let threads = settings.threads.max(1);
     while done < settings.max_local_minimisations && !stop() {
         let round = threads.min(settings.max_local_minimisations - done);
+        let started = done + failed_starts + cut_off;
         let results: Vec<Result<LocalResult, Error>> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..round)
                 .map(|k| {
-                    let start_index = (done + k) as u64;
-                    let x = perturb::<N>(
-                        &current,
-                        semi_axes.len(),
-                        settings.perturbation,
-                        settings.seed,
-                        start_index,
-                    );
+                    let index = started + k;
+                    let x = match start_kind(settings, index) {
+                        Start::Lattice(n) => lattice_start_of(&problem, &LatticeStart::sequence(n)),
+                        Start::Perturbed(amplitude) => perturb::<N>(
+                            if settings.from_best {
+                                &best.x
+                            } else {
+                                &current
+                            },
+                            semi_axes.len(),
+                            amplitude,
+                            settings.seed,
+                            index as u64,
+                        ),
+                    };
                     let local = &settings.local;
                     let stop = &stop;
                     scope.spawn(move || {
@@ -165,6 +198,7 @@ pub fn multistart<const N: usize>(
             if result.report.stop_reason == auglag::StopReason::Interrupted {
                 // Cut off by the time limit or an interrupt, usually still at its perturbed
                 // (infeasible) start: repaired, but not a result of the method.
+                cut_off += 1;
                 continue;
             }
             done += 1;
@@ -197,6 +231,28 @@ pub fn multistart<const N: usize>(
         wall_time: start.elapsed(),
         interrupted: interrupt(),
     })
+}
+
+/// Where start `index` (≥ 1) of a run comes from.
+enum Start {
+    /// Dense lattice start number n of [`LatticeStart::sequence`].
+    Lattice(usize),
+    /// A perturbation of the current solution with this largest relative amplitude.
+    Perturbed(f64),
+}
+
+fn start_kind(settings: &MultiStartSettings, index: usize) -> Start {
+    let lattice = settings.lattice_starts;
+    if index <= lattice {
+        return Start::Lattice(index - 1);
+    }
+    let j = index - lattice - 1;
+    let every = settings.fresh_lattice_every;
+    if every > 0 && j % every == every - 1 {
+        return Start::Lattice(lattice + j / every);
+    }
+    let level = (j % settings.perturbation_levels.max(1) as usize) as i32;
+    Start::Perturbed(settings.perturbation * 0.5f64.powi(level))
 }
 
 /// The start `index` of a run: `x` with every centre coordinate moved by up to
@@ -312,6 +368,64 @@ mod tests {
         .unwrap();
         assert!(r.best.density >= first.unwrap());
         assert!(r.best.certificate.is_feasible());
+    }
+
+    #[test]
+    fn starts_run_through_lattices_then_perturbations_of_halving_amplitude() {
+        let settings = MultiStartSettings {
+            lattice_starts: 3,
+            perturbation_levels: 2,
+            fresh_lattice_every: 3,
+            ..MultiStartSettings::paper(3, 1)
+        };
+        let kinds: Vec<String> = (1..=10)
+            .map(|i| match start_kind(&settings, i) {
+                Start::Lattice(n) => format!("L{n}"),
+                Start::Perturbed(a) => format!("P{a}"),
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                "L0", "L1", "L2", "P0.1", "P0.05", "L3", "P0.05", "P0.1", "L4", "P0.1"
+            ]
+        );
+    }
+
+    #[test]
+    fn lattice_starts_and_best_walk_are_reproducible_and_no_worse() {
+        let axes = vec![[2.0, 1.0]; 7];
+        let x0 = paper_start(&axes, ContainerKind::Box).unwrap();
+        let settings = MultiStartSettings {
+            threads: 2,
+            max_local_minimisations: 6,
+            lattice_starts: 3,
+            from_best: true,
+            perturbation_levels: 2,
+            fresh_lattice_every: 2,
+            ..MultiStartSettings::paper(2, 5)
+        };
+        let run = || {
+            let mut densities = Vec::new();
+            let r = multistart(
+                &axes,
+                ContainerKind::Box,
+                &x0,
+                &settings,
+                &mut |p| densities.push(p.last_density),
+                &|_| {},
+                &|| false,
+            )
+            .unwrap();
+            (r, densities)
+        };
+        let (a, da) = run();
+        let (b, db) = run();
+        assert_eq!(a.best.x, b.best.x);
+        assert_eq!(da, db);
+        assert_eq!(a.local_minimisations, 6);
+        assert!(a.best.certificate.is_feasible());
+        assert_eq!(a.best.density, da.iter().copied().fold(0.0, f64::max));
     }
 
     #[test]

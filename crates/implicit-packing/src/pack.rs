@@ -89,15 +89,7 @@ pub struct LocalResult {
 /// and the smallest container of the problem's kind that holds every item's enclosing ball.
 pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
     let m = problem.len();
-    let mut spacing = [0.0_f64; N];
-    for l in problem.semi_axes() {
-        for k in 0..N {
-            spacing[k] = spacing[k].max(l[k]);
-        }
-    }
-    // Lattice neighbours are exactly tangent; a relative gap of 1e-9 keeps the start certified
-    // under rounding.
-    let spacing = spacing.map(|l| l * (1.0 + 1e-9));
+    let spacing = lattice_semi_axes(problem);
     let points = lattice_points::<N>(m, &spacing);
     let stride = Problem::<N>::vars_per_body();
     let mut x = vec![0.0; problem.var_count()];
@@ -121,6 +113,19 @@ pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
         crate::containment::ContainerKind::Box => dims.copy_from_slice(&reach),
     }
     x
+}
+
+/// The largest semi-axis of each direction over all items, which unrotated items on a lattice
+/// scaled by it never exceed. Lattice neighbours are then exactly tangent; a relative gap of
+/// 1e-9 keeps lattice starts certified under rounding.
+pub(crate) fn lattice_semi_axes<const N: usize>(problem: &Problem<N>) -> [f64; N] {
+    let mut l = [0.0_f64; N];
+    for axes in problem.semi_axes() {
+        for k in 0..N {
+            l[k] = l[k].max(axes[k]);
+        }
+    }
+    l.map(|v| v * (1.0 + 1e-9))
 }
 
 /// The `m` lattice points nearest the origin (ties broken by coordinates, so the start is

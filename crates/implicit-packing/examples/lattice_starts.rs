@@ -1,0 +1,58 @@
+//! One local minimisation from each of the first K dense lattice starts, against the paper's
+//! start: `cargo run --release -p implicit-packing --example lattice_starts -- 3 box 100 8`.
+
+use implicit_packing::containment::ContainerKind;
+use implicit_packing::lattice::{LatticeStart, lattice_start_of};
+use implicit_packing::model::Problem;
+use implicit_packing::pack::{LocalSettings, item_measure, lattice_start, local_minimisation};
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let dim: usize = args.get(1).map_or(Ok(3), |s| s.parse())?;
+    let kind = match args.get(2).map_or("ball", String::as_str) {
+        "ball" => ContainerKind::Ball,
+        "ellipsoid" => ContainerKind::Ellipsoid,
+        "box" => ContainerKind::Box,
+        other => return Err(format!("unknown container `{other}`").into()),
+    };
+    let m: usize = args.get(3).map_or(Ok(100), |s| s.parse())?;
+    let k: usize = args.get(4).map_or(Ok(8), |s| s.parse())?;
+    if dim == 2 {
+        run::<2>(vec![[2.0, 1.0]; m], kind, k)
+    } else {
+        run::<3>(vec![[1.0, 0.75, 0.5]; m], kind, k)
+    }
+}
+
+fn run<const N: usize>(
+    axes: Vec<[f64; N]>,
+    kind: ContainerKind,
+    k: usize,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut p = Problem::<N>::new(axes, kind)?;
+    let settings = LocalSettings::default();
+    let measure = item_measure(&p);
+    let one = |p: &mut Problem<N>,
+               label: String,
+               x0: Vec<f64>|
+     -> Result<(), Box<dyn std::error::Error>> {
+        let d0 = measure / p.evaluate(&x0, None)?.objective;
+        let t = Instant::now();
+        let r = local_minimisation(p, &x0, &settings, &mut |_| false)?;
+        println!(
+            "{label}: start {d0:.4} -> {:.5} in {:.1} s",
+            r.density,
+            t.elapsed().as_secs_f64()
+        );
+        Ok(())
+    };
+    let x0 = lattice_start(&p);
+    one(&mut p, "paper".into(), x0)?;
+    for i in 0..k {
+        let s = LatticeStart::<N>::sequence(i);
+        let x0 = lattice_start_of(&p, &s);
+        one(&mut p, format!("{s:?}"), x0)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,338 @@
+//! Dense lattice starts: affine images of the densest lattice packings of circles and spheres,
+//! cut to the container's shape.
+//!
+//! The paper's first initial solution ([`lattice_start`](crate::pack::lattice_start)) puts the
+//! items, unrotated, on the affine image of the hexagonal circle lattice in 2D but of the
+//! *simple cubic* lattice in 3D, whose density is π/6 ≈ 0.52 of the items' bounding boxes. Its
+//! single start also fixes the container's aspect ratio to that of a round cluster. A box
+//! holding 100 ellipsoids at the paper's density 0.64 is neither round nor cubic-packed.
+//!
+//! With every item unrotated and `l` the largest semi-axis of each direction over all items,
+//! the map `x ↦ diag(l)⁻¹ x` sends every item into a unit ball. Unit balls centred on a lattice
+//! with minimum distance 2 are disjoint, and so are their images under `diag(l)`; the densest
+//! such lattices are the hexagonal one in 2D (density π/√12 ≈ 0.907) and the face-centred
+//! cubic one in 3D (π/√18 ≈ 0.740). A [`LatticeStart`] chooses
+//!
+//! * the lattice's orientation ([`LatticeStart::orientation`]): rows along x or y in 2D; in 3D
+//!   the cubic axes along the coordinate axes, or close-packed hexagonal layers stacked along
+//!   x, y or z;
+//! * a shift of the lattice against the origin (in lattice units), which changes which points
+//!   sit on the boundary;
+//! * the container's aspect (relative semi-axes or half-sides; a ball ignores it);
+//!
+//! and keeps the `m` lattice points deepest inside the container's gauge — the smallest
+//! container of that aspect holding each item's enclosing ball or box. Many such starts differ
+//! in the structure the local solver refines, which the paper's perturbations of one solution
+//! rarely change.
+//!
+//! # References
+//! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
+//!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6 (the initial
+//!   solutions this module generalises).
+//! - J. H. Conway, N. J. A. Sloane, *Sphere Packings, Lattices and Groups*, 3rd ed., Springer
+//!   1999, chapter 1 (the hexagonal and face-centred cubic lattices).
+
+use crate::containment::ContainerKind;
+use crate::model::Problem;
+
+/// One dense lattice start: which lattice orientation, shifted by how much, cut to which
+/// container aspect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatticeStart<const N: usize> {
+    /// 2D: 0 rows along x, 1 rows along y. 3D: 0 cubic axes along the coordinate axes (FCC),
+    /// 1–3 close-packed layers stacked along x, y, z. Taken modulo the number of orientations.
+    pub orientation: usize,
+    /// Shift of the lattice against the origin, in units of the minimum distance.
+    pub shift: [f64; N],
+    /// Relative semi-axes (ellipsoid) or half-sides (box) of the container; ignored by a ball.
+    /// Positive; only ratios matter.
+    pub aspect: [f64; N],
+}
+
+impl<const N: usize> LatticeStart<N> {
+    /// Number of distinct orientations in dimension `N`.
+    pub const ORIENTATIONS: usize = if N == 2 { 2 } else { 4 };
+
+    /// The round, unshifted start with the first orientation.
+    pub fn centred() -> Self {
+        Self {
+            orientation: 0,
+            shift: [0.0; N],
+            aspect: [1.0; N],
+        }
+    }
+
+    /// The start number `k` of a deterministic sequence that runs through every orientation,
+    /// then varies the shift and (for non-ball containers) the aspect by a low-discrepancy
+    /// sequence: aspect ratios spread over [1/2, 2] per axis and shifts over the unit cell.
+    /// Start 0 is [`LatticeStart::centred`].
+    pub fn sequence(k: usize) -> Self {
+        let orientation = k % Self::ORIENTATIONS;
+        let round = k / Self::ORIENTATIONS;
+        if round == 0 {
+            return Self {
+                orientation,
+                ..Self::centred()
+            };
+        }
+        // Additive recurrence with the square roots of the first primes as steps (a Kronecker
+        // sequence: rationally independent steps fill the unit cube evenly) over 2N coordinates.
+        let mut unit = [0.0; 6];
+        for (u, p) in unit.iter_mut().zip([2.0_f64, 3.0, 5.0, 7.0, 11.0, 13.0]) {
+            let step = p.sqrt().fract();
+            *u = (round as f64 * step).fract();
+        }
+        let mut shift = [0.0; N];
+        let mut aspect = [1.0; N];
+        for a in 0..N {
+            shift[a] = unit[a];
+            // Log-uniform on [1/2, 2], relative to axis 0.
+            aspect[a] = if a == 0 {
+                1.0
+            } else {
+                2f64.powf(2.0 * unit[N + a] - 1.0)
+            };
+        }
+        Self {
+            orientation,
+            shift,
+            aspect,
+        }
+    }
+
+    /// Basis vectors (rows) of the lattice with minimum distance 2.
+    fn basis(&self) -> [[f64; N]; N] {
+        let mut b = [[0.0; N]; N];
+        if N == 2 {
+            let rows = [[2.0, 0.0], [1.0, 3f64.sqrt()]];
+            let swap = self.orientation % 2 == 1;
+            for (r, row) in rows.iter().enumerate() {
+                b[r][0] = if swap { row[1] } else { row[0] };
+                b[r][1] = if swap { row[0] } else { row[1] };
+            }
+        } else if self.orientation.is_multiple_of(4) {
+            // FCC with its cubic axes along x, y, z: √2 (1,1,0), √2 (1,0,1), √2 (0,1,1).
+            let s = std::f64::consts::SQRT_2;
+            let rows = [[s, s, 0.0], [s, 0.0, s], [0.0, s, s]];
+            for (r, row) in rows.iter().enumerate() {
+                b[r][..3].copy_from_slice(row);
+            }
+        } else {
+            // Hexagonal layers (two in-plane vectors) stacked ABC (the third), i.e. FCC seen
+            // along a body diagonal; the stacking axis is x, y or z.
+            let h = 3f64.sqrt();
+            let rows = [
+                [2.0, 0.0, 0.0],
+                [1.0, h, 0.0],
+                [1.0, 1.0 / h, 2.0 * (2.0f64 / 3.0).sqrt()],
+            ];
+            let stack = self.orientation % 4 - 1;
+            for (r, row) in rows.iter().enumerate() {
+                for k in 0..3 {
+                    // In-plane axes follow the stacking axis cyclically.
+                    b[r][(stack + 1 + k) % 3] = row[k];
+                }
+            }
+        }
+        b
+    }
+}
+
+/// The variables of a [`LatticeStart`] for `problem`: items unrotated on the lattice, and the
+/// smallest container of the start's aspect holding every item's enclosing ball (a ball or an
+/// ellipsoid) or box (a box), so the start is feasible.
+pub fn lattice_start_of<const N: usize>(problem: &Problem<N>, start: &LatticeStart<N>) -> Vec<f64> {
+    let m = problem.len();
+    let kind = problem.container_kind();
+    let l = crate::pack::lattice_semi_axes(problem);
+    let reach = l.iter().fold(0.0_f64, |a, &b| a.max(b));
+    let aspect = if kind == ContainerKind::Ball {
+        [1.0; N]
+    } else {
+        start
+            .aspect
+            .map(|a| if a > 0.0 && a.is_finite() { a } else { 1.0 })
+    };
+    let gauge = |p: &[f64; N]| match kind {
+        ContainerKind::Ball => p.iter().map(|v| v * v).sum::<f64>().sqrt(),
+        ContainerKind::Ellipsoid => (0..N)
+            .map(|k| (p[k] / aspect[k]).powi(2))
+            .sum::<f64>()
+            .sqrt(),
+        ContainerKind::Box => (0..N)
+            .map(|k| (p[k].abs() + l[k]) / aspect[k])
+            .fold(0.0, f64::max),
+    };
+    let points = deepest_points(m, &start.basis(), &start.shift, &l, &aspect, gauge);
+    let stride = Problem::<N>::vars_per_body();
+    let mut x = vec![0.0; problem.var_count()];
+    for (i, p) in points.iter().enumerate() {
+        x[i * stride..i * stride + N].copy_from_slice(p);
+    }
+    let dims = container_holding(&points, kind, &l, reach, &aspect);
+    x[m * stride..].copy_from_slice(&dims[..problem.var_count() - m * stride]);
+    x
+}
+
+/// The `m` points `diag(l) (shift·B + n·B)`, `n ∈ ℤᴺ`, of smallest gauge (ties broken by the
+/// lattice index, so the start is deterministic).
+fn deepest_points<const N: usize>(
+    m: usize,
+    basis: &[[f64; N]; N],
+    shift: &[f64; N],
+    l: &[f64; N],
+    aspect: &[f64; N],
+    gauge: impl Fn(&[f64; N]) -> f64,
+) -> Vec<[f64; N]> {
+    // The lattice has one point per cell of volume |det B| ≥ 2ᴺ·(√3/2 or 1/√2); a cube of index
+    // radius R holds (2R+1)ᴺ points, covering any container of aspect spread ≤ 4 holding m
+    // points when R exceeds the spread times m^(1/N) plus a margin.
+    let spread = aspect.iter().fold(0.0_f64, |a, &b| a.max(b))
+        / aspect.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let radius = (spread.min(4.0) * (m as f64).powf(1.0 / N as f64) + 3.0).ceil() as i64;
+    let mut candidates: Vec<(f64, [i64; N], [f64; N])> = Vec::new();
+    let mut index = [-radius; N];
+    loop {
+        let mut p = [0.0; N];
+        for r in 0..N {
+            let coefficient = index[r] as f64 + shift[r];
+            for k in 0..N {
+                p[k] += coefficient * basis[r][k];
+            }
+        }
+        let p = std::array::from_fn(|k| p[k] * l[k]);
+        candidates.push((gauge(&p), index, p));
+        let mut k = 0;
+        loop {
+            if k == N {
+                let cmp = |a: &(f64, [i64; N], [f64; N]), b: &(f64, [i64; N], [f64; N])| {
+                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                };
+                if m < candidates.len() {
+                    candidates.select_nth_unstable_by(m, cmp);
+                    candidates.truncate(m);
+                }
+                candidates.sort_by(cmp);
+                return candidates.into_iter().map(|c| c.2).collect();
+            }
+            index[k] += 1;
+            if index[k] <= radius {
+                break;
+            }
+            index[k] = -radius;
+            k += 1;
+        }
+    }
+}
+
+/// The smallest container of the given aspect that holds every item's enclosing ball (radius
+/// `reach`) about each point — for a box, the exact bounding box of the unrotated items.
+fn container_holding<const N: usize>(
+    points: &[[f64; N]],
+    kind: ContainerKind,
+    l: &[f64; N],
+    reach: f64,
+    aspect: &[f64; N],
+) -> [f64; N] {
+    let grow = 1.0 + 1e-9;
+    match kind {
+        ContainerKind::Ball => {
+            let r = points
+                .iter()
+                .map(|p| p.iter().map(|v| v * v).sum::<f64>().sqrt())
+                .fold(0.0, f64::max);
+            [(r + reach) * grow; N]
+        }
+        ContainerKind::Ellipsoid => {
+            // E(a t) contains the points; E(a t) + E(a s) = E(a (t + s)) for homothetic
+            // ellipsoids, and E(a s) ⊇ B(reach) when s = reach / min a.
+            let t = points
+                .iter()
+                .map(|p| {
+                    (0..N)
+                        .map(|k| (p[k] / aspect[k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .fold(0.0, f64::max);
+            let a_min = aspect.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            let s = t + reach / a_min;
+            aspect.map(|a| a * s * grow)
+        }
+        ContainerKind::Box => {
+            let mut half = [0.0; N];
+            for p in points {
+                for k in 0..N {
+                    half[k] = f64::max(half[k], p[k].abs() + l[k]);
+                }
+            }
+            half.map(|h| h * grow)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn certified<const N: usize>(axes: [f64; N], m: usize, kind: ContainerKind, k: usize) -> f64 {
+        let mut p = Problem::<N>::new(vec![axes; m], kind).unwrap();
+        let x = lattice_start_of(&p, &LatticeStart::sequence(k));
+        let c = p.certify(&x).unwrap();
+        assert!(c.is_feasible(), "start {k} of {kind:?}: {c:?}");
+        crate::pack::item_measure(&p) / p.evaluate(&x, None).unwrap().objective
+    }
+
+    #[test]
+    fn every_start_is_feasible() {
+        for kind in [
+            ContainerKind::Ball,
+            ContainerKind::Ellipsoid,
+            ContainerKind::Box,
+        ] {
+            for k in 0..12 {
+                certified([2.0, 1.0], 40, kind, k);
+                certified([1.0, 0.75, 0.5], 60, kind, k);
+            }
+        }
+    }
+
+    #[test]
+    fn fcc_starts_are_denser_than_the_papers_cubic_start_in_a_box() {
+        let m = 100;
+        let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerKind::Box).unwrap();
+        let paper = crate::pack::lattice_start(&p);
+        let paper = crate::pack::item_measure(&p) / p.evaluate(&paper, None).unwrap().objective;
+        let best = (0..16)
+            .map(|k| certified([1.0, 0.75, 0.5], m, ContainerKind::Box, k))
+            .fold(0.0, f64::max);
+        assert!(best > paper * 1.1, "FCC {best} against cubic {paper}");
+    }
+
+    #[test]
+    fn lattice_points_keep_the_minimum_distance() {
+        for orientation in 0..4 {
+            let s = LatticeStart::<3> {
+                orientation,
+                ..LatticeStart::centred()
+            };
+            let b = s.basis();
+            for n in [
+                [1, 0, 0],
+                [0, 1, 0],
+                [0, 0, 1],
+                [1, -1, 0],
+                [1, 0, -1],
+                [0, 1, -1],
+            ] {
+                let v: [f64; 3] =
+                    std::array::from_fn(|k| (0..3).map(|r| n[r] as f64 * b[r][k]).sum());
+                let d = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                assert!(
+                    (d - 2.0).abs() < 1e-12,
+                    "orientation {orientation}: {n:?} has {d}"
+                );
+            }
+        }
+    }
+}
