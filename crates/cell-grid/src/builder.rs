@@ -92,7 +92,8 @@ impl<const D: usize> GridBuilder<D> {
     /// ([`Layout::Hashed`](crate::Layout::Hashed)): memory stays `O(m)` however small the
     /// cutoff is against the domain, at the price of a hash lookup per neighbouring cell.
     /// Without this call the cap is `max(65 536, 16 m)` for `m` points, re-evaluated at each
-    /// rebuild. `max_cells(0)` always selects the hashed layout.
+    /// rebuild. `max_cells(0)` always selects the hashed layout. A dense array of `2^32 - 1`
+    /// cells or more is never used whatever the cap (cell slots are stored as `u32`).
     pub fn max_cells(mut self, cells: usize) -> Self {
         self.max_cells = Some(cells);
         self

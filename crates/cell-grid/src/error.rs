@@ -86,6 +86,15 @@ pub enum Error {
         /// The box side along `axis`.
         box_length: f64,
     },
+    /// More items than the grid can number: item indices and cell slots are stored as `u32`
+    /// (half the memory traffic of `usize` in the sort), so a grid holds fewer than
+    /// `u32::MAX` items.
+    TooManyItems {
+        /// Number of items given.
+        count: usize,
+        /// The largest number accepted.
+        max: usize,
+    },
     /// An item index is not below the number of items.
     ItemOutOfRange {
         /// The index given.
@@ -148,6 +157,9 @@ impl fmt::Display for Error {
                 f,
                 "reach {reach} exceeds half the periodic box side {box_length} along axis {axis}"
             ),
+            Error::TooManyItems { count, max } => {
+                write!(f, "{count} items given, a grid holds at most {max}")
+            }
             Error::ItemOutOfRange { index, len } => {
                 write!(f, "item {index} does not exist, the grid holds {len} items")
             }

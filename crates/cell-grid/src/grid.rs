@@ -33,8 +33,12 @@ const BLOCKED_MIN_ITEMS: usize = 1 << 15;
 /// block stays in L1, many enough that a block's cells and items fit in L2.
 const SORT_BLOCKS: usize = 256;
 
-/// `slot_seq` entry of an item kept out of the cells.
-const NO_CELL: usize = usize::MAX;
+/// Slot recorded for an item kept out of the cells (see `Grid::rank`).
+const NO_CELL: u32 = u32::MAX;
+
+/// Largest number of items: item ranks and cell slots are `u32` (`NO_CELL` excluded), which
+/// halves the bytes the sort writes per item against `usize`.
+const MAX_ITEMS: usize = u32::MAX as usize - 1;
 
 /// Bucket of radius `r`: how many binary orders of magnitude it lies below `r_max`
 /// (difference of the exponents, capped).
@@ -95,6 +99,12 @@ pub struct Cell<'a, const D: usize> {
 /// sequentially. The number of cells is capped (see [`GridBuilder::max_cells`]); above the
 /// cap only non-empty cells are kept, in a hash map ([`Layout::Hashed`]).
 ///
+/// A build touches few bytes per item, because a fresh build pays a page fault (and the
+/// kernel's zeroing) for every page of new buffer: `8 D` for the position, 8 for the index,
+/// 4 for the item's rank (`u32`, which limits a grid to fewer than `u32::MAX` items), 8
+/// more with radii, and 8 per cell of the dense array. Large inputs are sorted in
+/// cache-sized blocks inside the final arrays, with no temporary of the size of the input.
+///
 /// # Pairs
 /// Each non-empty cell is paired with itself and with the half of its `3^D - 1` neighbours
 /// that come later in cell order (13 in 3D, 4 in 2D), so every pair of items in the same or
@@ -145,21 +155,31 @@ pub struct Grid<const D: usize> {
     pub(crate) any_periodic: bool,
 
     // --- buffers, reused by `rebuild` ---
-    /// Slot of each item, or `NO_CELL`.
-    pub(crate) slot_seq: Vec<usize>,
-    /// Scratch of the blocked counting sort: items grouped by block of cells.
-    pub(crate) tmp_ids: Vec<usize>,
-    pub(crate) tmp_slots: Vec<usize>,
-    pub(crate) tmp_pos: Vec<[f64; D]>,
-    pub(crate) tmp_r: Vec<f64>,
+    /// Blocked counting sort without `pack_slots`: slot of each item of `order`, while the
+    /// items are only grouped by block of cells.
+    pub(crate) tmp_slots: Vec<u32>,
+    /// Blocked counting sort: whether the slot of an item travels in the high half of its
+    /// `order` entry (64-bit `usize`) instead of in `tmp_slots`, which saves 4 bytes of
+    /// fresh memory per item. A field so that tests can run the other path.
+    pub(crate) pack_slots: bool,
+    /// Blocked counting sort: one block's items, copied out of the final arrays so that they
+    /// can be sorted back into the same range (sized for one block, which fits in cache).
+    pub(crate) scratch_ids: Vec<usize>,
+    pub(crate) scratch_slots: Vec<u32>,
+    pub(crate) scratch_pos: Vec<[f64; D]>,
+    pub(crate) scratch_r: Vec<f64>,
     /// Item count from which the blocked sort is used (a field so tests can lower it).
     pub(crate) blocked_min: usize,
+    /// Largest number of items accepted (`MAX_ITEMS`; a field so tests can lower it).
+    pub(crate) max_items: usize,
     pub(crate) start: Vec<usize>,
     pub(crate) order: Vec<usize>,
-    pub(crate) rank: Vec<usize>,
+    /// Position in cell order of each item (`u32`: see `MAX_ITEMS`). During the sort it first
+    /// holds each item's slot (or `NO_CELL`): one buffer instead of two, each entry read as
+    /// a slot before it is overwritten as a position.
+    pub(crate) rank: Vec<u32>,
     pub(crate) sorted: Vec<[f64; D]>,
     pub(crate) sorted_r: Vec<f64>,
-    pub(crate) nonempty: Vec<usize>,
     /// Number of items, in cells or not.
     pub(crate) n_items: usize,
     /// Items with radius at least `r_cut` live outside the cells, in these three arrays
@@ -188,7 +208,8 @@ impl<const D: usize> Grid<D> {
     /// # Errors
     /// [`Error::InvalidCutoff`] if `cutoff` is not finite and positive,
     /// [`Error::NonFiniteCoordinate`] for a NaN or infinite coordinate,
-    /// [`Error::UnsupportedDimension`] unless `1 <= D <= 3`.
+    /// [`Error::UnsupportedDimension`] unless `1 <= D <= 3`,
+    /// [`Error::TooManyItems`] for `u32::MAX` points or more.
     pub fn build(points: &[[f64; D]], cutoff: f64) -> Result<Self, Error> {
         GridBuilder::with_cutoff(cutoff).build(points)
     }
@@ -262,18 +283,19 @@ impl<const D: usize> Grid<D> {
             strides: [1; D],
             layout: Layout::Dense,
             any_periodic: b.periodic.iter().any(|&p| p),
-            slot_seq: Vec::new(),
-            tmp_ids: Vec::new(),
             tmp_slots: Vec::new(),
-            tmp_pos: Vec::new(),
-            tmp_r: Vec::new(),
+            pack_slots: usize::BITS >= 64,
+            scratch_ids: Vec::new(),
+            scratch_slots: Vec::new(),
+            scratch_pos: Vec::new(),
+            scratch_r: Vec::new(),
             blocked_min: BLOCKED_MIN_ITEMS,
+            max_items: MAX_ITEMS,
             start: Vec::new(),
             order: Vec::new(),
             rank: Vec::new(),
             sorted: Vec::new(),
             sorted_r: Vec::new(),
-            nonempty: Vec::new(),
             rows: Vec::new(),
             n_items: 0,
             r_cut: 0.0,
@@ -304,7 +326,8 @@ impl<const D: usize> Grid<D> {
     /// # Errors
     /// [`Error::NonFiniteCoordinate`] for a NaN or infinite coordinate,
     /// [`Error::RadiiCountMismatch`] if the grid has per-item radii and the number of points
-    /// changed (use [`rebuild_with_radii`](Self::rebuild_with_radii)).
+    /// changed (use [`rebuild_with_radii`](Self::rebuild_with_radii)),
+    /// [`Error::TooManyItems`] for `u32::MAX` points or more.
     pub fn rebuild(&mut self, points: &[[f64; D]]) -> Result<(), Error> {
         if self.radii_mode && self.radii.len() != points.len() {
             return Err(Error::RadiiCountMismatch {
@@ -363,6 +386,12 @@ impl<const D: usize> Grid<D> {
 
     /// Checks every coordinate and returns the domain of this build.
     fn check_points(&self, points: &[[f64; D]]) -> Result<([f64; D], [f64; D]), Error> {
+        if points.len() > self.max_items {
+            return Err(Error::TooManyItems {
+                count: points.len(),
+                max: self.max_items,
+            });
+        }
         let mut lo = [f64::INFINITY; D];
         let mut hi = [f64::NEG_INFINITY; D];
         for (index, p) in points.iter().enumerate() {
@@ -452,7 +481,8 @@ impl<const D: usize> Grid<D> {
             self.inv_edge[a] = 1.0 / edge[a];
         }
         self.dims = dims;
-        self.layout = if padded_cells <= cap as f64 {
+        // Dense slots are `u32` too (`NO_CELL` excluded); a cap above that is not honoured.
+        self.layout = if padded_cells <= cap as f64 && padded_cells < NO_CELL as f64 {
             Layout::Dense
         } else {
             Layout::Hashed
@@ -544,9 +574,11 @@ impl<const D: usize> Grid<D> {
                     self.lo[a]
                 };
             }
-            let t = ((w[a] - self.lo[a]) * self.inv_edge[a]).floor();
+            let t = (w[a] - self.lo[a]) * self.inv_edge[a];
             let top = (self.dims[a] - 1) as f64;
-            // Clamp in f64 before the cast: far-away points would saturate the integer.
+            // Clamp in f64 before the cast: far-away points would saturate the integer. On
+            // the clamped range `[0, top]` the cast's truncation is `floor`, which without
+            // SSE4.1 is a library call per coordinate (measured: 2 % of a rebuild + pairs).
             k[a] = t.clamp(0.0, top) as i64;
         }
         (w, k)
@@ -599,26 +631,27 @@ impl<const D: usize> Grid<D> {
 
     /// Turns the per-cell counts in `start[..nslots]` into inclusive prefix sums (each cell's
     /// end, which the backward scatter decrements to its start), sets the sentinel, and sizes
-    /// the sorted buffers for the counted items out of `m` (no allocation once large enough).
+    /// the sorted buffers for the counted items (no allocation once large enough).
     /// Returns the number of items in cells.
-    fn end_offsets_and_buffers(&mut self, nslots: usize, m: usize) -> usize {
+    fn end_offsets_and_buffers(&mut self, nslots: usize) -> usize {
         let mut acc = 0usize;
         for c in &mut self.start[..nslots] {
             acc += *c;
             *c = acc;
         }
         self.start[nslots] = acc;
-        self.order.clear();
-        self.order.resize(acc, 0);
-        self.rank.clear();
-        self.rank.resize(m, 0);
-        self.sorted.clear();
-        self.sorted.resize(acc, [0.0; D]);
-        self.sorted_r.clear();
-        if self.radii_mode {
-            self.sorted_r.resize(acc, 0.0);
-        }
+        self.size_sorted_buffers(acc);
         acc
+    }
+
+    /// Sets the length of the cell-ordered arrays to `n` items. Their old contents are kept,
+    /// not zeroed: the sort writes every entry exactly once, and on a rebuild a fill would
+    /// be one more pass over all of them for nothing.
+    fn size_sorted_buffers(&mut self, n: usize) {
+        self.order.resize(n, 0);
+        self.sorted.resize(n, [0.0; D]);
+        self.sorted_r
+            .resize(if self.radii_mode { n } else { 0 }, 0.0);
     }
 
     /// The counting sort: items into slots, then positions into cell order. Items at or
@@ -634,43 +667,28 @@ impl<const D: usize> Grid<D> {
         // order instead (sequential stores, random loads) was measured 2x slower on shuffled
         // input at m = 1e6: a store that misses the cache retires at once, a load stalls.
         self.n_items = m;
-        self.slot_seq.clear();
-        self.slot_seq.resize(m, 0);
-        self.nonempty.clear();
+        // The slot of each item goes into `rank`, pushed in turn: no zero-fill of fresh
+        // memory first.
+        self.rank.clear();
+        self.rank.reserve(m);
         self.large_ids.clear();
         self.large_pos.clear();
         self.large_r.clear();
         let split = self.split_active;
         let r_cut = self.r_cut;
-        let is_large = |i: usize| split && self.radii[i] >= r_cut;
         let nslots = match self.layout {
             Layout::Dense => {
-                let ncells = self.strides[D - 1] * (self.dims[D - 1] + 2);
-                if self.start.capacity() <= ncells {
-                    // A bounding-box domain gains a cell along an axis as soon as the points
-                    // spread a little: leave room for one more cell per axis so that the
-                    // next small moves do not reallocate.
-                    let roomy: usize = self.dims.iter().map(|&n| n + 3).product();
-                    self.start.reserve_exact(roomy + 1 - self.start.len());
-                }
-                self.start.clear();
-                self.start.resize(ncells + 1, 0);
-                // No more non-empty cells than items: sized once, moves never regrow it.
-                self.nonempty.reserve(m);
+                let ncells = self.dense_cell_count();
+                self.reset_dense_starts(ncells);
                 for (i, p) in points.iter().enumerate() {
-                    if is_large(i) {
-                        self.slot_seq[i] = NO_CELL;
-                        continue;
-                    }
-                    let (_, c) = self.locate(p);
-                    let s = self.dense_slot(&c);
-                    self.slot_seq[i] = s;
-                    self.start[s] += 1;
-                }
-                for (s, &count) in self.start.iter().enumerate() {
-                    if count > 0 {
-                        self.nonempty.push(s);
-                    }
+                    let s = if split && self.radii[i] >= r_cut {
+                        NO_CELL
+                    } else {
+                        let s = self.dense_slot(&self.locate(p).1);
+                        self.start[s] += 1;
+                        s as u32
+                    };
+                    self.rank.push(s);
                 }
                 ncells
             }
@@ -682,46 +700,47 @@ impl<const D: usize> Grid<D> {
                 // cells.
                 self.map.reserve(m);
                 self.slot_coords.reserve(m);
-                self.nonempty.reserve(m);
                 self.start.clear();
                 self.start.reserve(m + 1);
                 for (i, p) in points.iter().enumerate() {
-                    if is_large(i) {
-                        self.slot_seq[i] = NO_CELL;
-                        continue;
-                    }
-                    let (_, c) = self.locate(p);
-                    let next = self.slot_coords.len();
-                    let s = *self.map.entry(CellKey(c)).or_insert(next);
-                    if s == next {
-                        self.slot_coords.push(c);
-                    }
-                    self.slot_seq[i] = s;
+                    let s = if split && self.radii[i] >= r_cut {
+                        NO_CELL
+                    } else {
+                        let (_, c) = self.locate(p);
+                        let next = self.slot_coords.len();
+                        let s = *self.map.entry(CellKey(c)).or_insert(next);
+                        if s == next {
+                            self.slot_coords.push(c);
+                        }
+                        // Fewer slots than items, and items are fewer than `NO_CELL`.
+                        s as u32
+                    };
+                    self.rank.push(s);
                 }
                 let n = self.slot_coords.len();
                 self.start.clear();
                 self.start.resize(n + 1, 0);
-                for &s in &self.slot_seq {
+                for &s in &self.rank {
                     if s != NO_CELL {
-                        self.start[s] += 1;
+                        self.start[s as usize] += 1;
                     }
                 }
-                self.nonempty.extend(0..n);
                 n
             }
         };
         // Inclusive prefix sums give each cell's end; the backward scatter below decrements
         // them to the starts and keeps each cell's items in ascending index order.
-        let in_cells = self.end_offsets_and_buffers(nslots, m);
+        let in_cells = self.end_offsets_and_buffers(nslots);
         for i in (0..m).rev() {
-            let s = self.slot_seq[i];
+            let s = self.rank[i];
             if s == NO_CELL {
                 continue;
             }
+            let s = s as usize;
             self.start[s] -= 1;
             let pos = self.start[s];
             self.order[pos] = i;
-            self.rank[i] = pos;
+            self.rank[i] = pos as u32;
             self.sorted[pos] = if self.any_periodic {
                 self.locate(&points[i]).0
             } else {
@@ -731,15 +750,40 @@ impl<const D: usize> Grid<D> {
                 self.sorted_r[pos] = self.radii[i];
             }
         }
-        if split {
-            // In index order: the large-large loop relies on it for i < j.
-            for i in 0..m {
-                if self.radii[i] >= r_cut {
-                    self.rank[i] = in_cells + self.large_ids.len();
-                    self.large_ids.push(i);
-                    self.large_pos.push(self.locate(&points[i]).0);
-                    self.large_r.push(self.radii[i]);
-                }
+        self.place_large_items(points, in_cells);
+    }
+
+    /// Number of slots of the padded dense array.
+    fn dense_cell_count(&self) -> usize {
+        self.strides[D - 1] * (self.dims[D - 1] + 2)
+    }
+
+    /// Zeroes the dense per-cell counts (`ncells` slots and the sentinel).
+    fn reset_dense_starts(&mut self, ncells: usize) {
+        if self.start.capacity() <= ncells {
+            // A bounding-box domain gains a cell along an axis as soon as the points
+            // spread a little: leave room for one more cell per axis so that the next
+            // small moves do not reallocate.
+            let roomy: usize = self.dims.iter().map(|&n| n + 3).product();
+            self.start.reserve_exact(roomy + 1 - self.start.len());
+        }
+        self.start.clear();
+        self.start.resize(ncells + 1, 0);
+    }
+
+    /// Appends the items at or above the split radius to the large-item arrays, in index
+    /// order (the large-large loop relies on it for `i < j`), ranked after the `in_cells`
+    /// items of the cells.
+    fn place_large_items(&mut self, points: &[[f64; D]], in_cells: usize) {
+        if !self.split_active {
+            return;
+        }
+        for i in 0..points.len() {
+            if self.radii[i] >= self.r_cut {
+                self.rank[i] = (in_cells + self.large_ids.len()) as u32;
+                self.large_ids.push(i);
+                self.large_pos.push(self.locate(&points[i]).0);
+                self.large_r.push(self.radii[i]);
             }
         }
     }
@@ -750,32 +794,40 @@ impl<const D: usize> Grid<D> {
     /// cache (on shuffled input: three cache misses per item, measured 3x slower per item at
     /// m = 1e6 than at 1e4). Here the items are first distributed, in index order, into
     /// `SORT_BLOCKS` contiguous ranges of cells (one write stream per block, cache-friendly),
-    /// and each block is then counting-sorted on its own, within memory that fits in cache.
+    /// straight into the final arrays: a block of cells owns one contiguous range of them.
+    /// Each block is then copied to a cache-sized scratch and counting-sorted back into its
+    /// own range. No full-size temporary is needed, which matters for a fresh build: every
+    /// byte of a new buffer costs a page fault and the kernel's zeroing on first touch.
     /// The result is identical to the one-pass sort: cell order, ascending items per cell.
     fn sort_blocked(&mut self, points: &[[f64; D]]) {
         let m = points.len();
         self.n_items = m;
-        self.nonempty.clear();
         self.large_ids.clear();
         self.large_pos.clear();
         self.large_r.clear();
         let split = self.split_active;
         let r_cut = self.r_cut;
-        let ncells = self.strides[D - 1] * (self.dims[D - 1] + 2);
-        let block = ncells.div_ceil(SORT_BLOCKS);
+        let ncells = self.dense_cell_count();
+        // Blocks of a power-of-two number of cells: the block of a slot is a shift, not a
+        // division. At most SORT_BLOCKS of them.
+        let shift = ncells
+            .div_ceil(SORT_BLOCKS)
+            .next_power_of_two()
+            .trailing_zeros();
 
-        // Pass 1: slot of every item, count per block.
+        // Pass 1: slot of every item (into `rank`), count per block.
         let mut blk = [0usize; SORT_BLOCKS + 1];
-        self.slot_seq.clear();
-        self.slot_seq.resize(m, 0);
+        self.rank.clear();
+        self.rank.reserve(m);
         for (i, p) in points.iter().enumerate() {
-            if split && self.radii[i] >= r_cut {
-                self.slot_seq[i] = NO_CELL;
-                continue;
-            }
-            let s = self.dense_slot(&self.locate(p).1);
-            self.slot_seq[i] = s;
-            blk[s / block] += 1;
+            let s = if split && self.radii[i] >= r_cut {
+                NO_CELL
+            } else {
+                let s = self.dense_slot(&self.locate(p).1);
+                blk[s >> shift] += 1;
+                s as u32
+            };
+            self.rank.push(s);
         }
         let mut acc = 0usize;
         for b in blk.iter_mut() {
@@ -784,78 +836,107 @@ impl<const D: usize> Grid<D> {
             acc += c;
         }
         let in_cells = acc;
+        // `blk[b]` is now the start of block b; the distribution below moves each to its end.
+        let bounds = blk;
 
-        // Pass 2: items into their block, keeping index order within each block.
-        self.tmp_ids.clear();
-        self.tmp_ids.resize(in_cells, 0);
-        self.tmp_slots.clear();
-        self.tmp_slots.resize(in_cells, 0);
-        self.tmp_pos.clear();
-        self.tmp_pos.resize(in_cells, [0.0; D]);
-        self.tmp_r.clear();
-        if self.radii_mode {
-            self.tmp_r.resize(in_cells, 0.0);
-        }
-        let mut fill = blk;
+        // Pass 2: items into their block's range of the final arrays, in index order.
+        self.size_sorted_buffers(in_cells);
+        let pack = self.pack_slots;
+        // Every entry is written below, as in `size_sorted_buffers`.
+        self.tmp_slots.resize(if pack { 0 } else { in_cells }, 0);
         for (i, p) in points.iter().enumerate() {
-            let s = self.slot_seq[i];
+            let s = self.rank[i];
             if s == NO_CELL {
                 continue;
             }
-            let q = &mut fill[s / block];
-            self.tmp_ids[*q] = i;
-            self.tmp_slots[*q] = s;
-            self.tmp_pos[*q] = if self.any_periodic {
+            let q = &mut blk[(s as usize) >> shift];
+            if pack {
+                // Both fit in 32 bits (`MAX_ITEMS`, and dense slots below `NO_CELL`).
+                self.order[*q] = (u64::from(s) << 32 | i as u64) as usize;
+            } else {
+                self.order[*q] = i;
+                self.tmp_slots[*q] = s;
+            }
+            self.sorted[*q] = if self.any_periodic {
                 self.locate(p).0
             } else {
                 *p
             };
             if self.radii_mode {
-                self.tmp_r[*q] = self.radii[i];
+                self.sorted_r[*q] = self.radii[i];
             }
             *q += 1;
         }
 
-        // Pass 3: the counting sort by cell, block after block.
-        if self.start.capacity() <= ncells {
-            let roomy: usize = self.dims.iter().map(|&n| n + 3).product();
-            self.start.reserve_exact(roomy + 1 - self.start.len());
+        // Pass 3: each block through the scratch and back, counting-sorted by cell.
+        self.reset_dense_starts(ncells);
+        // Capacity for every item, so that a rebuild never reallocates; only the pages of
+        // the largest block are ever touched. (Cleared first: `reserve` counts from the
+        // length, which the last block of the previous build left behind.)
+        self.scratch_ids.clear();
+        self.scratch_slots.clear();
+        self.scratch_pos.clear();
+        self.scratch_r.clear();
+        self.scratch_ids.reserve(in_cells);
+        if !pack {
+            self.scratch_slots.reserve(in_cells);
         }
-        self.start.clear();
-        self.start.resize(ncells + 1, 0);
-        self.nonempty.reserve(m);
-        for &s in &self.tmp_slots {
-            self.start[s] += 1;
+        self.scratch_pos.reserve(in_cells);
+        if self.radii_mode {
+            self.scratch_r.reserve(in_cells);
         }
-        for (s, &count) in self.start.iter().enumerate() {
-            if count > 0 {
-                self.nonempty.push(s);
+        let mut end = 0usize;
+        for b in 0..SORT_BLOCKS {
+            let cells = (b << shift).min(ncells)..((b + 1) << shift).min(ncells);
+            if cells.is_empty() {
+                break;
             }
-        }
-        let counted = self.end_offsets_and_buffers(ncells, m);
-        debug_assert_eq!(counted, in_cells);
-        for q in (0..in_cells).rev() {
-            let s = self.tmp_slots[q];
-            self.start[s] -= 1;
-            let pos = self.start[s];
-            let i = self.tmp_ids[q];
-            self.order[pos] = i;
-            self.rank[i] = pos;
-            self.sorted[pos] = self.tmp_pos[q];
+            let (q0, q1) = (bounds[b], bounds[b + 1]);
+            self.scratch_ids.clear();
+            self.scratch_ids.extend_from_slice(&self.order[q0..q1]);
+            self.scratch_slots.clear();
+            if pack {
+                for &v in &self.scratch_ids {
+                    self.start[(v as u64 >> 32) as usize] += 1;
+                }
+            } else {
+                self.scratch_slots
+                    .extend_from_slice(&self.tmp_slots[q0..q1]);
+                for &s in &self.scratch_slots {
+                    self.start[s as usize] += 1;
+                }
+            }
+            self.scratch_pos.clear();
+            self.scratch_pos.extend_from_slice(&self.sorted[q0..q1]);
+            self.scratch_r.clear();
             if self.radii_mode {
-                self.sorted_r[pos] = self.tmp_r[q];
+                self.scratch_r.extend_from_slice(&self.sorted_r[q0..q1]);
             }
-        }
-        if split {
-            for i in 0..m {
-                if self.radii[i] >= r_cut {
-                    self.rank[i] = in_cells + self.large_ids.len();
-                    self.large_ids.push(i);
-                    self.large_pos.push(self.locate(&points[i]).0);
-                    self.large_r.push(self.radii[i]);
+            // Inclusive prefix sums (each cell's end), carried over from the earlier blocks.
+            for s in cells {
+                end += self.start[s];
+                self.start[s] = end;
+            }
+            for k in (0..q1 - q0).rev() {
+                let (s, i) = if pack {
+                    let v = self.scratch_ids[k] as u64;
+                    ((v >> 32) as usize, (v & 0xffff_ffff) as usize)
+                } else {
+                    (self.scratch_slots[k] as usize, self.scratch_ids[k])
+                };
+                self.start[s] -= 1;
+                let pos = self.start[s];
+                self.order[pos] = i;
+                self.rank[i] = pos as u32;
+                self.sorted[pos] = self.scratch_pos[k];
+                if self.radii_mode {
+                    self.sorted_r[pos] = self.scratch_r[k];
                 }
             }
         }
+        debug_assert_eq!(end, in_cells);
+        self.start[ncells] = end;
+        self.place_large_items(points, in_cells);
     }
 
     /// Number of items.
@@ -916,14 +997,28 @@ impl<const D: usize> Grid<D> {
 
     /// Number of non-empty cells.
     pub fn nonempty_cell_count(&self) -> usize {
-        self.nonempty.len()
+        self.nonempty_slots().count()
+    }
+
+    /// Number of slots: every cell of the padded dense array, or the hashed cells (all of
+    /// which are non-empty).
+    #[inline]
+    pub(crate) fn slot_count(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    /// The non-empty slots, ascending. No list of them is stored: at packing density
+    /// nearly every cell holds an item, and the list cost a push per cell and 8 bytes per
+    /// cell of fresh memory at each build, more than skipping the empty ones costs.
+    pub(crate) fn nonempty_slots(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.slot_count()).filter(move |&s| self.start[s] < self.start[s + 1])
     }
 
     /// The non-empty cells with their items (in the dense layout, in increasing linear
     /// cell order with x fastest; in the hashed layout, in order of first appearance).
     /// Items kept out of the cells by the size split are in [`large_items`](Self::large_items).
     pub fn cells(&self) -> impl Iterator<Item = Cell<'_, D>> + '_ {
-        self.nonempty.iter().map(move |&s| {
+        self.nonempty_slots().map(move |s| {
             let k = self.slot_coords_of(s);
             Cell {
                 coords: k.map(|c| c as usize),
@@ -970,15 +1065,16 @@ impl<const D: usize> Grid<D> {
                 len: self.len(),
             });
         }
-        let pos = self.rank[i];
+        let pos = self.rank[i] as usize;
         if pos >= self.order.len() {
             // A large item: the cell its centre falls in, though it is not listed there.
             return Ok(self.locate(&self.item_point(i).0).1.map(|c| c as usize));
         }
-        // Slots in `nonempty` are ascending and so are their starts: the item's cell is the
-        // last one starting at or before its position.
-        let idx = self.nonempty.partition_point(|&s| self.start[s] <= pos) - 1;
-        Ok(self.slot_coords_of(self.nonempty[idx]).map(|c| c as usize))
+        // The starts are ascending (an empty cell starts where the next one does) and the
+        // sentinel `start[slots] = order.len()` is beyond `pos`: the last slot starting at or
+        // before `pos` is the non-empty cell that holds it.
+        let s = self.start.partition_point(|&x| x <= pos) - 1;
+        Ok(self.slot_coords_of(s).map(|c| c as usize))
     }
 
     /// Position of item `i` as stored at the last build (wrapped into the box on periodic
@@ -999,7 +1095,7 @@ impl<const D: usize> Grid<D> {
     /// Stored position and radius (0 without radii) of item `i < len()`.
     #[inline]
     pub(crate) fn item_point(&self, i: usize) -> ([f64; D], f64) {
-        let pos = self.rank[i];
+        let pos = self.rank[i] as usize;
         let in_cells = self.order.len();
         if pos < in_cells {
             let r = if self.radii_mode {
@@ -1137,13 +1233,20 @@ mod tests {
         assert!(!valid_reach(f64::NAN));
     }
 
-    /// The blocked counting sort must give exactly the arrays of the one-pass sort.
+    /// The blocked counting sort must give exactly the arrays of the one-pass sort, with the
+    /// slots packed into `order` or kept apart.
     fn same_sort<const D: usize>(b: GridBuilder<D>, pts: &[[f64; D]]) {
+        same_sort_packed(b.clone(), pts, true);
+        same_sort_packed(b, pts, false);
+    }
+
+    fn same_sort_packed<const D: usize>(b: GridBuilder<D>, pts: &[[f64; D]], pack: bool) {
         let b = b.max_cells(1 << 22);
         let mut one = b.clone().build(&[]).unwrap();
         one.blocked_min = usize::MAX;
         let mut blocked = b.build(&[]).unwrap();
         blocked.blocked_min = 0;
+        blocked.pack_slots = pack;
         let radii = one.radii_mode.then(|| {
             (0..pts.len())
                 .map(|i| {
@@ -1167,10 +1270,7 @@ mod tests {
         assert_eq!(one.rank, blocked.rank);
         assert_eq!(one.sorted, blocked.sorted);
         assert_eq!(one.sorted_r, blocked.sorted_r);
-        assert_eq!(one.nonempty, blocked.nonempty);
-        for &s in &one.nonempty {
-            assert_eq!(one.start[s..s + 2], blocked.start[s..s + 2]);
-        }
+        assert_eq!(one.start, blocked.start);
         assert_eq!(one.large_ids, blocked.large_ids);
         assert_eq!(one.large_pos, blocked.large_pos);
     }
@@ -1207,6 +1307,19 @@ mod tests {
             GridBuilder::<1>::with_cutoff(0.01),
             &[[0.5], [0.2], [0.51], [3.0]],
         );
+    }
+
+    #[test]
+    fn too_many_items_is_an_error_and_keeps_the_grid() {
+        let mut g = Grid::<2>::build(&[[0.0; 2], [0.5, 0.0]], 1.0).unwrap();
+        // The real limit (u32::MAX - 1 items) is out of reach of a test: lower it.
+        g.max_items = 2;
+        let err = Error::TooManyItems { count: 3, max: 2 };
+        assert_eq!(g.rebuild(&[[0.0; 2]; 3]), Err(err.clone()));
+        assert_eq!(g.rebuild_with_radii(&[[0.0; 2]; 3], &[0.1; 3]), Err(err));
+        assert_eq!((g.len(), g.close_pairs()), (2, vec![(0, 1)]));
+        g.rebuild(&[[0.0; 2], [2.0, 0.0]]).unwrap();
+        assert_eq!(g.count_close_pairs(), 0);
     }
 
     #[test]

@@ -41,9 +41,9 @@ pub(crate) trait CellPairs<const D: usize> {
 impl<const D: usize> Grid<D> {
     /// Visits each non-empty slot of `slots` against itself and against every neighbouring
     /// non-empty slot that comes after it, so that each unordered pair of cells is seen once
-    /// when `slots` ranges over all non-empty cells (or once in total over a partition of
-    /// them, which is how the parallel version splits the work).
-    pub(crate) fn drive<V: CellPairs<D>>(&self, slots: &[usize], v: &mut V) {
+    /// when `slots` ranges over all slots (or once in total over a partition of them, which
+    /// is how the parallel version splits the work). Empty slots are skipped.
+    pub(crate) fn drive<V: CellPairs<D>>(&self, slots: Range<usize>, v: &mut V) {
         if self.layout == Layout::Dense && !self.any_periodic {
             // The forward half of the 3^D stencil, in the padded array, is: the next cell
             // along x, and for each forward row offset `h` (along y, z) the three cells
@@ -51,8 +51,11 @@ impl<const D: usize> Grid<D> {
             // these is one contiguous run: 5 runs in 3D instead of 13 cells, 2 in 2D. The
             // ghost layer keeps every index valid without a bounds test.
             let st = &self.start;
-            for &s in slots {
+            for s in slots {
                 let a = st[s]..st[s + 1];
+                if a.is_empty() {
+                    continue;
+                }
                 v.block(self, a.clone(), st[s]..st[s + 2]);
                 for &h in &self.rows {
                     let t = s + h;
@@ -69,8 +72,11 @@ impl<const D: usize> Grid<D> {
         // neighbours with a larger slot, and each of them once, still visits each pair of
         // cells exactly once.
         let mut seen = [0usize; 26];
-        for &s in slots {
+        for s in slots {
             let a = self.start[s]..self.start[s + 1];
+            if a.is_empty() {
+                continue;
+            }
             v.same(self, a.clone());
             let k = self.slot_coords_of(s);
             let mut n_seen = 0;
@@ -112,7 +118,7 @@ impl<const D: usize> Grid<D> {
     /// [`large_items`](Self::large_items)) are paired with every item of the cells within
     /// their search box and with every other large item.
     pub fn for_each_candidate_pair<F: FnMut(usize, usize)>(&self, mut f: F) {
-        self.drive(&self.nonempty, &mut Candidates { f: &mut f });
+        self.drive(0..self.slot_count(), &mut Candidates { f: &mut f });
         self.large_candidates(0..self.large_ids.len(), &mut f);
     }
 
@@ -211,13 +217,13 @@ impl<const D: usize> Grid<D> {
     ///
     /// This is the fast path: positions are read in cell order, sequentially in memory.
     pub fn for_each_close_pair<F: FnMut(usize, usize, [f64; D], f64)>(&self, mut f: F) {
-        self.close_pairs_over(&self.nonempty, &mut f);
+        self.close_pairs_over(0..self.slot_count(), &mut f);
         self.large_close(0..self.large_ids.len(), &mut f);
     }
 
     pub(crate) fn close_pairs_over<F: FnMut(usize, usize, [f64; D], f64)>(
         &self,
-        slots: &[usize],
+        slots: Range<usize>,
         f: F,
     ) {
         match (self.any_periodic, self.radii_mode) {
@@ -360,7 +366,9 @@ where
     #[inline]
     fn block(&mut self, g: &Grid<D>, a: Range<usize>, b: Range<usize>) {
         let c2 = g.cutoff * g.cutoff;
-        let mut hits = [(0usize, 0usize); BATCH];
+        // Each hit is the pair of positions packed in one `u64` (both are below 2^32, see
+        // `MAX_ITEMS`): one 8-byte store per candidate instead of two.
+        let mut hits = [0u64; BATCH];
         let mut n = 0usize;
         for x in a {
             let pa = g.sorted[x];
@@ -380,7 +388,7 @@ where
                 } else {
                     c2
                 };
-                hits[n & (BATCH - 1)] = (x, lo + k);
+                hits[n & (BATCH - 1)] = (x as u64) << 32 | (lo + k) as u64;
                 n += usize::from(d2 < lim);
                 if n == BATCH {
                     self.emit(g, &hits);
@@ -395,11 +403,12 @@ where
 impl<F, const P: bool, const R: bool> Close<F, P, R> {
     /// Calls back for pairs of positions already known to be close.
     #[inline(always)]
-    fn emit<const D: usize>(&mut self, g: &Grid<D>, hits: &[(usize, usize)])
+    fn emit<const D: usize>(&mut self, g: &Grid<D>, hits: &[u64])
     where
         F: FnMut(usize, usize, [f64; D], f64),
     {
-        for &(x, y) in hits {
+        for &h in hits {
+            let (x, y) = ((h >> 32) as usize, (h & 0xffff_ffff) as usize);
             let d = Self::delta(g, &g.sorted[x], &g.sorted[y]);
             let d2 = dot(&d, &d);
             let (i, j) = (g.order[x], g.order[y]);

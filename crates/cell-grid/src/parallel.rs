@@ -1,4 +1,4 @@
-//! Parallel pair enumeration (feature `rayon`): the non-empty cells are split into
+//! Parallel pair enumeration (feature `rayon`): the cells (slots) are split into
 //! contiguous ranges and each range runs the serial stencil. A pair of cells is visited
 //! from the earlier of the two, so the ranges never visit a pair twice.
 
@@ -11,7 +11,16 @@ impl<const D: usize> Grid<D> {
     /// Cells per task: enough pairs to amortise a task, enough tasks to balance the load.
     fn chunk_len(&self) -> usize {
         let threads = rayon::current_num_threads().max(1);
-        (self.nonempty.len() / (8 * threads)).max(64)
+        (self.slot_count() / (8 * threads)).max(64)
+    }
+
+    /// The slots cut into consecutive ranges of `chunk_len` slots, as a parallel iterator.
+    fn slot_chunks(&self) -> impl IndexedParallelIterator<Item = std::ops::Range<usize>> + '_ {
+        let n = self.slot_count();
+        let len = self.chunk_len();
+        (0..n.div_ceil(len))
+            .into_par_iter()
+            .map(move |c| c * len..((c + 1) * len).min(n))
     }
 
     /// Parallel [`for_each_candidate_pair`](Self::for_each_candidate_pair): `f(i, j)` for
@@ -20,8 +29,7 @@ impl<const D: usize> Grid<D> {
     where
         F: Fn(usize, usize) + Sync,
     {
-        self.nonempty
-            .par_chunks(self.chunk_len())
+        self.slot_chunks()
             .for_each(|slots| self.drive(slots, &mut Candidates { f: &f }));
         (0..self.large_ids.len())
             .into_par_iter()
@@ -34,8 +42,7 @@ impl<const D: usize> Grid<D> {
     where
         F: Fn(usize, usize, [f64; D], f64) + Sync,
     {
-        self.nonempty
-            .par_chunks(self.chunk_len())
+        self.slot_chunks()
             .for_each(|slots| self.close_pairs_over(slots, &f));
         (0..self.large_ids.len())
             .into_par_iter()
@@ -53,8 +60,7 @@ impl<const D: usize> Grid<D> {
         R: Fn(T, T) -> T + Sync + Send,
     {
         let cells = self
-            .nonempty
-            .par_chunks(self.chunk_len())
+            .slot_chunks()
             .map(|slots| {
                 let mut acc = init();
                 self.close_pairs_over(slots, |i, j, d, d2| fold(&mut acc, i, j, d, d2));

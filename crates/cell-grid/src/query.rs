@@ -149,7 +149,7 @@ impl<const D: usize> Grid<D> {
             let d2 = dot(&d, &d);
             visit(p, d, d2);
         };
-        if volume > self.nonempty.len() as f64 {
+        if volume > self.order.len() as f64 {
             for p in 0..self.order.len() {
                 emit(p, &mut visit);
             }

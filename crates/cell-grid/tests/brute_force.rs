@@ -610,3 +610,30 @@ fn coordinates_near_the_largest_float() {
         Err(cell_grid::Error::InvalidDomain { axis: 0, .. })
     ));
 }
+
+#[test]
+fn sparse_points_skip_the_empty_cells() {
+    // Few points over many cells: nearly every slot of the dense array is empty, and the
+    // enumeration, `cells`, `nonempty_cell_count` and `cell_of_item` (which find the cells
+    // by skipping empty slots, not from a stored list) must still see each cell once.
+    let mut rng = Rng(5);
+    let pts: Vec<[f64; 3]> = uniform(&mut rng, 300, 25.0);
+    let n = check_cutoff(&pts, 1.5);
+    assert!(n > 0, "the test needs some pairs");
+    let g = Grid::<3>::build(&pts, 1.5).unwrap();
+    assert_eq!(g.layout(), Layout::Dense);
+    let mut distinct: Vec<[usize; 3]> = pts.iter().map(|&p| g.cell_of_point(p).unwrap()).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let listed: Vec<[usize; 3]> = g.cells().map(|c| c.coords).collect();
+    // Increasing linear order, x fastest.
+    let key = |c: &[usize; 3]| (c[2], c[1], c[0]);
+    assert!(listed.windows(2).all(|w| key(&w[0]) < key(&w[1])));
+    let mut sorted = listed.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, distinct);
+    assert_eq!(g.nonempty_cell_count(), distinct.len());
+    for (i, &p) in pts.iter().enumerate() {
+        assert_eq!(g.cell_of_item(i).unwrap(), g.cell_of_point(p).unwrap());
+    }
+}

@@ -124,11 +124,17 @@ fn blocked_rebuild_of_a_large_input_allocates_nothing() {
     let mut g = Grid::<3>::build(&pts, 0.8).unwrap();
     let mut gr = GridBuilder::<3>::with_radii(&radii).build(&pts).unwrap();
     assert!(gr.split_radius().is_some());
+    // Points along a line: the last block of cells holds items (in a cube it holds only
+    // the ghost layer), so the sort's per-block scratch ends a build non-empty.
+    let mut line: Vec<[f64; 3]> = (0..40_000).map(|i| [0.0, 0.0, i as f64 * 0.025]).collect();
+    let mut gl = Grid::<3>::build(&line, 0.8).unwrap();
     for _ in 0..3 {
         jiggle(&mut rng, &mut pts, 0.01);
+        jiggle(&mut rng, &mut line, 0.001);
         let n = allocations_during(|| {
             g.rebuild(&pts).unwrap();
             gr.rebuild(&pts).unwrap();
+            gl.rebuild(&line).unwrap();
         });
         assert_eq!(n, 0);
     }
