@@ -310,6 +310,15 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
             // The single subproblem stopped short without hitting a limit: nothing in the
             // outer loop can change that.
             Some(StopReason::Stalled)
+        } else if outcome.status == InnerStatus::Stalled
+            && outcome.iterations == 0
+            && m.infeasibility <= o.feasibility_tolerance
+            && m.complementarity <= o.complementarity_tolerance
+        {
+            // Feasible and complementary, so the penalty stays, and the multipliers barely
+            // move: the next subproblem is this one again, and would stall again (observed:
+            // 35 outer iterations in a row without a step on a packing problem).
+            Some(StopReason::Stalled)
         } else if self.outer_iterations >= o.max_outer_iterations {
             Some(StopReason::MaxOuterIterations)
         } else {

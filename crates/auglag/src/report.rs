@@ -72,9 +72,11 @@ pub enum StopReason {
     /// Without general constraints there is a single subproblem, and it reached
     /// `max_inner_iterations`.
     MaxInnerIterations,
-    /// Without general constraints: the line search could not decrease f any more although the
-    /// projected gradient is above tolerance (stationary to within rounding, or a
-    /// non-smooth/inaccurate gradient).
+    /// The line search could not decrease the function any more although the projected
+    /// gradient is above tolerance (stationary to within rounding, or a non-smooth/inaccurate
+    /// gradient): without general constraints, in the single subproblem; with constraints, in a
+    /// subproblem that could not take a single step from a point already feasible and
+    /// complementary to tolerance, where further outer iterations would repeat it unchanged.
     Stalled,
     /// `max_evaluations` reached.
     MaxEvaluations,
