@@ -12,7 +12,8 @@
 
 use crate::REFINE_ABOVE;
 use crate::contact::{
-    Prepared, Scale, Solution, amplification, check_positive_definite, odds_solution,
+    Prepared, Scale, Solution, check_positive_definite, depth_weighted, odds_amplification,
+    odds_solution, oriented,
 };
 use crate::dispatch::multiversion;
 use crate::error::Argument;
@@ -224,13 +225,11 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
     let u = V4::from_fn(|k| results[k].u);
-    let [t, s, f, sa, sb] = odds_solution(&alpha, &beta, u);
+    let [t, s, f, sa, sb, big_a, big_b] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
-    let (pa, pb) = (
-        V4::from_fn(|k| scale[k].powers().0),
-        V4::from_fn(|k| scale[k].powers().1),
-    );
-    let amplification = amplification(&bound_alpha, &bound_beta, [lambda, sa, sb, pa, pb]);
+    let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
+    let amplification =
+        odds_amplification(&bound_alpha, &bound_beta, [u, big_a, big_b, inv_a, inv_b]);
     for k in 0..LANES {
         let Some(scale) = scales[k] else {
             continue;
@@ -247,6 +246,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
                 f: f.0[k],
                 a: sa.0[k],
                 b: sb.0[k],
+                odds: None,
             };
             scale.contact(&solution, estimate, false)
         } else {

@@ -39,15 +39,36 @@ use crate::sym::{Sym2, Sym3, mat_vec};
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
 ///
 /// The bound is a worst case: on 20 000 pairs of the bench's distribution (aspect ratios up to
-/// 10) the actual error never exceeded 0.26 × the bound, and stayed below 4e-15 wherever the
-/// bound was below this threshold, while 1.5 % of the pairs were refined (at 1e-14, 38 % would
-/// be). See the `calibration` test.
+/// 10) the actual error never exceeded 0.33 × the bound, and stayed below 4.5e-15 wherever the
+/// bound was below this threshold, while 0.49 % of the pairs were refined (at 1e-14, 25 % would
+/// be). With one common rounding factor 10 u for all coefficients instead of their own depths
+/// (5 to 8 roundings) it was 1.5 %, each refinement costing about 590 ns. See
+/// the `calibration` test.
 pub const REFINE_ABOVE: f64 = 1e-13;
 
 /// Rounding-error factor γ of the coefficient formulas: their expression trees are at most
 /// about ten operations deep, so |computed − exact| ≤ 10 u Σ|terms| (u = 2⁻⁵³), and ≈ 10 u_dd
 /// in double-double (u_dd = 2⁻¹⁰⁴).
 const GAMMA_F64: f64 = 10.0 * f64::EPSILON * 0.5;
+
+/// The error bound that decides refinement counts the roundings of each coefficient's own
+/// expression tree instead of the common [`GAMMA_F64`]: a computed sum of products is
+/// Σ terms · ∏(1 + δᵢ) over the nᵢ roundings on each term's path, so its error is at most
+/// γₙ Σ|terms| with γₙ = n u / (1 − n u) and n the deepest path (Higham, *Accuracy and
+/// Stability*, §3.1, 3.4). In [`crate::poly::pencil3`]: x xᵀ 1 rounding, an adjugate entry 2
+/// (product, difference), a mixed-adjugate entry 3 (product, sum, difference), the product
+/// with the other factor 1, and the sums of the determinant 2 and of a quadratic form or
+/// trace 3. Hence α₀, α₂ = r12ᵀ adj Qᵢ r12: 1 + 2 + 1 + 3 = 7; α₁ = r12ᵀ M r12: 1 + 3 + 1 + 3
+/// = 8; β₀, β₃ = det Qᵢ: 2 + 1 + 2 = 5; β₁, β₂ = tr(adj Qᵢ Qⱼ): 2 + 1 + 3 = 6. The ellipses'
+/// coefficients ([`crate::poly::coefficients_2d`], degree-elevated) are at most 5 (α₁; α₀ and
+/// α₂ 4) and 4 (β) deep, within these.
+const DEPTH_ALPHA: [f64; 3] = [7.0, 8.0, 7.0];
+const DEPTH_BETA: [f64; 4] = [5.0, 6.0, 6.0, 5.0];
+
+/// u = 2⁻⁵³ with a safety factor covering γₙ / (n u) − 1 ≤ 1e-15, the rounding of the
+/// computed Σ|terms| (a sum of non-negative terms, at most 8 roundings deep) and of the
+/// amplification's own evaluation.
+const UNIT_ROUNDOFF: f64 = 0.5 * f64::EPSILON * (1.0 + 1e-6);
 const GAMMA_DD: f64 = 10.0 * 4.930380657631324e-32;
 
 /// The value of the contact function and where it is attained.
@@ -121,7 +142,7 @@ fn contact_function_portable<const FMA: bool>(
     q1: &Sym3,
     q2: &Sym3,
 ) -> Result<Contact, Error> {
-    Ok(Prepared::new(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2)))
+    Ok(Prepared::new::<FMA>(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2)))
 }
 
 multiversion! {
@@ -149,7 +170,7 @@ fn exact_coefficients_portable<const FMA: bool>(
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_function_refined(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
-    let prepared = Prepared::new(r12, q1, q2)?;
+    let prepared = Prepared::new::<false>(r12, q1, q2)?;
     Ok(match prepared.normalised() {
         Some((scale, _)) => prepared.refine::<false>(|| exact_coefficients(r12, q1, q2), scale),
         None => Contact::COINCIDENT,
@@ -167,18 +188,33 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
-    /// The estimate of the relative error of μ² from the amplification of the coefficients'
-    /// rounding errors (see [`Solution::amplification`]).
+    /// The estimate of the relative error of μ² from the depth-weighted amplification of the
+    /// coefficients' rounding errors (see [`Solution::weighted_amplification`]).
     #[inline(always)]
-    pub(crate) fn estimate(amplification: f64) -> f64 {
-        GAMMA_F64 * amplification + EVAL
+    pub(crate) fn estimate(weighted_amplification: f64) -> f64 {
+        UNIT_ROUNDOFF * weighted_amplification + EVAL
     }
 
+    /// Validates and computes the coefficients; `FMA` says whether this is the AVX2 + FMA
+    /// build of a dispatched function (which selects the vector-register form of the
+    /// four-lane pass, [`crate::lanes::Ends4Avx`]).
     #[inline(always)]
-    pub(crate) fn new(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Self, Error> {
+    pub(crate) fn new<const FMA: bool>(
+        r12: &[f64; 3],
+        q1: &Sym3,
+        q2: &Sym3,
+    ) -> Result<Self, Error> {
         check_inputs_finite(r12, q1, q2)?;
         // The coefficients and their error bound in one pass (four SIMD lanes).
-        let (rational, bound) = crate::poly::coefficients_with_bound(r12, q1, q2);
+        #[cfg(target_arch = "x86_64")]
+        let (rational, bound) = if FMA {
+            crate::poly::coefficients_with_bound::<crate::lanes::Ends4Avx>(r12, q1, q2)
+        } else {
+            crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let (rational, bound) =
+            crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2);
         let (beta, beta_bound) = (rational.beta, bound.beta);
         check_positive_definite(Argument::Q1, q1, beta[0], beta_bound[0])?;
         check_positive_definite(Argument::Q2, q2, beta[3], beta_bound[3])?;
@@ -223,7 +259,7 @@ impl Prepared {
         solution: Solution,
         exact: impl FnOnce() -> RationalForm,
     ) -> Contact {
-        let estimate = Self::estimate(solution.amplification(&self.bound, scale));
+        let estimate = Self::estimate(solution.weighted_amplification(&self.bound, scale));
         if estimate <= REFINE_ABOVE {
             return scale.contact(&solution, estimate, false);
         }
@@ -353,6 +389,16 @@ pub(crate) struct Solution {
     pub f: f64,
     pub a: f64,
     pub b: f64,
+    /// Where the odds iteration found it: u, A(u), B(u) of the oriented form and whether it
+    /// is reversed; `None` from the λ iteration.
+    pub odds: Option<OddsPoint>,
+}
+
+/// A point of the odds iteration: [u, A(u), B(u)] of the oriented form, and its orientation.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OddsPoint {
+    pub u_a_b: [f64; 3],
+    pub reversed: bool,
 }
 
 impl Solution {
@@ -367,6 +413,79 @@ impl Solution {
     }
 }
 
+impl Solution {
+    /// [`Solution::amplification`] with each coefficient's Σ|terms| multiplied by the depth
+    /// of its expression tree ([`DEPTH_ALPHA`], [`DEPTH_BETA`]): u times this bounds the
+    /// relative error of f(λ₀) caused by the rounding of the `f64` coefficients.
+    #[inline(always)]
+    pub(crate) fn weighted_amplification(&self, bound: &RationalForm, scale: Scale) -> f64 {
+        let weighted = depth_weighted(&bound.alpha, &bound.beta);
+        match self.odds {
+            Some(OddsPoint {
+                u_a_b: [u, big_a, big_b],
+                reversed,
+            }) => {
+                let (alpha, beta) =
+                    oriented(weighted, |keep, swap| if reversed { swap } else { keep });
+                odds_amplification(
+                    &alpha,
+                    &beta,
+                    [u, big_a, big_b, scale.inv_alpha, scale.inv_beta],
+                )
+            }
+            None => amplification(
+                &weighted.0,
+                &weighted.1,
+                [self.lambda, self.a, self.b, scale.alpha, scale.beta],
+            ),
+        }
+    }
+}
+
+/// The Σ|terms| of the coefficients multiplied by the depths of their expression trees
+/// ([`DEPTH_ALPHA`], [`DEPTH_BETA`]), in any arithmetic.
+#[inline(always)]
+pub(crate) fn depth_weighted<T: Arith>(alpha: &[T; 3], beta: &[T; 4]) -> ([T; 3], [T; 4]) {
+    (
+        core::array::from_fn(|k| alpha[k] * T::lift(DEPTH_ALPHA[k])),
+        core::array::from_fn(|k| beta[k] * T::lift(DEPTH_BETA[k])),
+    )
+}
+
+/// Coefficient lists in the orientation chosen by [`orient`]: `pick(keep, swap)` selects.
+#[inline(always)]
+pub(crate) fn oriented<T: Copy>(
+    (alpha, beta): ([T; 3], [T; 4]),
+    pick: impl Fn(T, T) -> T,
+) -> ([T; 3], [T; 4]) {
+    let [a0, a1, a2] = alpha;
+    let [b0, b1, b2, b3] = beta;
+    (
+        [pick(a0, a2), a1, pick(a2, a0)],
+        [pick(b0, b3), pick(b1, b2), pick(b2, b1), pick(b3, b0)],
+    )
+}
+
+/// [`amplification`] at the odds u of the oriented form, from the oriented bounds and A(u),
+/// B(u) of the normalised oriented form (`inv_alpha`, `inv_beta`: the normalisation). With
+/// a = s²A, b = s³B (s = 1 / (1 + u)) and the bounds' polynomials likewise, the powers of s
+/// cancel: Σ|terms| / value is Ā(u) / A(u) for a and B̄(u) / B(u) for b. So the estimate
+/// needs neither λ nor s, and its two divisions wait only for A and B, not for the division
+/// that gives s (a shorter dependency chain at the end of every call).
+#[inline(always)]
+pub(crate) fn odds_amplification<T: Arith + core::ops::Div<Output = T>>(
+    bound_alpha: &[T; 3],
+    bound_beta: &[T; 4],
+    [u, big_a, big_b, inv_alpha, inv_beta]: [T; 5],
+) -> T {
+    let [a0, a1, a2] = *bound_alpha;
+    let [b0, b1, b2, b3] = *bound_beta;
+    let u2 = u * u;
+    let bound_a = (a0 + a1 * u) + a2 * u2;
+    let bound_b = (b0 + b1 * u) + (b2 + b3 * u) * u2;
+    bound_a * inv_alpha / big_a + bound_b * inv_beta / big_b
+}
+
 /// [`Solution::amplification`] in any arithmetic (the batch evaluates four lanes at once).
 #[inline(always)]
 pub(crate) fn amplification<T: Arith + core::ops::Div<Output = T>>(
@@ -378,7 +497,8 @@ pub(crate) fn amplification<T: Arith + core::ops::Div<Output = T>>(
     ba / (a * scale_alpha) + bb / (b * scale_beta)
 }
 
-/// [`Solution::at`] in any arithmetic: [λ, 1 − λ, f, a, b] at the odds u of an oriented form.
+/// [`Solution::at`] in any arithmetic: [λ, 1 − λ, f, a, b, A, B] at the odds u of an oriented
+/// form.
 ///
 /// With A(u) = α₀ + α₁u + α₂u², B(u) = β₀ + β₁u + β₂u² + β₃u³ (non-negative coefficients and
 /// u ≥ 0, so evaluated without cancellation): λ = u / (1 + u), f = u A / ((1 + u) B) (eq. 15),
@@ -388,7 +508,7 @@ pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
     alpha: &[T; 3],
     beta: &[T; 4],
     u: T,
-) -> [T; 5] {
+) -> [T; 7] {
     let [a0, a1, a2] = *alpha;
     let [b0, b1, b2, b3] = *beta;
     let one = T::lift(1.0);
@@ -405,6 +525,8 @@ pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
         u * big_a / ((one + u) * big_b),
         s * s * big_a,
         s * s * s * big_b,
+        big_a,
+        big_b,
     ]
 }
 
@@ -455,13 +577,13 @@ pub(crate) fn orient(r: &RationalForm) -> (RationalForm, f64, bool) {
     // Selects rather than a branch: the side is a coin toss on ordinary input, and a
     // mispredicted branch here costs as much as the selects and the reversal together.
     let reversed = x > y;
-    let pick = |keep: f64, swap: f64| if reversed { swap } else { keep };
-    let [a0, a1, a2] = r.alpha;
-    let [b0, b1, b2, b3] = r.beta;
-    let form = RationalForm {
-        alpha: [pick(a0, a2), a1, pick(a2, a0)],
-        beta: [pick(b0, b3), pick(b1, b2), pick(b2, b1), pick(b3, b0)],
-    };
+    let (alpha, beta) = oriented(
+        (r.alpha, r.beta),
+        |keep: f64, swap: f64| {
+            if reversed { swap } else { keep }
+        },
+    );
+    let form = RationalForm { alpha, beta };
     (form, (x.min(y) / x.max(y)).sqrt(), reversed)
 }
 
@@ -472,12 +594,16 @@ impl Solution {
     /// b = B / (1 + u)³ (eq. 16).
     #[inline(always)]
     pub(crate) fn at(form: &RationalForm, u: f64, reversed: bool) -> Self {
-        let [t, s, f, a, b] = odds_solution(&form.alpha, &form.beta, u);
+        let [t, s, f, a, b, big_a, big_b] = odds_solution(&form.alpha, &form.beta, u);
         Solution {
             lambda: if reversed { s } else { t },
             f,
             a,
             b,
+            odds: Some(OddsPoint {
+                u_a_b: [u, big_a, big_b],
+                reversed,
+            }),
         }
     }
 
@@ -489,6 +615,7 @@ impl Solution {
             f: search.f,
             a: form.a(t),
             b: form.b(t),
+            odds: None,
         }
     }
 }
@@ -578,15 +705,20 @@ fn power_of_two_below(x: f64) -> (f64, f64) {
 }
 
 /// All fifteen inputs finite, checked in one pass (x − x is NaN exactly for NaN and ±∞); the
-/// slow search for the culprit runs only when the check fails.
+/// slow search for the culprit runs only when the check fails. The differences are summed in
+/// four independent chains (in any order the sum is NaN iff a term is): 19 instructions per
+/// call fewer than fifteen dependent additions (callgrind).
 #[inline(always)]
 pub(crate) fn check_inputs_finite(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<(), Error> {
     #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
-    let probe = r12
-        .iter()
-        .chain(q1)
-        .chain(q2)
-        .fold(0.0, |acc, &x| acc + (x - x));
+    let d = |x: f64| x - x;
+    let chains: [f64; 4] = [
+        d(r12[0]) + d(q1[2]) + d(q1[5]) + d(q2[3]),
+        d(r12[1]) + d(q1[0]) + d(q1[4]) + d(q2[4]),
+        d(r12[2]) + d(q1[1]) + d(q2[0]) + d(q2[5]),
+        d(q1[3]) + d(q2[1]) + d(q2[2]),
+    ];
+    let probe = (chains[0] + chains[1]) + (chains[2] + chains[3]);
     if probe == 0.0 {
         return Ok(());
     }
@@ -696,7 +828,7 @@ mod calibration {
             let scale = Scale::of(&fast).unwrap();
             let s1 = solve::<false>(&scale.apply(&fast));
             let bound = coefficients::<Mag>(&r, &q1, &q2).to_f64();
-            let est = GAMMA_F64 * s1.amplification(&bound, scale) + EVAL;
+            let est = Prepared::estimate(s1.weighted_amplification(&bound, scale));
             let exact = coefficients::<Dd>(&r, &q1, &q2).to_f64();
             let scale2 = Scale::of(&exact).unwrap();
             let s2 = solve::<false>(&scale2.apply(&exact));

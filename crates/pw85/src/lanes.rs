@@ -150,11 +150,104 @@ impl Arith for Ends4 {
     }
 }
 
-impl Ends4 {
-    /// [a, b, |a|, |b|].
+/// The arithmetic of [`crate::poly::coefficients_with_bound`]'s four-lane pass: [`Ends4`] in
+/// the portable build, [`Ends4Avx`] in the AVX2 build.
+pub(crate) trait EndsLanes: Arith {
+    /// [a, b, |a|, |b|] in this type's layout.
+    fn of(a: f64, b: f64) -> Self;
+    /// [x(Q1), x(Q2), Σ|terms| of x(Q1), Σ|terms| of x(Q2)].
+    fn lanes(self) -> [f64; 4];
+}
+
+impl EndsLanes for Ends4 {
     #[inline(always)]
-    pub(crate) fn of(a: f64, b: f64) -> Self {
+    fn of(a: f64, b: f64) -> Self {
         Ends4(V4([a, b, a.abs(), b.abs()]))
+    }
+    #[inline(always)]
+    fn lanes(self) -> [f64; 4] {
+        // Left to itself the optimiser splits the four-lane expressions into one scalar chain
+        // per lane read (more instructions than the vector form); materialising the result
+        // keeps each operation one vector instruction. ([`Ends4Avx`] is a vector type and
+        // needs no such help: there this barrier cost 8 instructions per call.)
+        core::hint::black_box(self).0.0
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx::Ends4Avx;
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use super::EndsLanes;
+    use crate::arith::Arith;
+    use core::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_addsub_pd, _mm256_mul_pd, _mm256_setr_pd, _mm256_storeu_pd,
+    };
+    use core::ops::{Add, Mul, Sub};
+
+    /// [`super::Ends4`] as one AVX register, lanes [x(Q1), Σ|terms|(Q1), x(Q2), Σ|terms|(Q2)]:
+    /// written with `[f64; 4]` the optimiser splits the lanes into scalars and re-packs them
+    /// into 128-bit halves with shuffles and stack spills (callgrind: 340 instructions per
+    /// call in the coefficients); as a vector type every operation is one instruction. In this
+    /// layout a − b is ADDSUBPD, which subtracts in the even (value) lanes and adds in the odd
+    /// (magnitude) ones: the subtraction of the `f64` formula and the addition of the `Mag`
+    /// one, each with its own rounding, so the results are the same bits as [`super::Ends4`].
+    ///
+    /// Values of this type are only created in the AVX2 + FMA build of a dispatched function
+    /// (`FMA = true` in [`crate::dispatch::multiversion`]), after the processor was checked to
+    /// have AVX2 and FMA: that is what makes the intrinsics below sound.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Ends4Avx(__m256d);
+
+    impl Add for Ends4Avx {
+        type Output = Self;
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            // SAFETY: AVX is available wherever an `Ends4Avx` exists (see the type).
+            Self(unsafe { _mm256_add_pd(self.0, o.0) })
+        }
+    }
+    impl Sub for Ends4Avx {
+        type Output = Self;
+        #[inline(always)]
+        fn sub(self, o: Self) -> Self {
+            // SAFETY: as in `add`.
+            Self(unsafe { _mm256_addsub_pd(self.0, o.0) })
+        }
+    }
+    impl Mul for Ends4Avx {
+        type Output = Self;
+        #[inline(always)]
+        fn mul(self, o: Self) -> Self {
+            // SAFETY: as in `add`.
+            Self(unsafe { _mm256_mul_pd(self.0, o.0) })
+        }
+    }
+    impl Arith for Ends4Avx {
+        #[inline(always)]
+        fn lift(x: f64) -> Self {
+            Self::of(x, x)
+        }
+        #[inline(always)]
+        fn to_f64(self) -> f64 {
+            self.lanes()[0]
+        }
+    }
+    impl EndsLanes for Ends4Avx {
+        #[inline(always)]
+        fn of(a: f64, b: f64) -> Self {
+            debug_assert!(crate::dispatch::has_avx2_fma());
+            // SAFETY: only called in the AVX2 build (see the type).
+            Self(unsafe { _mm256_setr_pd(a, a.abs(), b, b.abs()) })
+        }
+        #[inline(always)]
+        fn lanes(self) -> [f64; 4] {
+            let mut out = [0.0; 4];
+            // SAFETY: as in `of`; `out` has room for four doubles.
+            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
+            [out[0], out[2], out[1], out[3]]
+        }
     }
 }
 
@@ -195,4 +288,47 @@ pub(crate) fn maximise4<const FMA: bool>(
         }
     }
     search
+}
+
+#[cfg(test)]
+mod tests {
+    /// The vector-register form of the four-lane pass gives the same bits as the array form
+    /// (and so as the scalar `f64` and `Mag` formulas), lanes in the same order.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_ends_equal_portable_ends_bit_for_bit() {
+        use crate::poly::coefficients_with_bound;
+        if !crate::dispatch::has_avx2_fma() {
+            return;
+        }
+        let mut x = 0.123_f64;
+        let mut next = || {
+            x = (x * 3.99 * (1.0 - x)).clamp(1e-9, 1.0 - 1e-9);
+            x - 0.5
+        };
+        for _ in 0..2000 {
+            let mut ellipsoid = || {
+                let axes = [1.0, 0.3, 1e-3].map(|a| a * (1.0 + next()));
+                let q = [next(), next(), next(), next()];
+                crate::shape::from_axes_quaternion(&axes, &q).unwrap()
+            };
+            let (q1, q2) = (ellipsoid(), ellipsoid());
+            let r12 = [next(), next(), 1e-6 * next()];
+            let avx = coefficients_with_bound::<super::Ends4Avx>(&r12, &q1, &q2);
+            let portable = coefficients_with_bound::<super::Ends4>(&r12, &q1, &q2);
+            let bits = |(v, m): (crate::poly::RationalForm, crate::poly::RationalForm)| {
+                [
+                    v.alpha.to_vec(),
+                    v.beta.to_vec(),
+                    m.alpha.to_vec(),
+                    m.beta.to_vec(),
+                ]
+                .concat()
+                .into_iter()
+                .map(f64::to_bits)
+                .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(avx), bits(portable));
+        }
+    }
 }

@@ -5,8 +5,9 @@
 //! since f is concave (a minimum of functions affine in λ, eq. 5) every tangent line gives an
 //! upper bound. The verdict therefore stops at the first of:
 //!
-//! 1. the bounding spheres (radius √λmax(Q) ≤ √tr Q) are apart: no overlap;
-//! 2. the inscribed spheres (radius √λmin(Q), λmin ≥ det Q / tr adj Q) overlap: overlap;
+//! 1. the projections on the centre line are disjoint (support values along r̂): no overlap;
+//! 2. the segment between the centres is covered by the two ellipsoids (radial extents along
+//!    r̂): overlap;
 //! 3. some iterate λ of the contact-function iteration has f(λ) > 1: no overlap;
 //! 4. the tangent lines at the iterates bound max f below 1: overlap;
 //!
@@ -30,6 +31,10 @@ use crate::sym::{
     outer_generic, quadratic_form_generic,
 };
 
+/// Rounding-error factor of the short expression trees of the axis test (at most about six
+/// roundings deep; 10 u as in the contact function's coefficients).
+const GAMMA: f64 = 10.0 * 0.5 * f64::EPSILON;
+
 /// Relative safety factor on the geometric sphere tests (their square roots and sums round).
 const SPHERE_MARGIN: f64 = 1e-12;
 /// Iterations of the bounded search before handing over to the full contact function.
@@ -39,8 +44,9 @@ multiversion! {
     /// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
     /// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
     ///
-    /// Stops as soon as the answer is certain: bounding spheres apart (no overlap), inscribed
-    /// spheres overlapping (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
+    /// Stops as soon as the answer is certain: the projections on the centre line disjoint (no
+    /// overlap), the segment between the centres covered by the two ellipsoids' radial extents
+    /// (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
     /// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
     /// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
     /// pencil, pay for the full [`crate::contact_function`].
@@ -68,27 +74,36 @@ fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Re
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
     let det2 = det_generic(q2, &adj2);
-    check_positive_definite(Argument::Q1, q1, det1, det_magnitude(q1, det1))?;
-    check_positive_definite(Argument::Q2, q2, det2, det_magnitude(q2, det2))?;
+    // Q11 Q22 Q33 bounds each of the six terms of det Q (|Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ)).
+    let (p1, p2) = (q1[0] * q1[3] * q1[5], q2[0] * q2[3] * q2[5]);
+    check_positive_definite(Argument::Q1, q1, det1, det_magnitude(q1, det1, p1))?;
+    check_positive_definite(Argument::Q2, q2, det2, det_magnitude(q2, det2, p2))?;
 
-    let r2 = r12[0] * r12[0] + r12[1] * r12[1] + r12[2] * r12[2];
-    let spheres = Spheres {
-        outer: (q1[0] + q1[3] + q1[5]).sqrt() + (q2[0] + q2[3] + q2[5]).sqrt(),
-        inner: (det1 / (adj1[0] + adj1[3] + adj1[5])).sqrt()
-            + (det2 / (adj2[0] + adj2[3] + adj2[5])).sqrt(),
+    let rr = outer_generic::<f64>(r12);
+    let r2 = rr[0] + rr[3] + rr[5];
+    let (d1, d2) = (q1[0].max(q1[3]).max(q1[5]), q2[0].max(q2[3]).max(q2[5]));
+    // α₀ = r12ᵀ adj Q1 r12 and α₂ (eq. 16a at λ = 0, 1): the radial extents need them, and
+    // so do the coefficients if the axis test does not decide.
+    let alpha0 = quadratic_form_generic(&rr, &adj1);
+    let alpha2 = quadratic_form_generic(&rr, &adj2);
+    let axis = AxisTest {
+        r2,
+        d: [d1, d2],
+        support2: [
+            quadratic_form_generic(&rr, q1),
+            quadratic_form_generic(&rr, q2),
+        ],
+        alpha: [alpha0, alpha2],
+        det: [det1, det2],
+        det_terms: [p1, p2],
     };
-    if let Some(verdict) = spheres.verdict(r2) {
+    if let Some(verdict) = axis.verdict() {
         return Ok(verdict);
     }
 
-    let rr = outer_generic::<f64>(r12);
     let mixed = mixed_adjugate_generic(q1, q2);
     let fast = RationalForm {
-        alpha: [
-            quadratic_form_generic(&rr, &adj1),
-            quadratic_form_generic(&rr, &mixed),
-            quadratic_form_generic(&rr, &adj2),
-        ],
+        alpha: [alpha0, quadratic_form_generic(&rr, &mixed), alpha2],
         beta: [
             det1,
             frobenius_generic(&adj1, q2),
@@ -97,8 +112,8 @@ fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Re
         ],
     };
     let bound = CrudeBound {
-        d1: q1[0].max(q1[3]).max(q1[5]),
-        d2: q2[0].max(q2[3]).max(q2[5]),
+        d1,
+        d2,
         r2,
         k_b: 18.0,
         k_a: 6.0,
@@ -158,9 +173,10 @@ fn overlap_2d_portable<const FMA: bool>(
 /// A bound on Σ|terms| of det Q as the cofactor expansion computes it. For the positive
 /// definiteness check only its size relative to det Q matters, so the cheap bound 6 Q11 Q22 Q33
 /// (each of the six terms of a determinant with |Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ) is at most the product of the
-/// diagonal) is used when it already proves det Q > 0, and the exact Σ|terms| otherwise.
-fn det_magnitude(q: &Sym3, det: f64) -> f64 {
-    let cheap = 6.0 * q[0] * q[3] * q[5];
+/// diagonal, `diagonal_product`) is used when it already proves det Q > 0, and the exact
+/// Σ|terms| otherwise.
+fn det_magnitude(q: &Sym3, det: f64, diagonal_product: f64) -> f64 {
+    let cheap = 6.0 * diagonal_product;
     if det > 1e-12 * cheap {
         return cheap;
     }
@@ -168,7 +184,8 @@ fn det_magnitude(q: &Sym3, det: f64) -> f64 {
     det_generic(&m, &adjugate_generic(&m)).0
 }
 
-/// Radii sums of the bounding and inscribed spheres.
+/// Radii sums of the bounding and inscribed circles of two ellipses (the 2D verdict's first
+/// test).
 struct Spheres {
     outer: f64,
     inner: f64,
@@ -183,6 +200,70 @@ impl Spheres {
         } else {
             None
         }
+    }
+}
+
+/// The two cheap certificates along the centre line r̂ = r12 / |r12|, from quantities the
+/// validation and the coefficients need anyway (theory eq. 16a at λ = 0 and 1):
+///
+/// - **separating axis**: the projections of the ellipsoids on r̂ are the intervals
+///   cᵢ·r̂ ± hᵢ with the support values hᵢ = √(r̂ᵀ Qᵢ r̂); if h₁ + h₂ < |r12| the projections
+///   are disjoint and so are the ellipsoids. With r12 unnormalised: √(r12ᵀQ₁r12) +
+///   √(r12ᵀQ₂r12) < |r12|²;
+/// - **covered segment**: the points c₁ + t r̂, 0 ≤ t ≤ ρ₁, lie in the first ellipsoid for its
+///   radial extent ρ₁ = (r̂ᵀ Q₁⁻¹ r̂)^(−1/2), and likewise from c₂; if ρ₁ + ρ₂ > |r12| the two
+///   pieces of the segment overlap and so do the ellipsoids. Unnormalised:
+///   √(β₀/α₀) + √(β₃/α₂) > 1 with α₀ = r12ᵀ adj Q₁ r12, β₀ = det Q₁ (α₂, β₃ for Q₂).
+///
+/// The first dominates the bounding spheres (hᵢ ≤ √λmax(Qᵢ)), the second the inscribed ones
+/// (ρᵢ ≥ √λmin(Qᵢ)); on the bench's 100 000 pairs they decide 74.0 % of the verdicts (34.6 %
+/// separated, 39.4 % overlapping), the spheres decided 9.8 %. The first iterate of the
+/// search then decides 22.0 % of all pairs, the second 3.8 %, later ones 0.2 %.
+///
+/// Rounding: with |Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ) ≤ d (d the largest diagonal entry) the terms of
+/// r12ᵀQr12 sum to at most 3 d |r12|², those of r12ᵀ adj Q r12 to at most 6 d² |r12|² and those
+/// of det Q to at most 6 Q11 Q22 Q33; γ times these bound the errors, the quantities are
+/// moved by them to the safe side, and the final comparisons keep a relative margin
+/// [`SPHERE_MARGIN`] for the square roots, divisions and sums. The test is only made when
+/// |r12|², d₁ and d₂ are within [1e-60, 1e60]: then every product above stays far from
+/// overflow, and the absolute errors of subnormal intermediates are negligible against the
+/// margins (which are ≥ γ · 1e-180).
+struct AxisTest {
+    r2: f64,
+    d: [f64; 2],
+    /// r12ᵀ Qᵢ r12 = |r12|² hᵢ².
+    support2: [f64; 2],
+    /// r12ᵀ adj Qᵢ r12.
+    alpha: [f64; 2],
+    /// det Qᵢ and the bound Q11 Q22 Q33 on each of its terms.
+    det: [f64; 2],
+    det_terms: [f64; 2],
+}
+
+impl AxisTest {
+    #[inline(always)]
+    fn verdict(&self) -> Option<bool> {
+        let Self {
+            r2,
+            d: [d1, d2],
+            support2: [s1, s2],
+            alpha: [a1, a2],
+            det: [b1, b2],
+            det_terms: [p1, p2],
+        } = *self;
+        let lo = r2.min(d1).min(d2);
+        let hi = r2.max(d1).max(d2);
+        if !(lo >= 1e-60 && hi <= 1e60) {
+            return None;
+        }
+        let support = (s1 + GAMMA * 3.0 * d1 * r2).sqrt() + (s2 + GAMMA * 3.0 * d2 * r2).sqrt();
+        let extent = ((b1 - GAMMA * 6.0 * p1) / (a1 + GAMMA * 6.0 * d1 * d1 * r2)).sqrt()
+            + ((b2 - GAMMA * 6.0 * p2) / (a2 + GAMMA * 6.0 * d2 * d2 * r2)).sqrt();
+        // Both tests before one branch (see `bounded_search`). A negative lower bound of det
+        // gives NaN, which fails the comparison: no claim.
+        let separated = support * (1.0 + SPHERE_MARGIN) < r2;
+        let overlapping = extent > 1.0 + SPHERE_MARGIN;
+        (separated || overlapping).then_some(!separated)
     }
 }
 
@@ -330,4 +411,84 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
         search.advance(odds.halley_terms::<FMA>(u));
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The axis test on one pair, built exactly as [`overlap`] builds it.
+    fn axis_verdict(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Option<bool> {
+        let (adj1, adj2) = (adjugate_generic(q1), adjugate_generic(q2));
+        let rr = outer_generic::<f64>(r12);
+        let r2 = rr[0] + rr[3] + rr[5];
+        AxisTest {
+            r2,
+            d: [q1[0].max(q1[3]).max(q1[5]), q2[0].max(q2[3]).max(q2[5])],
+            support2: [
+                quadratic_form_generic(&rr, q1),
+                quadratic_form_generic(&rr, q2),
+            ],
+            alpha: [
+                quadratic_form_generic(&rr, &adj1),
+                quadratic_form_generic(&rr, &adj2),
+            ],
+            det: [det_generic(q1, &adj1), det_generic(q2, &adj2)],
+            det_terms: [q1[0] * q1[3] * q1[5], q2[0] * q2[3] * q2[5]],
+        }
+        .verdict()
+    }
+
+    /// Every claim of the axis test agrees with μ² (double-double, error ≤ 1e-15 here), on
+    /// spheres (where the separating-axis bound is exact, so tangent pairs sit right at its
+    /// margin), needles and discs of aspect ratio up to 1e4, pairs within 1e-9 of tangency, and
+    /// whole configurations scaled by 10^±25 and 10^±45 (the latter beyond the test's range,
+    /// where it must abstain).
+    #[test]
+    fn axis_test_claims_are_right() {
+        let mut state = 0xA515u64;
+        let mut next = move || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut decided, mut decided_scaled, mut decided_spheres) = (0, 0, 0);
+        for i in 0..20_000 {
+            let mut ellipsoid = |decades: f64| {
+                let axes: [f64; 3] = core::array::from_fn(|_| 10f64.powf(-decades * next()));
+                let q: [f64; 4] = core::array::from_fn(|_| 2.0 * next() - 1.0);
+                crate::shape::from_axes_quaternion(&axes, &q).unwrap()
+            };
+            let decades = [0.0, 1.0, 4.0][i % 3];
+            let (q1, q2) = (ellipsoid(decades), ellipsoid(decades));
+            let dir = [next() - 0.5, next() - 0.5, next() - 0.5];
+            let unit = crate::contact_function_refined(&dir, &q1, &q2).unwrap().mu2;
+            let target = match i % 4 {
+                0 | 1 => 2f64.powf(6.0 * next() - 3.0),
+                _ => 1.0 + 2e-9 * (next() - 0.5),
+            };
+            // Scaling r by k and Q by k² leaves μ² unchanged.
+            let k = [1.0, 1e-45, 1e45, 1e-25, 1e25][(i / 4) % 5];
+            let r = dir.map(|x| x * (target / unit).sqrt() * k);
+            let (q1, q2) = (q1.map(|x| x * k * k), q2.map(|x| x * k * k));
+            let exact = crate::contact_function_refined(&r, &q1, &q2).unwrap().mu2;
+            if let Some(verdict) = axis_verdict(&r, &q1, &q2) {
+                assert!(
+                    (exact - 1.0).abs() > 1e-13,
+                    "pair {i}: a claim at μ² = {exact}"
+                );
+                assert_eq!(verdict, exact < 1.0, "pair {i}: μ² = {exact}");
+                decided += 1;
+                decided_scaled += usize::from(k != 1.0);
+                decided_spheres += usize::from(decades == 0.0);
+            }
+        }
+        // The test is not vacuous: it decides most far-from-tangent pairs, also at scales
+        // 1e±25, and on spheres.
+        assert!(decided > 5_000, "{decided}");
+        assert!(decided_scaled > 2_000, "{decided_scaled}");
+        assert!(decided_spheres > 2_000, "{decided_spheres}");
+    }
 }

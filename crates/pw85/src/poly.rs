@@ -641,26 +641,21 @@ pub(crate) fn pencil3_lifted<T: Arith>(r12: [T; 3], a: [T; 6], b: [T; 6]) -> Pen
 /// the same expression trees as [`pencil3`] in `f64` and in `Mag`, bit for bit, evaluated for
 /// both ends of the pencil at once ([`crate::lanes::Ends4`]). Returns (values, bounds).
 #[inline(always)]
-pub(crate) fn coefficients_with_bound(
+pub(crate) fn coefficients_with_bound<E: crate::lanes::EndsLanes>(
     r12: &[f64; 3],
     q1: &Sym3,
     q2: &Sym3,
 ) -> (RationalForm, RationalForm) {
-    use crate::lanes::Ends4;
-    let ends: [Ends4; 6] = core::array::from_fn(|i| Ends4::of(q1[i], q2[i]));
-    let swapped: [Ends4; 6] = core::array::from_fn(|i| Ends4::of(q2[i], q1[i]));
-    let rr = crate::sym::outer_generic::<Ends4>(r12);
+    let ends: [E; 6] = core::array::from_fn(|i| E::of(q1[i], q2[i]));
+    let swapped: [E; 6] = core::array::from_fn(|i| E::of(q2[i], q1[i]));
+    let rr = crate::sym::outer_generic::<E>(r12);
     let adj = adjugate_generic(&ends);
     // Lanes: (β₀, β₃), (α₀, α₂), (β₁, β₂) and α₁ (first lane; the second is M(Q2, Q1)).
     let det = det_generic(&ends, &adj);
     let outer = quadratic_form_generic(&rr, &adj);
     let cross = frobenius_generic(&adj, &swapped);
     let mixed = quadratic_form_generic(&rr, &mixed_adjugate_generic(&ends, &swapped));
-    // Left to itself the optimiser splits the four-lane expressions into one scalar chain per
-    // lane read below (more instructions than the vector form); materialising the results
-    // keeps each operation one vector instruction.
-    let (det, outer, cross, mixed) = core::hint::black_box((det, outer, cross, mixed));
-    let [det, outer, cross, mixed] = [det, outer, cross, mixed].map(|x| x.0.0);
+    let [det, outer, cross, mixed] = [det, outer, cross, mixed].map(E::lanes);
     let pick = |k: usize| RationalForm {
         alpha: [outer[k], mixed[k], outer[k + 1]],
         beta: [det[k], cross[k], cross[k + 1], det[k + 1]],
