@@ -805,14 +805,7 @@ mod calibration {
     /// coefficients (against the double-double ones) on the bench's distribution of pairs.
     #[test]
     fn bound_versus_actual_error() {
-        let mut state = 12345u64;
-        let mut next = move || {
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_rng::uniform_stream(12345u64);
         let mut rows = Vec::new();
         for _ in 0..20000 {
             let mut ell = |decades: f64| {

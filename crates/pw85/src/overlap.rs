@@ -446,14 +446,7 @@ mod tests {
     /// where it must abstain).
     #[test]
     fn axis_test_claims_are_right() {
-        let mut state = 0xA515u64;
-        let mut next = move || {
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_rng::uniform_stream(0xA515u64);
         let (mut decided, mut decided_scaled, mut decided_spheres) = (0, 0, 0);
         for i in 0..20_000 {
             let mut ellipsoid = |decades: f64| {
