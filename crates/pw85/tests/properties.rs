@@ -392,3 +392,40 @@ fn refined_path_agrees_with_the_fast_path_within_its_bound() {
         );
     }
 }
+
+/// A pair on which the Halley iteration once stopped at its start: there h = p/V has h′ ≈ 0,
+/// so Halley's step was tiny although p was far from 0, and λ = 0.559 came back instead of
+/// 0.256 (found by `cargo xtask validate` among 1e6 pairs). Checked against the Brent baseline.
+#[test]
+fn halley_does_not_stop_where_the_derivative_vanishes() {
+    let r = [
+        0.36007638574278555,
+        -0.27269395417913356,
+        -0.18166772753057847,
+    ];
+    let q1 = [
+        0.12134042233143592,
+        0.03171636396136718,
+        0.08771842837997272,
+        0.9634352483507153,
+        0.17423796180249643,
+        0.10269523694701543,
+    ];
+    let q2 = [
+        0.5991991576797356,
+        0.29725195532654075,
+        0.34627790835768774,
+        0.1601445579602266,
+        0.16876727761160956,
+        0.4084151448558676,
+    ];
+    let c = pw85::contact_function(&r, &q1, &q2).unwrap();
+    let b = pw85::baseline::brent(&r, &q1, &q2, 1e-14);
+    assert!(
+        (c.mu2 - b.mu2).abs() <= 1e-13 * b.mu2,
+        "{c:?} against {b:?}"
+    );
+    assert!((c.lambda - b.lambda).abs() <= 1e-6, "{c:?} against {b:?}");
+    let batch = pw85::batch::contact_functions(&[pw85::batch::Pair { r12: r, q1, q2 }]);
+    assert_eq!(batch[0].as_ref().unwrap().mu2.to_bits(), c.mu2.to_bits());
+}
