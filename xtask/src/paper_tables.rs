@@ -255,13 +255,14 @@ fn csv(rows: &[Row]) -> String {
     );
     for r in rows {
         let paper = r.instance.reference_density();
+        let to_best = paper_to_best(r.instance.name);
         let _ = writeln!(
             out,
             "{},{},{},{},{:.6},{},{:.1},{},{},{:.0},{},{},\"{}\"",
             r.instance.name,
             paper.map_or(String::new(), |d| format!("{d:.5}")),
-            paper_to_best(r.instance.name).map_or("", |p| p.0),
-            paper_to_best(r.instance.name).map_or(String::new(), |p| p.1.to_string()),
+            to_best.map_or("", |p| p.0),
+            to_best.map_or(String::new(), |p| p.1.to_string()),
             r.density,
             paper.map_or(String::new(), |d| format!("{:.5}", r.density / d)),
             r.seconds_to_best,

@@ -684,15 +684,7 @@ impl Validator<'_> {
             })?;
         }
         if let Some(n) = &raw.local_minimisations {
-            let v = *n.get_ref();
-            if v < 1 {
-                return Err(self.error(
-                    n.span(),
-                    "solver.local_minimisations",
-                    format!("must be at least 1, not {v}"),
-                ));
-            }
-            s.local_minimisations = Some(v.unsigned_abs());
+            s.local_minimisations = Some(self.count(n, "solver.local_minimisations", 1)?);
         }
         if let Some(solver) = raw.inner_solver {
             s.inner_solver = solver;
