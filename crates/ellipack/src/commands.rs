@@ -172,6 +172,12 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         outcome.repair_factor - 1.0,
         outcome.density_before_repair
     );
+    if outcome.restarts > 0 {
+        println!(
+            "{} new chains from fresh lattice starts (after {} starts without improvement)",
+            outcome.restarts, scene.solver.restart_after
+        );
+    }
     if outcome.failed_starts > 0 {
         println!(
             "{} starts were abandoned: their local minimisation ended at a point that could \

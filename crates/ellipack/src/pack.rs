@@ -62,6 +62,8 @@ pub struct RunOutcome {
     pub interrupted: bool,
     /// Starts abandoned because their local minimisation ended at an uncertifiable point.
     pub failed_starts: usize,
+    /// New chains begun from fresh lattice starts (`solver.restart_after`).
+    pub restarts: usize,
 }
 
 /// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
@@ -123,6 +125,7 @@ fn run_n<const N: usize>(
         perturbation_levels: scene.solver.perturbation_levels,
         fresh_lattice_every: usize::try_from(scene.solver.fresh_lattice_every)
             .unwrap_or(usize::MAX),
+        restart_after: usize::try_from(scene.solver.restart_after).unwrap_or(usize::MAX),
         threads,
         max_local_minimisations: scene
             .solver
@@ -158,6 +161,7 @@ fn run_n<const N: usize>(
         seconds_to_best: result.time_to_best.as_secs_f64(),
         interrupted: result.interrupted,
         failed_starts: result.failed_starts,
+        restarts: result.restarts,
     })
 }
 

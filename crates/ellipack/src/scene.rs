@@ -31,6 +31,8 @@
 //! from_best = true                    # perturb the best packing (false: the latest, as the paper)
 //! perturbation_levels = 3             # amplitudes perturbation, /2, /4 in turn (1: the paper's)
 //! fresh_lattice_every = 8             # every 8th later start a new lattice start (0: never)
+//! restart_after = 300                 # new chain from fresh lattice starts after 300 starts
+//!                                     # without improvement (0: never; needs from_best)
 //!
 //! [output]                            # optional; the defaults are shown
 //! # directory = "out"                 # default directory (--out overrides it)
@@ -190,7 +192,14 @@ pub struct SolverSettings {
     pub perturbation_levels: u32,
     /// Every this many later starts, one is a new dense lattice start (0: never).
     pub fresh_lattice_every: u64,
+    /// With `from_best`: after this many starts in a row without improving the current
+    /// chain's best packing, a round of fresh lattice starts begins a new chain (0: never).
+    pub restart_after: u64,
 }
+
+/// Starts without improvement after which a run begins a new chain, unless the scene says
+/// otherwise.
+pub const DEFAULT_RESTART_AFTER: u64 = 300;
 
 /// Dense lattice starts of a run unless the scene says otherwise: four rounds of every
 /// lattice orientation in 3D, eight in 2D.
@@ -214,6 +223,7 @@ impl SolverSettings {
             from_best: true,
             perturbation_levels: 3,
             fresh_lattice_every: 8,
+            restart_after: DEFAULT_RESTART_AFTER,
         }
     }
 }
@@ -308,6 +318,7 @@ struct RawSolver {
     from_best: Option<bool>,
     perturbation_levels: Option<Spanned<i64>>,
     fresh_lattice_every: Option<Spanned<i64>>,
+    restart_after: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -469,6 +480,7 @@ impl Scene {
             "fresh_lattice_every",
             s.fresh_lattice_every.to_string(),
         );
+        line(&mut out, "restart_after", s.restart_after.to_string());
         let o = &self.output;
         out.push_str("\n[output]\n");
         if let Some(dir) = &o.directory {
@@ -705,6 +717,9 @@ impl Validator<'_> {
         }
         if let Some(n) = &raw.fresh_lattice_every {
             s.fresh_lattice_every = self.count(n, "solver.fresh_lattice_every", 0)?;
+        }
+        if let Some(n) = &raw.restart_after {
+            s.restart_after = self.count(n, "solver.restart_after", 0)?;
         }
         if let Some(n) = &raw.perturbation_levels {
             let v = self.count(n, "solver.perturbation_levels", 1)?;

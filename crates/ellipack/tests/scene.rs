@@ -118,6 +118,16 @@ fn the_default_scene_is_thirty_ellipses_in_an_ellipse() {
 }
 
 #[test]
+fn restarts_are_on_by_default_and_can_be_turned_off() {
+    assert_eq!(
+        parse(&minimal_2d("")).unwrap().solver.restart_after,
+        ellipack::scene::DEFAULT_RESTART_AFTER
+    );
+    let off = parse(&minimal_2d("[solver]\nrestart_after = 0\n")).unwrap();
+    assert_eq!(off.solver.restart_after, 0);
+}
+
+#[test]
 fn scenes_survive_a_round_trip_through_toml() {
     for text in [GOOD_3D, DEFAULT_SCENE, &minimal_2d("")] {
         let scene = parse(text).unwrap();
@@ -270,6 +280,12 @@ fn impossible_values_are_named_with_their_line() {
     assert_error(
         &minimal_2d("[solver]\nlattice_starts = -2\n"),
         "solver.lattice_starts",
+        8,
+        "at least 0",
+    );
+    assert_error(
+        &minimal_2d("[solver]\nrestart_after = -1\n"),
+        "solver.restart_after",
         8,
         "at least 0",
     );

@@ -2,7 +2,8 @@
 //! `cargo run --release -p implicit-packing --example multistart -- 3 ball 100 60 2`
 //! (dimension, container, items, seconds, threads), then optionally: local minimisations
 //! (0: no cap), lattice starts, from best (0/1), perturbation levels, a fresh lattice start
-//! every n perturbations (0: never).
+//! every n perturbations (0: never), a new chain after n starts without improvement (0:
+//! never).
 
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::multistart::{MultiStartSettings, multistart, paper_start};
@@ -31,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     settings.from_best = arg(8, "0").parse::<u8>()? == 1;
     settings.perturbation_levels = arg(9, "1").parse()?;
     settings.fresh_lattice_every = arg(10, "0").parse()?;
+    settings.restart_after = arg(11, "0").parse()?;
     settings.time_limit = Some(Duration::from_secs_f64(seconds));
     let mut report = |p: &implicit_packing::multistart::MultiStartProgress| {
         eprintln!(
@@ -51,10 +53,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         multistart(&axes, kind, &x0, &settings, &mut report, &|_| {}, &|| false)?
     };
     println!(
-        "{dim}D m = {m} {kind:?}: best density {:.5} after {:.1} s ({} local minimisations in {:.1} s, {threads} threads)",
+        "{dim}D m = {m} {kind:?}: best density {:.5} after {:.1} s ({} local minimisations, {} restarts, in {:.1} s, {threads} threads)",
         r.best.density,
         r.time_to_best.as_secs_f64(),
         r.local_minimisations,
+        r.restarts,
         r.wall_time.as_secs_f64()
     );
     Ok(())
