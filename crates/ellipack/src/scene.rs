@@ -32,7 +32,7 @@
 //! perturbation_levels = 3             # amplitudes perturbation, /2, /4 in turn (1: the paper's)
 //! fresh_lattice_every = 8             # every 8th later start a new lattice start (0: never)
 //! restart_after = 300                 # new chain from fresh lattice starts after 300 starts
-//!                                     # without improvement (0: never; needs from_best)
+//!                                     # without a 1e-5 gain (0: never; needs from_best)
 //!
 //! [output]                            # optional; the defaults are shown
 //! # directory = "out"                 # default directory (--out overrides it)
@@ -193,7 +193,8 @@ pub struct SolverSettings {
     /// Every this many later starts, one is a new dense lattice start (0: never).
     pub fresh_lattice_every: u64,
     /// With `from_best`: after this many starts in a row without improving the current
-    /// chain's best packing, a round of fresh lattice starts begins a new chain (0: never).
+    /// chain's best packing by more than 1e-5 relative, a round of fresh lattice starts
+    /// begins a new chain (0: never).
     pub restart_after: u64,
 }
 
