@@ -224,7 +224,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     let results = maximise4::<FMA>(&OddsForm::new(&alpha, &beta), u0);
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
-    let u = V4::from_fn(|k| results[k].u);
+    let u = results.u;
     let [t, s, f, sa, sb, big_a, big_b] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
@@ -235,7 +235,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
             continue;
         };
         let p = &pairs[k];
-        if results[k].fallback {
+        if results.fallback[k] {
             out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
             continue;
         }

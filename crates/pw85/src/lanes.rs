@@ -8,7 +8,7 @@
 //! when they stop, and a lane that has stopped keeps its state (selects, not branches).
 
 use crate::arith::Arith;
-use crate::poly::{OddsForm, OddsSearch};
+use crate::poly::OddsForm;
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Number of lanes.
@@ -263,29 +263,131 @@ impl V4 {
     }
 }
 
-/// The odds iteration of [`crate::contact_function`] ([`OddsSearch`]) on four pairs at once,
-/// from the starting points `u0`.
-///
-/// The Halley terms are computed for all lanes together (the same generic formulas as the
-/// scalar code, so the same bits), then each lane applies the scalar bracket and stopping rule
-/// to its own state. A stopped lane's state is frozen.
+/// Four lanes of truth values (the comparisons of the lane-wise search).
+type Mask = [bool; LANES];
+
+impl V4 {
+    #[inline(always)]
+    fn cmp(self, o: V4, f: impl Fn(f64, f64) -> bool) -> Mask {
+        core::array::from_fn(|k| f(self.0[k], o.0[k]))
+    }
+    /// `self` where `mask` is true, `other` elsewhere.
+    #[inline(always)]
+    fn or_else(self, mask: Mask, other: V4) -> V4 {
+        V4::from_fn(|k| if mask[k] { self.0[k] } else { other.0[k] })
+    }
+    #[inline(always)]
+    fn abs(self) -> V4 {
+        V4(self.0.map(f64::abs))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> V4 {
+        V4(self.0.map(f64::sqrt))
+    }
+}
+
 #[inline(always)]
-pub(crate) fn maximise4<const FMA: bool>(
-    odds: &OddsForm<V4>,
-    u0: [f64; LANES],
-) -> [OddsSearch; LANES] {
-    let mut search = u0.map(OddsSearch::new);
-    while search.iter().any(|s| !s.done) {
-        let (p, n, v, step) = odds.halley_terms::<FMA>(V4::from_fn(|k| search[k].u));
-        // Left to itself the optimiser sinks these lane-wise computations into the per-lane
-        // loop below (a stopped lane does not use its values) and computes them one lane at a
-        // time, undoing the vectorisation; materialising them keeps the four lanes together.
-        let (p, n, v, step) = core::hint::black_box((p, n, v, step));
-        for (k, s) in search.iter_mut().enumerate() {
-            if !s.done {
-                s.advance((p.0[k], n.0[k], v.0[k], step.0[k]));
-            }
+fn and(a: Mask, b: Mask) -> Mask {
+    core::array::from_fn(|k| a[k] & b[k])
+}
+#[inline(always)]
+fn or(a: Mask, b: Mask) -> Mask {
+    core::array::from_fn(|k| a[k] | b[k])
+}
+#[inline(always)]
+fn not(a: Mask) -> Mask {
+    a.map(|x| !x)
+}
+
+/// Four odds searches ([`crate::poly::OddsSearch`]) side by side, as four-lane values.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OddsSearch4 {
+    /// The current iterates; u₀ in the lanes that are done (and not `fallback`).
+    pub u: V4,
+    lo: V4,
+    hi: V4,
+    /// Iterations so far, as a float (exact: at most 101).
+    iterations: V4,
+    done: Mask,
+    /// The lanes whose values left the trustworthy range ([`crate::poly::OddsSearch::fallback`]).
+    pub fallback: Mask,
+}
+
+impl OddsSearch4 {
+    #[inline(always)]
+    fn new(u0: [f64; LANES]) -> Self {
+        let ok: Mask = u0.map(|u| u > 0.0 && u < f64::INFINITY);
+        Self {
+            u: V4(u0),
+            lo: V4::lift(0.0),
+            hi: V4::lift(f64::INFINITY),
+            iterations: V4::lift(0.0),
+            done: not(ok),
+            fallback: not(ok),
         }
+    }
+
+    /// [`crate::poly::OddsSearch::advance`] in every lane that is not done, with the same operations on
+    /// the same values (so the same bits); the branches of the scalar rule become selects, so
+    /// the four lanes stay in vector registers and no lane's branch is mispredicted. Every
+    /// candidate of the scalar rule (Halley's point, the bracket's expansion, contraction or
+    /// geometric midpoint) is computed in every lane, and the rule's decisions pick one.
+    #[inline(always)]
+    fn advance(&mut self, (p, n, v, step): (V4, V4, V4, V4)) {
+        use crate::poly::HALLEY_LAST_STEP as TOL;
+        let active = not(self.done);
+        let u = self.u;
+        let iterations = self.iterations + V4::from_fn(|k| if active[k] { 1.0 } else { 0.0 });
+        let tiny = V4::lift(1e-60);
+        let bad = or(
+            not(and(
+                v.cmp(tiny, |a, b| a > b),
+                n.abs().cmp(tiny, |a, b| a > b),
+            )),
+            iterations.cmp(V4::lift(100.0), |a, b| a > b),
+        );
+        let below = p.cmp(V4::lift(0.0), |a, b| a > b);
+        let lo = u.or_else(below, self.lo);
+        let hi = self.hi.or_else(below, u);
+        let next = u - step;
+        let small = step.abs().cmp(V4::lift(TOL) * u, |a, b| a <= b);
+        let trusted = (p * v)
+            .abs()
+            .cmp(V4::lift(2.0 * TOL) * u * n.abs(), |a, b| a <= b);
+        let accept = and(
+            and(small, trusted),
+            and(next.cmp(lo, |a, b| a >= b), next.cmp(hi, |a, b| a <= b)),
+        );
+        let inside = and(
+            and(next.cmp(lo, |a, b| a > b), next.cmp(hi, |a, b| a < b)),
+            or(trusted, not(small)),
+        );
+        let expand = hi.cmp(V4::lift(f64::INFINITY), |a, b| a == b);
+        let contract = lo.cmp(V4::lift(0.0), |a, b| a == b);
+        let bisect = (lo * hi).sqrt();
+        let fallback =
+            (V4::lift(4.0) * u).or_else(expand, (V4::lift(0.25) * u).or_else(contract, bisect));
+        let moved = next.or_else(or(accept, inside), fallback);
+        // Accepted, or the bracket is down to adjacent doubles (the scalar rule's `next == u`).
+        let finished = or(accept, moved.cmp(u, |a, b| a == b));
+        let step_lanes = and(active, not(bad));
+        self.iterations = iterations;
+        self.lo = lo.or_else(step_lanes, self.lo);
+        self.hi = hi.or_else(step_lanes, self.hi);
+        self.u = moved.or_else(step_lanes, u);
+        self.fallback = or(self.fallback, and(active, bad));
+        self.done = or(self.done, or(and(active, bad), and(step_lanes, finished)));
+    }
+}
+
+/// The odds iteration of [`crate::contact_function`] ([`crate::poly::OddsSearch`]) on four pairs at once,
+/// from the starting points `u0`: the Halley terms and the step rule are both computed for all
+/// lanes together ([`OddsSearch4::advance`]); a stopped lane's state is frozen.
+#[inline(always)]
+pub(crate) fn maximise4<const FMA: bool>(odds: &OddsForm<V4>, u0: [f64; LANES]) -> OddsSearch4 {
+    let mut search = OddsSearch4::new(u0);
+    while search.done.iter().any(|d| !d) {
+        search.advance(odds.halley_terms::<FMA>(search.u));
     }
     search
 }

@@ -489,7 +489,7 @@ pub(crate) struct OddsSearch {
 /// about C · TOL³ with C ≤ 0.3 on the bench distribution. Measured against fully converged
 /// roots: 8e-15 relative in u at most (1e-5 would leave 5e-16 for 0.09 more evaluations per
 /// pair, 1e-4 would leave 2e-13); the λ iteration it replaces left up to 8e-12.
-const HALLEY_LAST_STEP: f64 = 3e-5;
+pub(crate) const HALLEY_LAST_STEP: f64 = 3e-5;
 
 impl OddsSearch {
     /// A search from `u0`; one that cannot start (u0 not a positive number) is a fallback.
@@ -508,7 +508,9 @@ impl OddsSearch {
 
     /// One step from the terms of [`OddsForm::halley_terms`] at `self.u`. The root stays
     /// bracketed (p > 0 below it); a step that leaves the bracket is replaced by bisection,
-    /// geometric since u spans decades.
+    /// geometric since u spans decades. (`crate::lanes::OddsSearch4::advance` applies the same
+    /// rule to four searches with selects; a change here must be made there too, and the
+    /// batch test compares the two bit for bit.)
     #[inline(always)]
     pub(crate) fn advance(&mut self, (p, n, v, step): (f64, f64, f64, f64)) {
         let u = self.u;

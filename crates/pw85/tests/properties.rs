@@ -426,6 +426,51 @@ fn halley_does_not_stop_where_the_derivative_vanishes() {
         "{c:?} against {b:?}"
     );
     assert!((c.lambda - b.lambda).abs() <= 1e-6, "{c:?} against {b:?}");
-    let batch = pw85::batch::contact_functions(&[pw85::batch::Pair { r12: r, q1, q2 }]);
-    assert_eq!(batch[0].as_ref().unwrap().mu2.to_bits(), c.mu2.to_bits());
+    // In every lane of a four-pair chunk (a single pair would take the scalar remainder path).
+    let other = pw85::batch::Pair {
+        r12: [1.0, 2.0, 0.5],
+        q1,
+        q2,
+    };
+    for lane in 0..4 {
+        let mut chunk = [other; 4];
+        chunk[lane] = pw85::batch::Pair { r12: r, q1, q2 };
+        let batch = pw85::batch::contact_functions(&chunk);
+        assert_eq!(
+            format!("{:?}", batch[lane]),
+            format!("{:?}", Ok::<_, Error>(c))
+        );
+    }
+}
+
+/// The four-lane path (branch-free step rule, `lanes::OddsSearch4`) equals the scalar one bit
+/// for bit where the scalar rule takes its rare branches: aspect ratios up to 1e8 and size
+/// ratios up to 1e12 (bracket expansion and contraction, geometric bisection, the λ fallback,
+/// refinement), centre distances from deep overlap to far apart, lanes mixed at random.
+#[test]
+fn batch_equals_scalar_bit_for_bit_on_extreme_pairs() {
+    let mut rng = Rng(0x0BA7_C4E5);
+    let pairs: Vec<pw85::batch::Pair> = (0..20_000)
+        .map(|i| {
+            let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
+            let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i % 3 == 0));
+            let q1 = rng.ellipsoid(decades).map(|x| x * size * size);
+            let q2 = rng.ellipsoid(decades);
+            let dist = 10f64.powf(rng.range(-4.0, 2.0));
+            pw85::batch::Pair {
+                r12: rng.direction().map(|x| x * dist),
+                q1,
+                q2,
+            }
+        })
+        .collect();
+    let batch = pw85::batch::contact_functions(&pairs);
+    let mut refined = 0;
+    for (p, b) in pairs.iter().zip(&batch) {
+        let s = contact_function(&p.r12, &p.q1, &p.q2);
+        refined += usize::from(s.is_ok_and(|c| c.refined));
+        assert_eq!(format!("{s:?}"), format!("{b:?}"), "{p:?}");
+    }
+    // The set exercises the rare paths, not only the ordinary one.
+    assert!(refined > 100, "only {refined} refined pairs");
 }
