@@ -11,15 +11,17 @@
 //! computed side by side.
 
 use crate::REFINE_ABOVE;
+use crate::arith::{Arith, Dd};
 use crate::contact::{
     Prepared, Scale, Solution, check_positive_definite, depth_weighted, odds_amplification,
     odds_solution, oriented,
 };
 use crate::dispatch::multiversion;
 use crate::error::Argument;
-use crate::lanes::{LANES, V4, maximise4};
-use crate::poly::{OddsForm, RationalForm, pencil3_lifted};
-use crate::sym::Sym3;
+use crate::lanes::{LANES, V4, coefficients4, maximise4};
+use crate::poly::RationalForm;
+use crate::poly::coefficients_2d;
+use crate::sym::{Sym2, Sym3};
 use crate::{Contact, Error};
 
 /// One pair of ellipsoids: r12 = c2 − c1 and the two quadratic forms.
@@ -92,6 +94,99 @@ pub fn overlaps(pairs: &[Pair]) -> Vec<Result<bool, Error>> {
         .collect()
 }
 
+/// One pair of ellipses: r12 = c2 − c1 and the two quadratic forms (Q11, Q12, Q22).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pair2d {
+    /// c2 − c1.
+    pub r12: [f64; 2],
+    /// Quadratic form of the first ellipse.
+    pub q1: Sym2,
+    /// Quadratic form of the second ellipse.
+    pub q2: Sym2,
+}
+
+/// [`crate::contact_function_2d`] for every pair, into `out[i]` for `pairs[i]`: four pairs
+/// at a time, as [`contact_functions_into`] (the ellipses' coefficients are degree-elevated
+/// to the same Bernstein form, so the four-lane solve is shared). The results are identical
+/// to the scalar function's.
+///
+/// # Panics
+/// If `out` is shorter than `pairs` (a programming error, not a data error).
+pub fn contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    let mut chunks = pairs.chunks_exact(LANES);
+    let mut outs = out.chunks_exact_mut(LANES);
+    for (chunk, o) in (&mut chunks).zip(&mut outs) {
+        contact_x4_2d(chunk, o);
+    }
+    let rest = chunks.remainder();
+    let start = pairs.len() - rest.len();
+    for (p, o) in rest.iter().zip(&mut out[start..]) {
+        *o = crate::contact_function_2d(&p.r12, &p.q1, &p.q2);
+    }
+}
+
+/// [`crate::contact_function_2d`] for every pair.
+pub fn contact_functions_2d(pairs: &[Pair2d]) -> Vec<Result<Contact, Error>> {
+    let mut out = vec![Ok(EMPTY_CONTACT); pairs.len()];
+    contact_functions_2d_into(pairs, &mut out);
+    out
+}
+
+/// [`crate::overlap_2d`] for every pair, into `out[i]` for `pairs[i]` (a plain loop, as
+/// [`overlaps_into`]).
+///
+/// # Panics
+/// If `out` is shorter than `pairs`.
+pub fn overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    for (p, o) in pairs.iter().zip(out.iter_mut()) {
+        *o = crate::overlap_2d(&p.r12, &p.q1, &p.q2);
+    }
+}
+
+/// [`crate::overlap_2d`] for every pair.
+pub fn overlaps_2d(pairs: &[Pair2d]) -> Vec<Result<bool, Error>> {
+    pairs
+        .iter()
+        .map(|p| crate::overlap_2d(&p.r12, &p.q1, &p.q2))
+        .collect()
+}
+
+/// [`contact_functions_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
+#[cfg(feature = "rayon")]
+pub fn par_contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
+    use rayon::prelude::*;
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    pairs
+        .par_chunks(1024)
+        .zip(out.par_chunks_mut(1024))
+        .for_each(|(p, o)| contact_functions_2d_into(p, o));
+}
+
+/// [`overlaps_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
+#[cfg(feature = "rayon")]
+pub fn par_overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
+    use rayon::prelude::*;
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    pairs
+        .par_chunks(1024)
+        .zip(out.par_chunks_mut(1024))
+        .for_each(|(p, o)| overlaps_2d_into(p, o));
+}
+
 /// [`contact_functions_into`] on all cores (rayon), in chunks of 1024 pairs.
 #[cfg(feature = "rayon")]
 pub fn par_contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
@@ -127,6 +222,51 @@ multiversion! {
     fn contact_x4(pairs: &[Pair], out: &mut [Result<Contact, Error>]) -> () => fused contact_x4_portable;
 }
 
+multiversion! {
+    /// Four pairs of ellipses in lock-step: validation and coefficients lane by lane (the
+    /// scalar [`Prepared::new_2d`], cheap in 2D), the solve four lanes at a time.
+    fn contact_x4_2d(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) -> () => fused contact_x4_2d_portable;
+}
+
+#[inline(always)]
+fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
+    let mut lanes = Lanes {
+        alpha: [V4::lift(0.0); 3],
+        beta: [V4::lift(0.0); 4],
+        bound_alpha: [V4::lift(0.0); 3],
+        bound_beta: [V4::lift(0.0); 4],
+        scales: [None; LANES],
+    };
+    for (k, p) in pairs.iter().enumerate().take(LANES) {
+        let prepared = match Prepared::new_2d(&p.r12, &p.q1, &p.q2) {
+            Ok(prepared) => prepared,
+            Err(e) => {
+                out[k] = Err(e);
+                continue;
+            }
+        };
+        let (r, b) = (prepared.rational, prepared.bound);
+        for i in 0..3 {
+            lanes.alpha[i].0[k] = r.alpha[i];
+            lanes.bound_alpha[i].0[k] = b.alpha[i];
+        }
+        for i in 0..4 {
+            lanes.beta[i].0[k] = r.beta[i];
+            lanes.bound_beta[i].0[k] = b.beta[i];
+        }
+        lanes.scales[k] = Scale::of(&r);
+        if lanes.scales[k].is_none() {
+            out[k] = Ok(Contact::COINCIDENT);
+        }
+    }
+    solve_x4::<FMA>(
+        &lanes,
+        out,
+        |k| crate::contact_function_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
+        |k| coefficients_2d::<Dd>(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2).to_f64(),
+    );
+}
+
 /// A pair that is valid and well scaled, to fill the lanes of pairs answered separately.
 const STAND_IN: Pair = Pair {
     r12: [2.0, 0.0, 0.0],
@@ -157,16 +297,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     let r: [V4; 3] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].r12[i]));
     let a: [V4; 6] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].q1[i]));
     let b: [V4; 6] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].q2[i]));
-    let rm = r.map(V4::magnitude);
-    let am = a.map(V4::magnitude);
-    let bm = b.map(V4::magnitude);
-    let c = pencil3_lifted(r, a, b).coefficients;
-    let m = pencil3_lifted(rm, am, bm).coefficients;
-    let m = (m.alpha.map(|x| V4(x.0)), m.beta.map(|x| V4(x.0)));
-    let form = |k: usize| RationalForm {
-        alpha: c.alpha.map(|x| x.0[k]),
-        beta: c.beta.map(|x| x.0[k]),
-    };
+    let (c, m) = coefficients4::<FMA>(r, a, b);
 
     // Per lane, the decisions of the scalar path before its iteration: validation, then
     // r12 = 0 (no scale). Everything after is computed four lanes at a time.
@@ -185,21 +316,68 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
             out[k] = Err(e);
             continue;
         }
-        scales[k] = Scale::of(&form(k));
+        scales[k] = Scale::of(&lane_form(&c.alpha, &c.beta, k));
         if scales[k].is_none() {
             out[k] = Ok(Contact::COINCIDENT);
         }
     }
+    let lanes = Lanes {
+        alpha: c.alpha,
+        beta: c.beta,
+        bound_alpha: m.0,
+        bound_beta: m.1,
+        scales,
+    };
+    solve_x4::<FMA>(
+        &lanes,
+        out,
+        |k| crate::contact_function(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
+        |k| crate::contact::exact_coefficients(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
+    );
+}
+
+/// Four validated pairs side by side: their `f64` Bernstein coefficients and Σ|terms|, one
+/// lane each, and the normalisation of each lane (`None`: the lane is answered already).
+struct Lanes {
+    alpha: [V4; 3],
+    beta: [V4; 4],
+    bound_alpha: [V4; 3],
+    bound_beta: [V4; 4],
+    scales: [Option<Scale>; LANES],
+}
+
+/// The rational form of lane `k`.
+#[inline(always)]
+fn lane_form(alpha: &[V4; 3], beta: &[V4; 4], k: usize) -> RationalForm {
+    RationalForm {
+        alpha: alpha.map(|x| x.0[k]),
+        beta: beta.map(|x| x.0[k]),
+    }
+}
+
+/// What [`crate::contact::Prepared::contact`] does after validation, for four lanes at once:
+/// normalisation, orientation, the odds iteration ([`maximise4`]), μ² and its error estimate,
+/// lane-wise; the refinement (`exact(k)`: lane `k`'s double-double coefficients) and the
+/// fallback to the λ iteration (`scalar(k)`: the scalar function on lane `k`'s pair) lane by
+/// lane. Shared by the 3D and 2D batches: both reduce to the same Bernstein form.
+#[inline(always)]
+fn solve_x4<const FMA: bool>(
+    lanes: &Lanes,
+    out: &mut [Result<Contact, Error>],
+    scalar: impl Fn(usize) -> Result<Contact, Error>,
+    exact: impl Fn(usize) -> RationalForm,
+) {
+    let scales = lanes.scales;
     let Some(first) = scales.iter().position(Option::is_some) else {
         return;
     };
-    // Lanes answered above carry a live lane's pair through the arithmetic.
+    // Lanes answered already carry a live lane's pair through the arithmetic.
     let source: [usize; LANES] =
         core::array::from_fn(|k| if scales[k].is_some() { k } else { first });
     let scale: [Scale; LANES] = core::array::from_fn(|k| scales[source[k]].unwrap_or(Scale::UNIT));
     let pick = |x: V4| V4::from_fn(|k| x.0[source[k]]);
-    let (alpha, beta) = (c.alpha.map(pick), c.beta.map(pick));
-    let (bound_alpha, bound_beta) = (m.0.map(pick), m.1.map(pick));
+    let (alpha, beta) = (lanes.alpha.map(pick), lanes.beta.map(pick));
+    let (bound_alpha, bound_beta) = (lanes.bound_alpha.map(pick), lanes.bound_beta.map(pick));
 
     // Scale::apply and orient, lane-wise (the same operations).
     let inv_a = V4::from_fn(|k| scale[k].inverses().0);
@@ -221,10 +399,9 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     let u0: [f64; LANES] =
         core::array::from_fn(|k| (x.0[k].min(y.0[k]) / x.0[k].max(y.0[k])).sqrt());
 
-    let results = maximise4::<FMA>(&OddsForm::new(&alpha, &beta), u0);
+    let (u, fallback) = maximise4::<FMA>(&alpha, &beta, u0);
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
-    let u = results.u;
     let [t, s, f, sa, sb, big_a, big_b] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
@@ -234,9 +411,8 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
         let Some(scale) = scales[k] else {
             continue;
         };
-        let p = &pairs[k];
-        if results.fallback[k] {
-            out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
+        if fallback[k] {
+            out[k] = scalar(k);
             continue;
         }
         let estimate = Prepared::estimate(amplification.0[k]);
@@ -251,16 +427,10 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
             scale.contact(&solution, estimate, false)
         } else {
             let prepared = Prepared {
-                rational: form(k),
-                bound: RationalForm {
-                    alpha: m.0.map(|x| x.0[k]),
-                    beta: m.1.map(|x| x.0[k]),
-                },
+                rational: lane_form(&lanes.alpha, &lanes.beta, k),
+                bound: lane_form(&lanes.bound_alpha, &lanes.bound_beta, k),
             };
-            prepared.refine::<FMA>(
-                || crate::contact::exact_coefficients(&p.r12, &p.q1, &p.q2),
-                scale,
-            )
+            prepared.refine::<FMA>(|| exact(k), scale)
         });
     }
 }
@@ -309,6 +479,70 @@ mod tests {
                 format!("{:?}", crate::overlap(&p.r12, &p.q1, &p.q2)),
                 format!("{v:?}")
             );
+        }
+    }
+}
+
+#[cfg(test)]
+mod portable_tests {
+    use super::*;
+
+    /// The portable build of the four-lane path (what processors without AVX2 and FMA run;
+    /// the public functions dispatch to the AVX2 build here) equals the portable scalar path
+    /// bit for bit, in 3D and 2D.
+    #[test]
+    fn portable_lanes_equal_portable_scalar() {
+        let mut x = 0.41_f64;
+        let mut next = || {
+            x = (x * 3.97 * (1.0 - x)).clamp(1e-9, 1.0 - 1e-9);
+            x
+        };
+        for i in 0..4000 {
+            let thin = 10f64.powf(-6.0 * next());
+            let mut chunk = [STAND_IN; LANES];
+            let mut chunk_2d = [Pair2d {
+                r12: [0.0; 2],
+                q1: [1.0, 0.0, 1.0],
+                q2: [1.0, 0.0, 1.0],
+            }; LANES];
+            for k in 0..LANES {
+                let q1 = crate::shape::from_axes_angles(
+                    &[1.0, 0.1 + next(), thin],
+                    &[next() * 6.0, next() * 6.0, next() * 6.0],
+                )
+                .unwrap();
+                let q2 = crate::shape::from_axes_angles(
+                    &[0.2 + next(), 1e-3 + next(), 0.05 + next()],
+                    &[next() * 6.0, next() * 6.0, next() * 6.0],
+                )
+                .unwrap();
+                let r12 = [next() - 0.5, next() - 0.5, next() - 0.5].map(|v| 3.0 * v);
+                chunk[k] = Pair { r12, q1, q2 };
+                let e1 = crate::shape::from_axes_angle_2d(&[1.0, thin], next() * 6.0).unwrap();
+                let e2 =
+                    crate::shape::from_axes_angle_2d(&[0.3, 0.1 + next()], next() * 6.0).unwrap();
+                chunk_2d[k] = Pair2d {
+                    r12: [r12[0], r12[1]],
+                    q1: e1,
+                    q2: e2,
+                };
+            }
+            if i % 7 == 3 {
+                chunk[i % LANES].q2[1] = 10.0;
+                chunk_2d[i % LANES].r12 = [0.0; 2];
+            }
+            let mut out = [Ok(EMPTY_CONTACT); LANES];
+            contact_x4_portable::<false>(&chunk, &mut out);
+            let mut out_2d = [Ok(EMPTY_CONTACT); LANES];
+            contact_x4_2d_portable::<false>(&chunk_2d, &mut out_2d);
+            for k in 0..LANES {
+                let p = &chunk[k];
+                let s = crate::contact::contact_function_portable::<false>(&p.r12, &p.q1, &p.q2);
+                assert_eq!(format!("{s:?}"), format!("{:?}", out[k]));
+                let p = &chunk_2d[k];
+                let s = crate::contact::contact_function_2d_portable::<false>(&p.r12, &p.q1, &p.q2);
+                assert_eq!(format!("{s:?}"), format!("{:?}", out_2d[k]));
+            }
         }
     }
 }

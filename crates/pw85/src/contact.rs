@@ -137,7 +137,7 @@ multiversion! {
 }
 
 #[inline(always)]
-fn contact_function_portable<const FMA: bool>(
+pub(crate) fn contact_function_portable<const FMA: bool>(
     r12: &[f64; 3],
     q1: &Sym3,
     q2: &Sym3,
@@ -302,7 +302,7 @@ multiversion! {
 }
 
 #[inline(always)]
-fn contact_function_2d_portable<const FMA: bool>(
+pub(crate) fn contact_function_2d_portable<const FMA: bool>(
     r12: &[f64; 2],
     q1: &Sym2,
     q2: &Sym2,

@@ -443,6 +443,50 @@ fn halley_does_not_stop_where_the_derivative_vanishes() {
     }
 }
 
+/// The 2D batch (lane-wise solve shared with 3D) equals `contact_function_2d` bit for bit,
+/// typed errors, coincident centres, refinements and extreme shapes included.
+#[test]
+fn batch_2d_equals_scalar_bit_for_bit() {
+    let mut rng = Rng(0x2D_BA7C);
+    let pairs: Vec<pw85::batch::Pair2d> = (0..20_003)
+        .map(|i| {
+            let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
+            let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i % 3 == 0));
+            let ellipse = |rng: &mut Rng| {
+                let axes = [0, 1].map(|_| 10f64.powf(rng.range(-decades, 0.0)));
+                from_axes_angle_2d(&axes, rng.range(0.0, 6.3)).unwrap()
+            };
+            let mut q1 = ellipse(&mut rng).map(|x| x * size * size);
+            let q2 = ellipse(&mut rng);
+            let dist = 10f64.powf(rng.range(-4.0, 2.0));
+            let angle = rng.range(0.0, 6.3);
+            let mut r12 = [dist * angle.cos(), dist * angle.sin()];
+            match i % 101 {
+                3 => q1[1] = 10.0 * q1[0].max(q1[2]), // not positive definite
+                5 => r12[1] = f64::INFINITY,          // not finite
+                7 => r12 = [0.0; 2],                  // coincident
+                _ => {}
+            }
+            pw85::batch::Pair2d { r12, q1, q2 }
+        })
+        .collect();
+    let batch = pw85::batch::contact_functions_2d(&pairs);
+    let verdicts = pw85::batch::overlaps_2d(&pairs);
+    let (mut refined, mut errors) = (0, 0);
+    for ((p, b), v) in pairs.iter().zip(&batch).zip(&verdicts) {
+        let s = contact_function_2d(&p.r12, &p.q1, &p.q2);
+        refined += usize::from(s.is_ok_and(|c| c.refined));
+        errors += usize::from(s.is_err());
+        assert_eq!(format!("{s:?}"), format!("{b:?}"), "{p:?}");
+        assert_eq!(
+            format!("{:?}", overlap_2d(&p.r12, &p.q1, &p.q2)),
+            format!("{v:?}")
+        );
+    }
+    assert!(refined > 100, "only {refined} refined pairs");
+    assert!(errors >= 2 * 198, "only {errors} errors");
+}
+
 /// The four-lane path (branch-free step rule, `lanes::OddsSearch4`) equals the scalar one bit
 /// for bit where the scalar rule takes its rare branches: aspect ratios up to 1e8 and size
 /// ratios up to 1e12 (bracket expansion and contraction, geometric bisection, the λ fallback,
