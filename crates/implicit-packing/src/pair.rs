@@ -308,13 +308,11 @@ pub(crate) fn setup_from<const N: usize>(
     // of l_i serve the gradient's force, P_i^−½ (c − X).
     let mut c = line.in_i;
     let mut b = line.in_j;
-    let mut inv_li = [0.0; N];
-    let mut inv_lj = [0.0; N];
+    let inv_li = i.inv_semi_axes();
+    let inv_lj = j.inv_semi_axes();
     for k in 0..N {
         c[k] /= li[k];
         b[k] /= lj[k];
-        inv_li[k] = 1.0 / li[k];
-        inv_lj[k] = 1.0 / lj[k];
     }
     // F = P_j^−½ (Q_jᵀ Q_i) P_i^½, entry by entry: a graded matrix with an orthogonal core.
     // Each entry carries a relative error of a few ulps, which moves the singular values by as
