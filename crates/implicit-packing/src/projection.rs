@@ -84,6 +84,10 @@ fn phi_t<const N: usize>(ins: &Inside<N>, g2: &[f64; N], t: f64) -> (f64, f64) {
 /// one or two more iterations spent chasing rounding noise in `φ − 1`.)
 pub(crate) const NEWTON_FINAL: f64 = 1e-9;
 
+/// A Halley step below this fraction of the iterate is the last one in
+/// [`solve_outside_direct`]: convergence is cubic, so the error after it is about (2e-6)³.
+const HALLEY_FINAL: f64 = 2e-6;
+
 /// Safeguarded Newton on `h(z) = 1 − φ(z)^−½` for a decreasing `φ`, root in `[lo, hi]`.
 #[inline(always)]
 pub(crate) fn newton<F: Fn(f64) -> (f64, f64)>(
@@ -198,20 +202,28 @@ pub const DIRECT_B2_LIMIT: f64 = 1e16;
 /// The outside case (`|b|² = cᵀSc > 1`, `U > 0`) without an eigen-decomposition, for a
 /// well-conditioned factor `F` (`S = FᵀF` is formed).
 ///
-/// Newton on `h(U) = 1 − φ(U)^−½`, `φ(U) = xᵀ S x`, `x(U) = (I + U S)⁻¹ c`,
-/// `φ'(U) = −2 (S x)ᵀ (I + U S)⁻¹ (S x)`, kept above `U_lo = (|b| − 1)/‖F‖²_F ≤ U` (a lower
-/// bound since `λ_max(S) ≤ ‖F‖²_F`): `h` is increasing and concave, so from the left of the
-/// root the iterates increase monotonically to it. Returns `None` if the iteration does not
-/// settle or `|b|² > DIRECT_B2_LIMIT` (the caller then takes the SVD route).
+/// Halley's method on `h(U) = 1 − φ(U)^−½`, `φ(U) = xᵀ S x`, `x(U) = (I + U S)⁻¹ c`,
+/// `φ' = −2 sᵀ M s` and `φ'' = 6 zᵀ S z` (`M = (I + U S)⁻¹`, `s = S x`, `z = M s = −dx/dU`),
+/// kept above `U_lo = (|b| − 1)/‖F‖²_F ≤ U` (a lower bound since `λ_max(S) ≤ ‖F‖²_F`). `h`
+/// is increasing and concave; where Halley's factor `1 + δ_N h''/(2h')` falls below ½ the
+/// Newton step `δ_N` is taken instead, which from the left of the root increases monotonically
+/// to it. Returns `None` if the iteration does not settle or `|b|² > DIRECT_B2_LIMIT` (the
+/// caller then takes the SVD route).
 ///
-/// Cost (this loop is most of the cost of a pair term in a packing): with
-/// `(I + U S)⁻¹ = adj/det`, the unnormalised `a = adj c`, `p = aᵀ S a = φ det²` and
-/// `q = (S a)ᵀ adj (S a) = −½ φ' det³` give the Newton step
-/// `2φ(√φ − 1)/(−φ') = (p/q)(√p − det)`: one square root and one division, which run side by
-/// side, and no division by `det`. The last step is not followed by another solve:
-/// `x(U + δ) = x(U) − δ z + O(δ²)`, `z = (I + U S)⁻¹ S x = −dx/dU`, and `|δ| ≤ 1e-9 U` makes
-/// the `O(δ²)` term (relative `≲ (δ/U)²`, since `U |dx/dU| ≤ |x|` and `U² |d²x/dU²| ≤ 2 |x|`
-/// componentwise in the eigenbasis for `U > 0`) far below an ulp.
+/// Cost (this loop is most of the cost of a pair term in a packing): with `M = adj/det`, the
+/// unnormalised `a = adj c`, `p = aᵀ S a = φ det²`, `q = (S a)ᵀ adj (S a) = −½ φ' det³` and
+/// `r = (adj S a)ᵀ S (adj S a) = zᵀ S z det⁴` give `δ_N = 2φ(√φ − 1)/(−φ') = (p/q) e`,
+/// `e = √p − det`, `h''/h' = (3/det)(q/p − r/q)`, and Halley's step over one denominator,
+/// `2 det p q e / (2 det q² + 3 e (q² − r p))`: one square root and one division, which run
+/// side by side, and no division by `det`. Against the Newton iteration this replaced (same
+/// start), one solve more per iteration and about one iteration fewer per pair: the same
+/// instructions, 3 % less time per overlapping pair (`pair` and `model` benches).
+///
+/// The last step is not followed by another solve: `x(U + δ) = x − δ z + δ² M S z + O(δ³)`
+/// (`x'' = 2 M S z`), and `|δ| ≤ 2e-6 U` (after a Halley step, whose error is then of order
+/// `(δ/U)³ ≈ 1e-17`) makes the `O(δ³)` term (relative `≲ (δ/U)³`, as `U^k |x^(k)| ≤ k! |x|`
+/// componentwise in the eigenbasis for `U > 0`) far below an ulp. `c − X = U S X` follows
+/// the same expansion.
 #[inline(always)]
 pub fn solve_outside_direct<const N: usize>(
     f: &[[f64; N]; N],
@@ -265,24 +277,38 @@ pub fn solve_outside_direct<const N: usize>(
         let p = dot(&ax, &sax);
         let az = sym_mat_vec(&adj, &sax);
         let q = dot(&sax, &az);
-        // p/q is divided while √p is taken: the two long-latency operations overlap.
-        let step = (p / q) * (p.sqrt() - det);
+        // r = (az)ᵀ S (az) = zᵀ S z det⁴, with φ'' = 6 zᵀ S z: Halley's correction.
+        let saz = sym_mat_vec(&s, &az);
+        let r = dot(&az, &saz);
+        // Halley on h: δ = δ_N / (1 + δ_N h''/(2h')), δ_N = (p/q)(√p − det),
+        // h''/h' = (3/det)(q/p − r/q); over one denominator:
+        // δ = 2 det p q e / (2 det q² + 3 e (q² − r p)), e = √p − det.
+        let e = p.sqrt() - det;
+        let qq = q * q;
+        let newton_den = 2.0 * det * qq;
+        let halley_den = newton_den + 3.0 * e * (qq - r * p);
+        // Halley's factor 1 + δ_N h''/(2h') below ½ (a long step where h bends a lot): take
+        // Newton's step, (p/q) e over the same numerator, which keeps the monotone approach.
+        let halley = halley_den >= 0.5 * newton_den;
+        let step = (2.0 * det * p * q * e) / if halley { halley_den } else { newton_den };
         if !step.is_finite() {
             return None;
         }
-        if step.abs() <= NEWTON_FINAL * u {
-            // Quadratic convergence: after this step the error is ~(1e-9)², below an ulp.
-            // X = x − δ z and S X = S x − δ S z (first order in δ, see above); c − X = U S X.
+        if halley && step.abs() <= HALLEY_FINAL * u {
+            // Cubic convergence: after this step the error is ~(2e-6)³, below an ulp. X and
+            // S X follow to second order in δ: x(U + δ) = x − δ z + δ² M S z + O(δ³),
+            // z = M S x = −dx/dU, M = (I + U S)⁻¹ = adj / det; c − X = U S X.
             let u = u + step;
-            let r = 1.0 / det;
-            let dr = step * r;
-            let saz = sym_mat_vec(&s, &az);
+            let rd = 1.0 / det;
+            let dr = step * rd;
+            let w = sym_mat_vec(&adj, &saz);
+            let sw = sym_mat_vec(&s, &w);
             let mut x = [0.0; N];
             let mut cmx = [0.0; N];
             let mut d2 = 0.0;
             for a in 0..N {
-                x[a] = (ax[a] - dr * az[a]) * r;
-                cmx[a] = u * ((sax[a] - dr * saz[a]) * r);
+                x[a] = (ax[a] - dr * (az[a] - dr * w[a])) * rd;
+                cmx[a] = u * ((sax[a] - dr * (saz[a] - dr * sw[a])) * rd);
                 d2 += cmx[a] * cmx[a];
             }
             return Some(DirectProjection {
