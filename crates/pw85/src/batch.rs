@@ -43,11 +43,14 @@ pub const EMPTY_CONTACT: Contact = Contact {
     refined: false,
 };
 
-/// [`crate::contact_function`] for every pair, into `out[i]` for `pairs[i]`.
-///
-/// # Panics
-/// If `out` is shorter than `pairs` (a programming error, not a data error).
-pub fn contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
+/// `out[i] = one(&pairs[i])`, by `four` on each whole chunk of four pairs.
+#[inline(always)]
+fn by_fours<P, R>(
+    pairs: &[P],
+    out: &mut [R],
+    four: impl Fn(&[P], &mut [R]),
+    one: impl Fn(&P) -> R,
+) {
     assert!(
         out.len() >= pairs.len(),
         "output slice shorter than the input"
@@ -55,13 +58,53 @@ pub fn contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]
     let mut chunks = pairs.chunks_exact(LANES);
     let mut outs = out.chunks_exact_mut(LANES);
     for (chunk, o) in (&mut chunks).zip(&mut outs) {
-        contact_x4(chunk, o);
+        four(chunk, o);
     }
     let rest = chunks.remainder();
     let start = pairs.len() - rest.len();
     for (p, o) in rest.iter().zip(&mut out[start..]) {
-        *o = crate::contact_function(&p.r12, &p.q1, &p.q2);
+        *o = one(p);
     }
+}
+
+/// `out[i] = one(&pairs[i])`.
+#[inline(always)]
+fn each<P, R>(pairs: &[P], out: &mut [R], one: impl Fn(&P) -> R) {
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    for (p, o) in pairs.iter().zip(out.iter_mut()) {
+        *o = one(p);
+    }
+}
+
+/// `run` on chunks of 1024 pairs, on all cores (rayon).
+#[cfg(feature = "rayon")]
+fn par_chunked<P: Sync, R: Send>(
+    pairs: &[P],
+    out: &mut [R],
+    run: impl Fn(&[P], &mut [R]) + Sync + Send,
+) {
+    use rayon::prelude::*;
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    pairs
+        .par_chunks(1024)
+        .zip(out.par_chunks_mut(1024))
+        .for_each(|(p, o)| run(p, o));
+}
+
+/// [`crate::contact_function`] for every pair, into `out[i]` for `pairs[i]`.
+///
+/// # Panics
+/// If `out` is shorter than `pairs` (a programming error, not a data error).
+pub fn contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
+    by_fours(pairs, out, contact_x4, |p| {
+        crate::contact_function(&p.r12, &p.q1, &p.q2)
+    });
 }
 
 /// [`crate::contact_function`] for every pair.
@@ -77,13 +120,7 @@ pub fn contact_functions(pairs: &[Pair]) -> Vec<Result<Contact, Error>> {
 /// # Panics
 /// If `out` is shorter than `pairs`.
 pub fn overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    for (p, o) in pairs.iter().zip(out.iter_mut()) {
-        *o = crate::overlap(&p.r12, &p.q1, &p.q2);
-    }
+    each(pairs, out, |p| crate::overlap(&p.r12, &p.q1, &p.q2));
 }
 
 /// [`crate::overlap`] for every pair.
@@ -113,20 +150,9 @@ pub struct Pair2d {
 /// # Panics
 /// If `out` is shorter than `pairs` (a programming error, not a data error).
 pub fn contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    let mut chunks = pairs.chunks_exact(LANES);
-    let mut outs = out.chunks_exact_mut(LANES);
-    for (chunk, o) in (&mut chunks).zip(&mut outs) {
-        contact_x4_2d(chunk, o);
-    }
-    let rest = chunks.remainder();
-    let start = pairs.len() - rest.len();
-    for (p, o) in rest.iter().zip(&mut out[start..]) {
-        *o = crate::contact_function_2d(&p.r12, &p.q1, &p.q2);
-    }
+    by_fours(pairs, out, contact_x4_2d, |p| {
+        crate::contact_function_2d(&p.r12, &p.q1, &p.q2)
+    });
 }
 
 /// [`crate::contact_function_2d`] for every pair.
@@ -142,13 +168,7 @@ pub fn contact_functions_2d(pairs: &[Pair2d]) -> Vec<Result<Contact, Error>> {
 /// # Panics
 /// If `out` is shorter than `pairs`.
 pub fn overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    for (p, o) in pairs.iter().zip(out.iter_mut()) {
-        *o = crate::overlap_2d(&p.r12, &p.q1, &p.q2);
-    }
+    each(pairs, out, |p| crate::overlap_2d(&p.r12, &p.q1, &p.q2));
 }
 
 /// [`crate::overlap_2d`] for every pair.
@@ -162,57 +182,25 @@ pub fn overlaps_2d(pairs: &[Pair2d]) -> Vec<Result<bool, Error>> {
 /// [`contact_functions_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
 #[cfg(feature = "rayon")]
 pub fn par_contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
-    use rayon::prelude::*;
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    pairs
-        .par_chunks(1024)
-        .zip(out.par_chunks_mut(1024))
-        .for_each(|(p, o)| contact_functions_2d_into(p, o));
+    par_chunked(pairs, out, contact_functions_2d_into);
 }
 
 /// [`overlaps_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
 #[cfg(feature = "rayon")]
 pub fn par_overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
-    use rayon::prelude::*;
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    pairs
-        .par_chunks(1024)
-        .zip(out.par_chunks_mut(1024))
-        .for_each(|(p, o)| overlaps_2d_into(p, o));
+    par_chunked(pairs, out, overlaps_2d_into);
 }
 
 /// [`contact_functions_into`] on all cores (rayon), in chunks of 1024 pairs.
 #[cfg(feature = "rayon")]
 pub fn par_contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    use rayon::prelude::*;
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    pairs
-        .par_chunks(1024)
-        .zip(out.par_chunks_mut(1024))
-        .for_each(|(p, o)| contact_functions_into(p, o));
+    par_chunked(pairs, out, contact_functions_into);
 }
 
 /// [`overlaps_into`] on all cores (rayon), in chunks of 1024 pairs.
 #[cfg(feature = "rayon")]
 pub fn par_overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
-    use rayon::prelude::*;
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    pairs
-        .par_chunks(1024)
-        .zip(out.par_chunks_mut(1024))
-        .for_each(|(p, o)| overlaps_into(p, o));
+    par_chunked(pairs, out, overlaps_into);
 }
 
 multiversion! {
@@ -573,6 +561,27 @@ mod parallel_tests {
         let mut vp = vec![Ok(false); pairs.len()];
         overlaps_into(&pairs, &mut vs);
         par_overlaps_into(&pairs, &mut vp);
+        assert_eq!(vs, vp);
+        assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
+
+        let e = crate::shape::from_axes_angle_2d(&[1.0, 0.5], 0.3).unwrap();
+        let pairs_2d: Vec<Pair2d> = pairs
+            .iter()
+            .map(|p| Pair2d {
+                r12: [p.r12[0], p.r12[1]],
+                q1: e,
+                q2: e,
+            })
+            .collect();
+        let mut seq = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
+        let mut par = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
+        contact_functions_2d_into(&pairs_2d, &mut seq);
+        par_contact_functions_2d_into(&pairs_2d, &mut par);
+        assert_eq!(seq, par);
+        let mut vs = vec![Ok(false); pairs_2d.len()];
+        let mut vp = vec![Ok(false); pairs_2d.len()];
+        overlaps_2d_into(&pairs_2d, &mut vs);
+        par_overlaps_2d_into(&pairs_2d, &mut vp);
         assert_eq!(vs, vp);
         assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
     }
