@@ -303,9 +303,9 @@ pub(crate) fn setup_from<const N: usize>(
     let li = i.semi_axes();
     let lj = j.semi_axes();
     // `c` and `b` keep their divisions: one rounding less in the quantities everything else is
-    // measured from. (Multiplying by the reciprocals below saved 3–4 % of a pair term, but the
-    // worst reference errors in `random_moderate` grew from 6e-15 to 1.3e-14.) The reciprocals
-    // of l_i serve the gradient's force, P_i^−½ (c − X).
+    // measured from. (Multiplying by the bodies' cached reciprocals saved 3–4 % of a pair
+    // term, but the worst reference errors in `random_moderate` grew from 6e-15 to 1.3e-14.)
+    // The reciprocals serve F below and the gradient's force, P_i^−½ (c − X).
     let mut c = line.in_i;
     let mut b = line.in_j;
     let inv_li = i.inv_semi_axes();

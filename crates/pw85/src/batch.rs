@@ -11,7 +11,7 @@
 //! computed side by side.
 
 use crate::REFINE_ABOVE;
-use crate::arith::{Arith, Dd};
+use crate::arith::Arith;
 use crate::contact::{
     Prepared, Scale, Solution, check_positive_definite, depth_weighted, odds_amplification,
     odds_solution, oriented,
@@ -20,7 +20,6 @@ use crate::dispatch::multiversion;
 use crate::error::Argument;
 use crate::lanes::{LANES, V4, coefficients4, maximise4};
 use crate::poly::RationalForm;
-use crate::poly::coefficients_2d;
 use crate::sym::{Sym2, Sym3};
 use crate::{Contact, Error};
 
@@ -251,7 +250,7 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
         &lanes,
         out,
         |k| crate::contact_function_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
-        |k| coefficients_2d::<Dd>(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2).to_f64(),
+        |k| crate::contact::exact_coefficients_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
     );
 }
 

@@ -162,6 +162,12 @@ fn exact_coefficients_portable<const FMA: bool>(
     crate::poly::coefficients::<DdT<FMA>>(r12, q1, q2).to_f64()
 }
 
+/// The ellipses' Bernstein coefficients computed in double-double arithmetic and rounded: the
+/// 2D refinement's input (the twin of [`exact_coefficients`]).
+pub(crate) fn exact_coefficients_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> RationalForm {
+    coefficients_2d::<Dd>(r12, q1, q2).to_f64()
+}
+
 /// [`contact_function`] with the coefficients always recomputed in double-double arithmetic
 /// (about 32 significant digits), whatever the error bound says: a reference for checking the
 /// fast path on random input, at about twice its cost. Its `error_estimate` bounds the
@@ -307,8 +313,7 @@ pub(crate) fn contact_function_2d_portable<const FMA: bool>(
     q1: &Sym2,
     q2: &Sym2,
 ) -> Result<Contact, Error> {
-    Ok(Prepared::new_2d(r12, q1, q2)?
-        .contact::<FMA>(|| coefficients_2d::<Dd>(r12, q1, q2).to_f64()))
+    Ok(Prepared::new_2d(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients_2d(r12, q1, q2)))
 }
 
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
