@@ -37,11 +37,13 @@
 //! # References
 //! Birgin, Lobato, Martínez (2016), Appendix A.1–A.2, eqs. (38)–(41).
 
+use crate::lanes::{Real, each};
 use crate::linalg::torque;
 use crate::pair::{
     PairSolution, bounding_spheres_apart, centre_line, certified_separated, direct_solution,
     setup_from, solve_direct, solve_pair_with, solve_svd,
 };
+use crate::projection::Settled;
 use crate::shape::{Body, angular_velocities_3d};
 
 /// Gradient of a scalar pair quantity with respect to the placements of `i` and `j`.
@@ -111,10 +113,10 @@ pub struct PairDerivatives<const N: usize> {
 }
 
 /// World-frame vectors of a solved pair: `Δ`, `y`, the force `F = ∂d²/∂c_i`.
-struct Frames<const N: usize> {
-    delta: [f64; N],
-    y: [f64; N],
-    force: [f64; N],
+struct Frames<T, const N: usize> {
+    delta: [T; N],
+    y: [T; N],
+    force: [T; N],
 }
 
 /// `Q_i P_i^{±½} V w` for a vector `w` in the eigenbasis.
@@ -154,7 +156,7 @@ fn to_world<const N: usize>(
     out
 }
 
-fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Frames<N> {
+fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Frames<f64, N> {
     let ci = i.centre();
     let cj = j.centre();
     let mut delta = [0.0; N];
@@ -172,26 +174,103 @@ fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Fr
 }
 
 #[inline(always)]
-fn grad_d2<const N: usize>(fr: &Frames<N>) -> PairGradient<N> {
-    let mut lever_i = [0.0; N];
+fn grad_d2<const N: usize>(fr: &Frames<f64, N>) -> PairGradient<N> {
+    grad_d2_parts(fr).into()
+}
+
+/// [`PairGradient`] in any [`Real`] arithmetic (one pair or four).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GradientParts<T, const N: usize> {
+    pub centre_i: [T; N],
+    pub centre_j: [T; N],
+    pub torque_i: [T; 3],
+    pub torque_j: [T; 3],
+}
+
+impl<const N: usize> From<GradientParts<f64, N>> for PairGradient<N> {
+    #[inline(always)]
+    fn from(g: GradientParts<f64, N>) -> Self {
+        PairGradient {
+            centre_i: g.centre_i,
+            centre_j: g.centre_j,
+            torque_i: g.torque_i,
+            torque_j: g.torque_j,
+        }
+    }
+}
+
+/// `∇d²` from the world-frame vectors: the force `F` on `c_i`, `−F` on `c_j`, and the torques
+/// `(y − Δ) × F` on `i` and `−y × F` on `j`.
+#[inline(always)]
+fn grad_d2_parts<T: Real, const N: usize>(fr: &Frames<T, N>) -> GradientParts<T, N> {
+    let mut lever_i = fr.y;
     for k in 0..N {
         lever_i[k] = fr.y[k] - fr.delta[k];
     }
     let ti = torque(&lever_i, &fr.force);
     let tj = torque(&fr.y, &fr.force);
-    let mut g = PairGradient::ZERO;
-    for k in 0..N {
-        g.centre_i[k] = fr.force[k];
-        g.centre_j[k] = -fr.force[k];
+    GradientParts {
+        centre_i: fr.force,
+        centre_j: each(fr.force, |v| -v),
+        torque_i: ti,
+        torque_j: each(tj, |v| -v),
     }
-    for k in 0..3 {
-        g.torque_i[k] = ti[k];
-        g.torque_j[k] = -tj[k];
-    }
-    g
 }
 
-fn grad_u<const N: usize>(i: &Body<N>, sol: &PairSolution<N>, fr: &Frames<N>) -> PairGradient<N> {
+/// `∇f = −2 (1 − d²) ∇d²` on the direct route with `U ≥ ε` (only the first term of `f` is
+/// active), from the direct solution `X`, `c − X` in the i-frame (where the direct route
+/// works, `V = I`): `y = Q_i P_i^½ X`, `F = Q_i P_i^−½ 2 (c − X)`. In any [`Real`] arithmetic;
+/// `a = 1 − d² > 0`. The sum starts from `+0`, as [`PairGradient::axpy`] onto zero does, so
+/// that one pair and four give the same bits.
+#[inline(always)]
+pub(crate) fn direct_gradient<T: Real, const N: usize>(
+    a: T,
+    settled: &Settled<T, N>,
+    body_i: BodyOf<'_, T, N>,
+    delta: &[T; N],
+) -> GradientParts<T, N> {
+    let zero = T::splat(0.0);
+    let mut fr = Frames {
+        delta: *delta,
+        y: [zero; N],
+        force: [zero; N],
+    };
+    let mut ys = fr.y;
+    let mut fs = fr.y;
+    for m in 0..N {
+        ys[m] = settled.x[m] * body_i.l[m];
+        fs[m] = T::splat(2.0) * settled.c_minus_x[m] * body_i.inv_l[m];
+    }
+    for r in 0..N {
+        for m in 0..N {
+            fr.y[r] = fr.y[r] + body_i.q[r][m] * ys[m];
+            fr.force[r] = fr.force[r] + body_i.q[r][m] * fs[m];
+        }
+    }
+    let g = grad_d2_parts(&fr);
+    let k = T::splat(-2.0) * a;
+    let axpy = |v: T| zero + k * v;
+    GradientParts {
+        centre_i: each(g.centre_i, axpy),
+        centre_j: each(g.centre_j, axpy),
+        torque_i: each(g.torque_i, axpy),
+        torque_j: each(g.torque_j, axpy),
+    }
+}
+
+/// The parts of body `i` that [`direct_gradient`] reads, in any [`Real`] arithmetic.
+#[derive(Clone, Copy)]
+pub(crate) struct BodyOf<'a, T, const N: usize> {
+    pub q: &'a [[T; N]; N],
+    pub l: &'a [T; N],
+    pub inv_l: &'a [T; N],
+}
+
+fn grad_u<const N: usize>(
+    i: &Body<N>,
+    sol: &PairSolution<N>,
+    fr: &Frames<f64, N>,
+) -> PairGradient<N> {
     let mut g = PairGradient::ZERO;
     let mut s = [0.0; N];
     for k in 0..N {
@@ -306,31 +385,24 @@ fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGra
         if a == 0.0 {
             return (0.0, PairGradient::ZERO);
         }
-        let q = i.rotation();
-        let l = i.semi_axes();
         let ci = i.centre();
         let cj = j.centre();
-        let mut fr = Frames {
-            delta: [0.0; N],
-            y: [0.0; N],
-            force: [0.0; N],
-        };
-        let mut ys = [0.0; N];
-        let mut fs = [0.0; N];
+        let mut delta = [0.0; N];
         for m in 0..N {
-            fr.delta[m] = ci[m] - cj[m];
-            ys[m] = d.x[m] * l[m];
-            fs[m] = 2.0 * d.c_minus_x[m] * st.inv_li[m];
+            delta[m] = ci[m] - cj[m];
         }
-        for r in 0..N {
-            for m in 0..N {
-                fr.y[r] += q[r][m] * ys[m];
-                fr.force[r] += q[r][m] * fs[m];
-            }
-        }
-        let mut gf = PairGradient::ZERO;
-        gf.axpy(-2.0 * a, &grad_d2(&fr));
-        return (a * a, gf);
+        let settled = Settled {
+            u: d.u,
+            x: d.x,
+            c_minus_x: d.c_minus_x,
+            d2: d.d2,
+        };
+        let body_i = BodyOf {
+            q: &i.rotation(),
+            l: &i.semi_axes(),
+            inv_l: &st.inv_li,
+        };
+        return (a * a, direct_gradient(a, &settled, body_i, &delta).into());
     }
     let sol = match direct {
         Some(d) => direct_solution(&st, &d),

@@ -67,6 +67,15 @@ pub enum Error {
         /// Length given.
         found: usize,
     },
+    /// A pair names an ellipsoid that is not there.
+    PairIndex {
+        /// Position of the pair in the list.
+        pair: usize,
+        /// The pair's indices.
+        indices: (usize, usize),
+        /// How many ellipsoids there are.
+        len: usize,
+    },
     /// The problem has no ellipsoid.
     Empty,
     /// The neighbour grid rejected the input.
@@ -141,6 +150,14 @@ impl fmt::Display for Error {
             } => {
                 write!(f, "{what}: expected {expected} values, found {found}")
             }
+            Error::PairIndex {
+                pair,
+                indices: (i, j),
+                len,
+            } => write!(
+                f,
+                "pair {pair} is ({i}, {j}), but there are only {len} ellipsoids"
+            ),
             Error::Empty => write!(f, "the problem has no ellipsoid"),
             Error::Grid(ref msg) => write!(f, "neighbour grid: {msg}"),
             Error::Solver(ref msg) => write!(f, "solver: {msg}"),

@@ -28,9 +28,11 @@
 // several arrays are indexed together; iterator chains would hide the mathematics.
 #![allow(clippy::needless_range_loop)]
 
+pub mod batch;
 pub mod containment;
 pub mod derivatives;
 pub mod error;
+pub(crate) mod lanes;
 pub mod lattice;
 pub(crate) mod linalg;
 pub mod model;

@@ -47,27 +47,29 @@ macro_rules! multiversion {
 }
 pub(crate) use multiversion;
 
+use crate::lanes::Real;
+
 /// Dot product.
 #[inline(always)]
-pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+pub(crate) fn dot<T: Real, const N: usize>(a: &[T; N], b: &[T; N]) -> T {
     // Started from the first product, not from 0.0: `0.0 + x` cannot be folded (it turns
     // −0 into +0), and that one extra addition lengthened every dependent 3×3 product of the
     // pair kernel by a third.
     let mut s = a[0] * b[0];
     for k in 1..N {
-        s += a[k] * b[k];
+        s = s + a[k] * b[k];
     }
     s
 }
 
 /// `Qᵀ v` for a row-major `Q`.
 #[inline(always)]
-pub(crate) fn mat_t_vec<const N: usize>(q: &[[f64; N]; N], v: &[f64; N]) -> [f64; N] {
-    let mut out = [0.0; N];
+pub(crate) fn mat_t_vec<T: Real, const N: usize>(q: &[[T; N]; N], v: &[T; N]) -> [T; N] {
+    let mut out = *v;
     for k in 0..N {
         let mut s = q[0][k] * v[0];
         for m in 1..N {
-            s += q[m][k] * v[m];
+            s = s + q[m][k] * v[m];
         }
         out[k] = s;
     }
@@ -87,7 +89,7 @@ pub(crate) fn mat_vec<const N: usize>(q: &[[f64; N]; N], v: &[f64; N]) -> [f64; 
 
 /// The "torque" `r × n`, as a 3-vector; in 2D only its third component is non-zero.
 #[inline(always)]
-pub(crate) fn torque<const N: usize>(r: &[f64; N], n: &[f64; N]) -> [f64; 3] {
+pub(crate) fn torque<T: Real, const N: usize>(r: &[T; N], n: &[T; N]) -> [T; 3] {
     if N == 3 {
         [
             r[1] * n[2] - r[2] * n[1],
@@ -95,7 +97,7 @@ pub(crate) fn torque<const N: usize>(r: &[f64; N], n: &[f64; N]) -> [f64; 3] {
             r[0] * n[1] - r[1] * n[0],
         ]
     } else {
-        [0.0, 0.0, r[0] * n[1] - r[1] * n[0]]
+        [T::splat(0.0), T::splat(0.0), r[0] * n[1] - r[1] * n[0]]
     }
 }
 

@@ -36,6 +36,7 @@
 //! # References
 //! Birgin, Lobato, Martínez (2016), eqs. (18)–(19), (33)–(34), (37), Section 5.2.
 
+use crate::batch::{KernelQueue, Term, ValueOnly, WithGradient};
 use crate::containment::{
     Container, ContainerKind, ContainmentDirection, containment_gradient,
     containment_gradient_derivative, containment_residual,
@@ -629,23 +630,35 @@ impl<const N: usize> Problem<N> {
 fn pair_sum_value<const N: usize>(grid: &cell_grid::Grid<N>, bodies: &[Body<N>]) -> (f64, usize) {
     let mut sum = 0.0;
     let mut count = 0;
+    // Four pairs at a time through the kernel, the values added in the order of the pairs.
+    let mut queue = KernelQueue::<N, ValueOnly>::default();
+    let mut emit = |_: usize, _: usize, &f: &f64| sum += f;
     grid.for_each_close_pair(|i, j, _, _| {
-        sum += overlap_measure(&bodies[i], &bodies[j]);
         count += 1;
+        queue.push(bodies, i, j, &mut emit);
     });
+    queue.flush(bodies, &mut emit);
     (sum, count)
 }
 
 #[cfg(feature = "rayon")]
 fn pair_sum_value<const N: usize>(grid: &cell_grid::Grid<N>, bodies: &[Body<N>]) -> (f64, usize) {
-    grid.par_fold_close_pairs(
-        || (0.0, 0usize),
-        |acc, i, j, _, _| {
-            acc.0 += overlap_measure(&bodies[i], &bodies[j]);
+    // Each task's queue is flushed before its sum is merged.
+    let ((sum, count), mut queue) = grid.par_fold_close_pairs(
+        || ((0.0, 0usize), KernelQueue::<N, ValueOnly>::default()),
+        |(acc, queue), i, j, _, _| {
             acc.1 += 1;
+            queue.push(bodies, i, j, &mut |_, _, &f| acc.0 += f);
         },
-        |a, b| (a.0 + b.0, a.1 + b.1),
-    )
+        |(mut a, mut qa), (mut b, mut qb)| {
+            qa.flush(bodies, &mut |_, _, &f| a.0 += f);
+            qb.flush(bodies, &mut |_, _, &f| b.0 += f);
+            ((a.0 + b.0, a.1 + b.1), qa)
+        },
+    );
+    let mut sum = sum;
+    queue.flush(bodies, &mut |_, _, &f| sum += f);
+    (sum, count)
 }
 
 /// Adds a force and a torque on body `b` to `out`: the force on its centre, and on its angle
@@ -713,16 +726,37 @@ fn pair_sum_gradient<const N: usize>(
     torques.resize(bodies.len(), [0.0; 3]);
     let mut sum = 0.0;
     let mut count = 0;
-    grid.for_each_close_pair(|i, j, _, _| {
-        count += 1;
-        let (f, g) = pair_gradient(&bodies[i], &bodies[j]);
+    // Four pairs at a time through the kernel; the terms come back in the order of the pairs,
+    // so the sums are those of a plain loop over `pair_gradient`.
+    let mut queue = KernelQueue::<N, WithGradient>::default();
+    let mut emit = |i: usize, j: usize, &(f, ref g): &Term<N>| {
         if f > 0.0 {
             sum += f;
-            add_pair(out, torques, i, j, &g);
+            add_pair(out, torques, i, j, g);
         }
+    };
+    grid.for_each_close_pair(|i, j, _, _| {
+        count += 1;
+        queue.push(bodies, i, j, &mut emit);
     });
+    queue.flush(bodies, &mut emit);
     torques_to_angles::<N>(out, torques, spins);
     (sum, count)
+}
+
+/// A task's share of the rayon pair sum: `Σf`, the pair count and the non-zero terms.
+#[cfg(feature = "rayon")]
+type Kept<const N: usize> = (f64, usize, Vec<(usize, usize, PairGradient<N>)>);
+
+/// Adds the terms a queue emits to a task's share.
+#[cfg(feature = "rayon")]
+fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>) + '_ {
+    move |i, j, &(f, ref g)| {
+        if f > 0.0 {
+            acc.0 += f;
+            acc.2.push((i, j, *g));
+        }
+    }
 }
 
 #[cfg(feature = "rayon")]
@@ -735,23 +769,30 @@ fn pair_sum_gradient<const N: usize>(
 ) -> (f64, usize) {
     // Each task collects its non-zero pair gradients; they are scattered serially, so the
     // result does not depend on the thread count beyond summation order.
-    let (sum, count, terms) = grid.par_fold_close_pairs(
-        || (0.0, 0usize, Vec::new()),
-        |acc, i, j, _, _| {
-            acc.1 += 1;
-            let (f, g) = pair_gradient(&bodies[i], &bodies[j]);
-            if f > 0.0 {
-                acc.0 += f;
-                acc.2.push((i, j, g));
-            }
+    // Each task's queue is flushed before its terms are merged, so that they stay in the
+    // order of the pairs.
+    let (mut acc, mut queue) = grid.par_fold_close_pairs(
+        || {
+            (
+                (0.0, 0usize, Vec::new()),
+                KernelQueue::<N, WithGradient>::default(),
+            )
         },
-        |mut a, mut b| {
+        |(acc, queue), i, j, _, _| {
+            acc.1 += 1;
+            queue.push(bodies, i, j, &mut keep(acc));
+        },
+        |(mut a, mut qa), (mut b, mut qb)| {
+            qa.flush(bodies, &mut keep(&mut a));
+            qb.flush(bodies, &mut keep(&mut b));
             a.0 += b.0;
             a.1 += b.1;
             a.2.append(&mut b.2);
-            a
+            (a, qa)
         },
     );
+    queue.flush(bodies, &mut keep(&mut acc));
+    let (sum, count, terms) = acc;
     torques.clear();
     torques.resize(bodies.len(), [0.0; 3]);
     for (i, j, g) in &terms {

@@ -27,6 +27,7 @@
 //! # References
 //! Birgin, Lobato, Martínez (2016), Sections 3–5.
 
+use crate::lanes::Real;
 use crate::linalg::{GradedSvd, dot, graded_svd, mat_t_vec};
 use crate::projection::{self, DirectProjection, Projection};
 use crate::shape::Body;
@@ -68,7 +69,7 @@ pub fn epsilon<const N: usize>(li: &[f64; N], lj: &[f64; N]) -> f64 {
 
 /// `ε_ij` from the extreme semi-axes: five roundings, ≤ 2.5 ulps.
 #[inline(always)]
-fn epsilon_from_extremes(imin: f64, imax: f64, jmin: f64, jmax: f64) -> f64 {
+pub(crate) fn epsilon_from_extremes<T: Real>(imin: T, imax: T, jmin: T, jmax: T) -> T {
     imin * (jmin * jmin) / ((imax * imax) * jmax)
 }
 
@@ -298,35 +299,20 @@ pub(crate) fn setup_from<const N: usize>(
     j: &Body<N>,
     line: &CentreLine<N>,
 ) -> Setup<N> {
-    let qi = i.rotation();
-    let qj = j.rotation();
-    let li = i.semi_axes();
-    let lj = j.semi_axes();
-    // `c` and `b` keep their divisions: one rounding less in the quantities everything else is
-    // measured from. (Multiplying by the bodies' cached reciprocals saved 3–4 % of a pair
-    // term, but the worst reference errors in `random_moderate` grew from 6e-15 to 1.3e-14.)
-    // The reciprocals serve F below and the gradient's force, P_i^−½ (c − X).
-    let mut c = line.in_i;
-    let mut b = line.in_j;
+    let (c, b, f) = frame_factor(
+        &line.in_i,
+        &line.in_j,
+        Sides {
+            q: &i.rotation(),
+            l: &i.semi_axes(),
+        },
+        Sides {
+            q: &j.rotation(),
+            l: &j.semi_axes(),
+        },
+        &j.inv_semi_axes(),
+    );
     let inv_li = i.inv_semi_axes();
-    let inv_lj = j.inv_semi_axes();
-    for k in 0..N {
-        c[k] /= li[k];
-        b[k] /= lj[k];
-    }
-    // F = P_j^−½ (Q_jᵀ Q_i) P_i^½, entry by entry: a graded matrix with an orthogonal core.
-    // Each entry carries a relative error of a few ulps, which moves the singular values by as
-    // little (the graded structure); N reciprocals replace N² divisions.
-    let mut f = [[0.0; N]; N];
-    for a in 0..N {
-        for bcol in 0..N {
-            let mut r = qj[0][a] * qi[0][bcol];
-            for m in 1..N {
-                r += qj[m][a] * qi[m][bcol];
-            }
-            f[a][bcol] = r * li[bcol] * inv_lj[a];
-        }
-    }
     let (imin, imax, jmin, jmax) = (
         i.min_semi_axis(),
         i.bounding_radius(),
@@ -342,6 +328,49 @@ pub(crate) fn setup_from<const N: usize>(
         // (l_max,i / l_min,i)(l_max,j / l_min,j) ≤ limit, without divisions.
         well_conditioned: imax * jmax <= DIRECT_CONDITION_LIMIT * (imin * jmin),
     }
+}
+
+/// A body's rotation and semi-axes, in any [`Real`] arithmetic.
+#[derive(Clone, Copy)]
+pub(crate) struct Sides<'a, T, const N: usize> {
+    pub q: &'a [[T; N]; N],
+    pub l: &'a [T; N],
+}
+
+/// `c = P_i^−½ Q_iᵀ Δ`, `b = P_j^−½ Q_jᵀ Δ` (eq. 3) from the centre line in both frames, and
+/// `F = P_j^−½ (Q_jᵀ Q_i) P_i^½`, in any [`Real`] arithmetic (one pair or four).
+#[inline(always)]
+pub(crate) fn frame_factor<T: Real, const N: usize>(
+    in_i: &[T; N],
+    in_j: &[T; N],
+    i: Sides<'_, T, N>,
+    j: Sides<'_, T, N>,
+    inv_lj: &[T; N],
+) -> ([T; N], [T; N], [[T; N]; N]) {
+    // `c` and `b` keep their divisions: one rounding less in the quantities everything else is
+    // measured from. (Multiplying by the bodies' cached reciprocals saved 3–4 % of a pair
+    // term, but the worst reference errors in `random_moderate` grew from 6e-15 to 1.3e-14.)
+    // The reciprocals serve F below and the gradient's force, P_i^−½ (c − X).
+    let mut c = *in_i;
+    let mut b = *in_j;
+    for k in 0..N {
+        c[k] = c[k] / i.l[k];
+        b[k] = b[k] / j.l[k];
+    }
+    // F = P_j^−½ (Q_jᵀ Q_i) P_i^½, entry by entry: a graded matrix with an orthogonal core.
+    // Each entry carries a relative error of a few ulps, which moves the singular values by as
+    // little (the graded structure); N reciprocals replace N² divisions.
+    let mut f = *i.q;
+    for a in 0..N {
+        for bcol in 0..N {
+            let mut r = j.q[0][a] * i.q[0][bcol];
+            for m in 1..N {
+                r = r + j.q[m][a] * i.q[m][bcol];
+            }
+            f[a][bcol] = r * i.l[bcol] * inv_lj[a];
+        }
+    }
+    (c, b, f)
 }
 
 /// The direct route of [`solve_pair_with`], or `None` where it does not apply (centre inside,
@@ -360,7 +389,7 @@ pub(crate) fn solve_direct<const N: usize>(st: &Setup<N>) -> Option<DirectProjec
 }
 
 /// Above this bound on `cond(F)` the direct solve is not used (see [`solve_pair_with`]).
-const DIRECT_CONDITION_LIMIT: f64 = 8.0;
+pub(crate) const DIRECT_CONDITION_LIMIT: f64 = 8.0;
 
 /// How [`pair_term_by`] solves eq. 35.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

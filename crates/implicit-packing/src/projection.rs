@@ -24,6 +24,7 @@
 //! # References
 //! Birgin, Lobato, Martínez (2016), eqs. (21)–(22), (35)–(36), Prop. 3.1, Prop. 4.2, Lemma 4.2.
 
+use crate::lanes::{Real, splat_n};
 use crate::linalg::dot;
 
 /// Solution of the secular equation in the eigenbasis of `S`.
@@ -159,8 +160,8 @@ pub struct DirectProjection<const N: usize> {
 /// below 64, so the cofactors lose little. The caller never divides by the determinant inside
 /// the Newton loop (see [`solve_outside_direct`]): the division left the critical path.
 #[inline(always)]
-fn spd_adjugate<const N: usize>(m: &[[f64; N]; N]) -> ([[f64; N]; N], f64) {
-    let mut adj = [[0.0; N]; N];
+fn spd_adjugate<T: Real, const N: usize>(m: &[[T; N]; N]) -> ([[T; N]; N], T) {
+    let mut adj = [splat_n::<T, N>(0.0); N];
     if N == 2 {
         adj[0][0] = m[1][1];
         adj[1][1] = m[0][0];
@@ -185,12 +186,18 @@ fn spd_adjugate<const N: usize>(m: &[[f64; N]; N]) -> ([[f64; N]; N], f64) {
 }
 
 #[inline(always)]
-fn sym_mat_vec<const N: usize>(m: &[[f64; N]; N], v: &[f64; N]) -> [f64; N] {
-    let mut o = [0.0; N];
+fn sym_mat_vec<T: Real, const N: usize>(m: &[[T; N]; N], v: &[T; N]) -> [T; N] {
+    let mut o = *v;
     for a in 0..N {
         o[a] = dot(&m[a], v);
     }
     o
+}
+
+/// `|v|²`, summed in index order.
+#[inline(always)]
+pub(crate) fn norm2<T: Real, const N: usize>(v: &[T; N]) -> T {
+    dot(v, v)
 }
 
 /// Above this `|b|² = cᵀSc` the direct solve is not attempted: its unnormalised quantities
@@ -233,12 +240,52 @@ pub fn solve_outside_direct<const N: usize>(
     if b2 > DIRECT_B2_LIMIT {
         return None;
     }
-    let mut s = [[0.0; N]; N];
+    let DirectStart { s, lo, u0 } = direct_start(f, c, b2);
+    let mut u = u0;
+    for _ in 0..DIRECT_MAX_ITERATIONS {
+        let h = halley_at(&s, c, u);
+        if !h.step.is_finite() {
+            return None;
+        }
+        if h.settled(u) {
+            let d = h.finish(&s, u);
+            return Some(DirectProjection {
+                u: d.u,
+                x: d.x,
+                c_minus_x: d.c_minus_x,
+                d2: d.d2,
+            });
+        }
+        u = h.next(u, lo);
+    }
+    None
+}
+
+/// The direct solve gives up after this many iterations (the caller then takes the SVD
+/// route); Halley's method from the start below takes two or three.
+pub(crate) const DIRECT_MAX_ITERATIONS: usize = 60;
+
+/// `S = FᵀF`, the lower bound `U_lo` and the start `U₀` of [`solve_outside_direct`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DirectStart<T, const N: usize> {
+    pub s: [[T; N]; N],
+    pub lo: T,
+    pub u0: T,
+}
+
+/// The start of [`solve_outside_direct`], in any [`Real`] arithmetic (one pair or four).
+#[inline(always)]
+pub(crate) fn direct_start<T: Real, const N: usize>(
+    f: &[[T; N]; N],
+    c: &[T; N],
+    b2: T,
+) -> DirectStart<T, N> {
+    let mut s = *f;
     for a in 0..N {
         for b in a..N {
             let mut v = f[0][a] * f[0][b];
             for k in 1..N {
-                v += f[k][a] * f[k][b];
+                v = v + f[k][a] * f[k][b];
             }
             s[a][b] = v;
             s[b][a] = v;
@@ -254,75 +301,132 @@ pub fn solve_outside_direct<const N: usize>(
     // ‖F‖²_F = tr S: two additions after S instead of a chain of nine.
     let mut fro2 = s[0][0];
     for a in 1..N {
-        fro2 += s[a][a];
+        fro2 = fro2 + s[a][a];
     }
+    let one = T::splat(1.0);
     let bn = b2.sqrt();
-    let lo = (bn - 1.0) / fro2;
-    let c2: f64 = c.iter().map(|v| v * v).sum();
+    let lo = (bn - one) / fro2;
+    let c2 = norm2(c);
     let sc = sym_mat_vec(&s, c);
-    let sc2: f64 = sc.iter().map(|v| v * v).sum();
-    let mut u = (0.5 * (bn - 1.0) * (c2 / b2 + b2 / sc2)).max(lo);
-    for _ in 0..60 {
-        let mut m = s;
-        for a in 0..N {
-            for b in 0..N {
-                m[a][b] *= u;
-            }
-            m[a][a] += 1.0;
+    let sc2 = norm2(&sc);
+    let u0 = (T::splat(0.5) * (bn - one) * (c2 / b2 + b2 / sc2)).max(lo);
+    DirectStart { s, lo, u0 }
+}
+
+/// What one Halley iteration of [`solve_outside_direct`] computes at `U`: with
+/// `M = (I + U S)⁻¹ = adj / det`, the unnormalised `a = adj c` (`ax`), `S a`, `adj S a`
+/// (`az`), `S adj S a`, and the step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct HalleyAt<T: Real, const N: usize> {
+    adj: [[T; N]; N],
+    det: T,
+    ax: [T; N],
+    sax: [T; N],
+    az: [T; N],
+    saz: [T; N],
+    /// The step `δ` to add to `U`.
+    pub step: T,
+    /// Whether `δ` is Halley's step (else Newton's).
+    halley: T::Mask,
+}
+
+/// One iteration of [`solve_outside_direct`] at `u`, in any [`Real`] arithmetic.
+#[inline(always)]
+pub(crate) fn halley_at<T: Real, const N: usize>(
+    s: &[[T; N]; N],
+    c: &[T; N],
+    u: T,
+) -> HalleyAt<T, N> {
+    let one = T::splat(1.0);
+    let two = T::splat(2.0);
+    let mut m = *s;
+    for a in 0..N {
+        for b in 0..N {
+            m[a][b] = m[a][b] * u;
         }
-        let (adj, det) = spd_adjugate(&m);
-        let ax = sym_mat_vec(&adj, c);
-        let sax = sym_mat_vec(&s, &ax);
-        // p = φ det²: with cond(S) ≤ 64 the formed S loses little that |F x|² would keep.
-        let p = dot(&ax, &sax);
-        let az = sym_mat_vec(&adj, &sax);
-        let q = dot(&sax, &az);
-        // r = (az)ᵀ S (az) = zᵀ S z det⁴, with φ'' = 6 zᵀ S z: Halley's correction.
-        let saz = sym_mat_vec(&s, &az);
-        let r = dot(&az, &saz);
-        // Halley on h: δ = δ_N / (1 + δ_N h''/(2h')), δ_N = (p/q)(√p − det),
-        // h''/h' = (3/det)(q/p − r/q); over one denominator:
-        // δ = 2 det p q e / (2 det q² + 3 e (q² − r p)), e = √p − det.
-        let e = p.sqrt() - det;
-        let qq = q * q;
-        let newton_den = 2.0 * det * qq;
-        let halley_den = newton_den + 3.0 * e * (qq - r * p);
-        // Halley's factor 1 + δ_N h''/(2h') below ½ (a long step where h bends a lot): take
-        // Newton's step, (p/q) e over the same numerator, which keeps the monotone approach.
-        let halley = halley_den >= 0.5 * newton_den;
-        let step = (2.0 * det * p * q * e) / if halley { halley_den } else { newton_den };
-        if !step.is_finite() {
-            return None;
-        }
-        if halley && step.abs() <= HALLEY_FINAL * u {
-            // Cubic convergence: after this step the error is ~(2e-6)³, below an ulp. X and
-            // S X follow to second order in δ: x(U + δ) = x − δ z + δ² M S z + O(δ³),
-            // z = M S x = −dx/dU, M = (I + U S)⁻¹ = adj / det; c − X = U S X.
-            let u = u + step;
-            let rd = 1.0 / det;
-            let dr = step * rd;
-            let w = sym_mat_vec(&adj, &saz);
-            let sw = sym_mat_vec(&s, &w);
-            let mut x = [0.0; N];
-            let mut cmx = [0.0; N];
-            let mut d2 = 0.0;
-            for a in 0..N {
-                x[a] = (ax[a] - dr * (az[a] - dr * w[a])) * rd;
-                cmx[a] = u * ((sax[a] - dr * (saz[a] - dr * sw[a])) * rd);
-                d2 += cmx[a] * cmx[a];
-            }
-            return Some(DirectProjection {
-                u,
-                x,
-                c_minus_x: cmx,
-                d2,
-            });
-        }
-        // From the right of the root a step of the concave h lands left of it, possibly below
-        // the lower bound: then restart from the bound, whence the iterates increase.
-        u = (u + step).max(lo);
+        m[a][a] = m[a][a] + one;
     }
-    None
+    let (adj, det) = spd_adjugate(&m);
+    let ax = sym_mat_vec(&adj, c);
+    let sax = sym_mat_vec(s, &ax);
+    // p = φ det²: with cond(S) ≤ 64 the formed S loses little that |F x|² would keep.
+    let p = dot(&ax, &sax);
+    let az = sym_mat_vec(&adj, &sax);
+    let q = dot(&sax, &az);
+    // r = (az)ᵀ S (az) = zᵀ S z det⁴, with φ'' = 6 zᵀ S z: Halley's correction.
+    let saz = sym_mat_vec(s, &az);
+    let r = dot(&az, &saz);
+    // Halley on h: δ = δ_N / (1 + δ_N h''/(2h')), δ_N = (p/q)(√p − det),
+    // h''/h' = (3/det)(q/p − r/q); over one denominator:
+    // δ = 2 det p q e / (2 det q² + 3 e (q² − r p)), e = √p − det.
+    let e = p.sqrt() - det;
+    let qq = q * q;
+    let newton_den = two * det * qq;
+    let halley_den = newton_den + T::splat(3.0) * e * (qq - r * p);
+    // Halley's factor 1 + δ_N h''/(2h') below ½ (a long step where h bends a lot): take
+    // Newton's step, (p/q) e over the same numerator, which keeps the monotone approach.
+    let halley = halley_den.ge(T::splat(0.5) * newton_den);
+    let step = (two * det * p * q * e) / T::select(halley, halley_den, newton_den);
+    HalleyAt {
+        adj,
+        det,
+        ax,
+        sax,
+        az,
+        saz,
+        step,
+        halley,
+    }
+}
+
+/// `U`, `X`, `c − X` and `d²` after the last step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Settled<T, const N: usize> {
+    pub u: T,
+    pub x: [T; N],
+    pub c_minus_x: [T; N],
+    pub d2: T,
+}
+
+impl<T: Real, const N: usize> HalleyAt<T, N> {
+    /// The iteration has settled: a Halley step shorter than `HALLEY_FINAL · U`.
+    #[inline(always)]
+    pub(crate) fn settled(&self, u: T) -> T::Mask {
+        self.halley & self.step.abs().le(T::splat(HALLEY_FINAL) * u)
+    }
+
+    /// The next iterate. From the right of the root a step of the concave h lands left of it,
+    /// possibly below the lower bound: then restart from the bound, whence the iterates
+    /// increase.
+    #[inline(always)]
+    pub(crate) fn next(&self, u: T, lo: T) -> T {
+        (u + self.step).max(lo)
+    }
+
+    /// The solution after the last step. Cubic convergence: after this step the error is
+    /// ~(2e-6)³, below an ulp. X and S X follow to second order in δ:
+    /// x(U + δ) = x − δ z + δ² M S z + O(δ³), z = M S x = −dx/dU, M = (I + U S)⁻¹ = adj / det;
+    /// c − X = U S X.
+    #[inline(always)]
+    pub(crate) fn finish(&self, s: &[[T; N]; N], u: T) -> Settled<T, N> {
+        let u = u + self.step;
+        let rd = T::splat(1.0) / self.det;
+        let dr = self.step * rd;
+        let w = sym_mat_vec(&self.adj, &self.saz);
+        let sw = sym_mat_vec(s, &w);
+        let mut x = w;
+        let mut cmx = w;
+        for a in 0..N {
+            x[a] = (self.ax[a] - dr * (self.az[a] - dr * w[a])) * rd;
+            cmx[a] = u * ((self.sax[a] - dr * (self.saz[a] - dr * sw[a])) * rd);
+        }
+        Settled {
+            u,
+            x,
+            c_minus_x: cmx,
+            d2: norm2(&cmx),
+        }
+    }
 }
 
 /// Solves the secular equation for eigenvalues `s`, `ĉ = Vᵀc` and `g_k = σ_k ĉ_k`.
