@@ -143,11 +143,13 @@ pub struct Problem<const N: usize> {
     kind: ContainerKind,
     bodies: Vec<Body<N>>,
     centres: Vec<[f64; N]>,
-    // Per ellipsoid, computed once per evaluation by `load`: the angular velocities ω_α of its
-    // angles (eq. 1/2; row α, world frame), which turn a torque into angle derivatives. The
-    // pair gradients only accumulate torques (`torques`), and each ellipsoid's are turned into
-    // angle derivatives once, instead of once per pair (that cost two `sin_cos` per side).
-    spins: Vec<[[f64; 3]; 3]>,
+    // Per ellipsoid, computed once per evaluation by `load`: (sin ψ, cos ψ) of eq. 2's third
+    // angle, from which `spin_rows` rebuilds the angular velocities ω_α of the angles (row α,
+    // world frame) that turn a torque into angle derivatives. The pair gradients only
+    // accumulate torques (`torques`), and each ellipsoid's are turned into angle derivatives
+    // once, instead of once per pair (that cost two `sin_cos` per side). Two numbers instead
+    // of the nine of ω: at m = 1e5 this array is written and read on every evaluation.
+    spins: Vec<[f64; 2]>,
     torques: Vec<[f64; 3]>,
     grid: Option<cell_grid::Grid<N>>,
 }
@@ -307,7 +309,8 @@ impl<const N: usize> Problem<N> {
                         continue;
                     }
                     ev.containment += r;
-                    scatter_force_torque(&mut g.containment, i, &cg.centre, &cg.torque, &spins[i]);
+                    let spin = spin_rows(b, spins[i]);
+                    scatter_force_torque(&mut g.containment, i, &cg.centre, &cg.torque, &spin);
                     for k in 0..self.kind.dimension_count(N) {
                         g.containment[nb + k] += cg.container[k];
                     }
@@ -707,18 +710,37 @@ fn add_pair<const N: usize>(
 fn torques_to_angles<const N: usize>(
     out: &mut [f64],
     torques: &[[f64; 3]],
-    spins: &[[[f64; 3]; 3]],
+    bodies: &[Body<N>],
+    spins: &[[f64; 2]],
 ) {
-    for (b, (t, spin)) in torques.iter().zip(spins).enumerate() {
-        scatter_force_torque::<N>(out, b, &[0.0; N], t, spin);
+    for (b, (t, &sc)) in torques.iter().zip(spins).enumerate() {
+        scatter_force_torque::<N>(out, b, &[0.0; N], t, &spin_rows(&bodies[b], sc));
     }
+}
+
+/// The angular velocities `ω_α` of a body's angles, row `α` (world frame), from its rotation
+/// and `(sin ψ, cos ψ)`: for eq. 2, `ω_φ` is the first column of `Q`, `ω_θ = (−sin ψ, cos ψ,
+/// 0)` and `ω_ψ = e_z` (the same expressions as `rotation_and_velocities_3d`, so the same
+/// bits); in 2D `ω_θ = e_z`.
+#[inline]
+fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3] {
+    let mut spin = [[0.0; 3]; 3];
+    if N == 2 {
+        spin[0][2] = 1.0;
+    } else {
+        let q = body.rotation();
+        spin[0] = [q[0][0], q[1][0], q[2][0]];
+        spin[1] = [-sp, cp, 0.0];
+        spin[2][2] = 1.0;
+    }
+    spin
 }
 
 #[cfg(not(feature = "rayon"))]
 fn pair_sum_gradient<const N: usize>(
     grid: &cell_grid::Grid<N>,
     bodies: &[Body<N>],
-    spins: &[[[f64; 3]; 3]],
+    spins: &[[f64; 2]],
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> (f64, usize) {
@@ -740,7 +762,7 @@ fn pair_sum_gradient<const N: usize>(
         queue.push(bodies, i, j, &mut emit);
     });
     queue.flush(bodies, &mut emit);
-    torques_to_angles::<N>(out, torques, spins);
+    torques_to_angles::<N>(out, torques, bodies, spins);
     (sum, count)
 }
 
@@ -763,7 +785,7 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
 fn pair_sum_gradient<const N: usize>(
     grid: &cell_grid::Grid<N>,
     bodies: &[Body<N>],
-    spins: &[[[f64; 3]; 3]],
+    spins: &[[f64; 2]],
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> (f64, usize) {
@@ -798,7 +820,7 @@ fn pair_sum_gradient<const N: usize>(
     for (i, j, g) in &terms {
         add_pair(out, torques, *i, *j, g);
     }
-    torques_to_angles::<N>(out, torques, spins);
+    torques_to_angles::<N>(out, torques, bodies, spins);
     (sum, count)
 }
 
@@ -809,11 +831,11 @@ fn make_body<const N: usize>(l: &[f64; N], vars: &[f64]) -> Body<N> {
 
 /// A body from its variables `[c, Ω]` and the angular velocities `ω_α` of its angles (rows;
 /// 2D: `ω_θ = e_z`), from one set of sines and cosines.
-fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, [[f64; 3]; 3]) {
+fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, [f64; 2]) {
     let mut c = [0.0; N];
     c.copy_from_slice(&vars[..N]);
     let mut q = [[0.0; N]; N];
-    let mut spin = [[0.0; 3]; 3];
+    let mut spin = [0.0; 2];
     if N == 2 {
         let r = rotation_2d(vars[2]);
         for a in 0..2 {
@@ -821,7 +843,6 @@ fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, 
                 q[a][b] = r[a][b];
             }
         }
-        spin[0][2] = 1.0;
     } else {
         let (r, w) = rotation_and_velocities_3d([vars[3], vars[4], vars[5]]);
         for a in 0..N {
@@ -829,7 +850,8 @@ fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, 
                 q[a][b] = r[a][b];
             }
         }
-        spin = w;
+        // ω_θ = (−sin ψ, cos ψ, 0).
+        spin = [-w[1][0], w[1][1]];
     }
     (Body::from_parts_unchecked(c, *l, q), spin)
 }
