@@ -4,13 +4,13 @@
 //! centre-line certificate does not separate it) takes the direct route of the projection
 //! (centre outside, `cond(F) ≤ 8`) with `U ≥ ε`, where `∇f = −2 (1 − d²) ∇d²`. That route is a
 //! chain of dependent 3×3 products: one pair keeps the processor waiting on latencies, four
-//! pairs in the four lanes of an AVX register fill them. [`KernelQueue`] collects the pairs
+//! pairs in the four lanes of an AVX register fill them. The model's queue collects the pairs
 //! that reach the kernel and solves them four at a time; a lane that leaves the route (centre
 //! inside, stiff shapes, `U < ε`, an iteration that does not settle) is handed to the scalar
 //! [`pair_gradient`], which takes the SVD route for it.
 //!
 //! The four-lane kernel runs the same generic formulas as the scalar one
-//! ([`crate::lanes::Real`]): every result is the same bits as [`pair_gradient`]'s, and the
+//! (`lanes::Real`): every result is the same bits as [`pair_gradient`]'s, and the
 //! model's sums, added in the order the pairs arrive, are the same bits with or without it.
 //! Without AVX2 and FMA the queue solves each pair with [`pair_gradient`].
 
