@@ -528,18 +528,23 @@ mod tests {
         }
     }
 
+    /// `n` pairs of [`pair_3d`], the pair `k` at bodies `2k`, `2k + 1`.
+    fn pairs_3d(rng: &mut Lcg, n: usize) -> Vec<Body<3>> {
+        (0..n)
+            .flat_map(|k| {
+                let (a, b) = pair_3d(rng, k);
+                [a, b]
+            })
+            .collect()
+    }
+
     /// Every lane the four-lane kernel answers is `pair_gradient`'s (or `overlap_measure`'s)
     /// answer, bit for bit, and it answers most lanes of the direct route (so that this test
     /// exercises it).
     #[test]
     fn four_lanes_are_the_scalar_kernel_bit_for_bit() {
         let mut rng = Lcg(17);
-        let bodies: Vec<Body<3>> = (0..40_000)
-            .flat_map(|k| {
-                let (a, b) = pair_3d(&mut rng, k);
-                [a, b]
-            })
-            .collect();
+        let bodies = pairs_3d(&mut rng, 40_000);
         let mut waiting: [Vec<Waiting<3>>; 4] = Default::default();
         for p in 0..bodies.len() / 2 {
             let (i, j) = (2 * p, 2 * p + 1);
@@ -601,12 +606,7 @@ mod tests {
     #[test]
     fn pair_gradients_equals_the_loop() {
         let mut rng = Lcg(5);
-        let bodies: Vec<Body<3>> = (0..600)
-            .flat_map(|k| {
-                let (a, b) = pair_3d(&mut rng, k);
-                [a, b]
-            })
-            .collect();
+        let bodies = pairs_3d(&mut rng, 600);
         for len in [0, 1, 3, 4, 5, 599, 1203] {
             let pairs: Vec<(usize, usize)> = (0..len)
                 .map(|k| {
