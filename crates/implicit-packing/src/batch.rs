@@ -101,16 +101,28 @@ fn has_lanes() -> bool {
 /// they settle has `f = 0` and is dropped); the others wait until four are there. Every
 /// solved pair is handed to `emit(i, j, result)` in the order the pairs were pushed, so a sum
 /// over the emitted results adds them in the same order as a loop of scalar calls.
+/// A fixed array, not a `Vec`: the model allocates nothing per evaluation.
 #[derive(Debug, Clone)]
 pub(crate) struct KernelQueue<const N: usize, K> {
-    waiting: Vec<Waiting<N>>,
+    waiting: [Waiting<N>; LANES],
+    len: usize,
     kernel: core::marker::PhantomData<K>,
 }
 
 impl<const N: usize, K> Default for KernelQueue<N, K> {
     fn default() -> Self {
+        let empty = Waiting {
+            i: 0,
+            j: 0,
+            line: CentreLine {
+                in_i: [0.0; N],
+                in_j: [0.0; N],
+                norm2: 0.0,
+            },
+        };
         Self {
-            waiting: Vec::with_capacity(LANES),
+            waiting: [empty; LANES],
+            len: 0,
             kernel: core::marker::PhantomData,
         }
     }
@@ -137,8 +149,10 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
         if certified_separated(bi, bj, &line) {
             return;
         }
-        self.waiting.push(Waiting { i, j, line });
-        if self.waiting.len() == LANES {
+        self.waiting[self.len] = Waiting { i, j, line };
+        self.len += 1;
+        if self.len == LANES {
+            self.len = 0;
             self.solve_four(bodies, emit);
         }
     }
@@ -149,15 +163,15 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
         bodies: &[Body<N>],
         emit: &mut impl FnMut(usize, usize, &K::Out),
     ) {
-        for w in self.waiting.drain(..) {
+        for w in &self.waiting[..self.len] {
             emit(w.i, w.j, &K::one(&bodies[w.i], &bodies[w.j]));
         }
+        self.len = 0;
     }
 
-    fn solve_four(&mut self, bodies: &[Body<N>], emit: &mut impl FnMut(usize, usize, &K::Out)) {
-        let w: [Waiting<N>; LANES] = core::array::from_fn(|k| self.waiting[k]);
-        self.waiting.clear();
-        for (k, out) in K::four(bodies, &w).iter().enumerate() {
+    fn solve_four(&self, bodies: &[Body<N>], emit: &mut impl FnMut(usize, usize, &K::Out)) {
+        let w = &self.waiting;
+        for (k, out) in K::four(bodies, w).iter().enumerate() {
             let (i, j) = (w[k].i, w[k].j);
             match out {
                 Some(o) => emit(i, j, o),
