@@ -101,7 +101,9 @@ fn has_lanes() -> bool {
 /// they settle has `f = 0` and is dropped); the others wait until four are there. Every
 /// solved pair is handed to `emit(i, j, result)` in the order the pairs were pushed, so a sum
 /// over the emitted results adds them in the same order as a loop of scalar calls.
-/// A fixed array, not a `Vec`: the model allocates nothing per evaluation.
+///
+/// The four pairs are held in a fixed array, not a `Vec`: the model allocates nothing per
+/// evaluation.
 #[derive(Debug, Clone)]
 pub(crate) struct KernelQueue<const N: usize, K> {
     waiting: [Waiting<N>; LANES],
