@@ -186,11 +186,11 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
 #[cfg(target_arch = "x86_64")]
 mod avx {
     use super::{LANES, Term, Waiting};
-    use crate::derivatives::{BodyOf, GradientParts, PairGradient, direct_gradient};
+    use crate::derivatives::{GradientParts, PairGradient, direct_gradient};
     use crate::lanes::{F64x4, Mask4, Real};
-    use crate::pair::{DIRECT_CONDITION_LIMIT, Sides, epsilon_from_extremes, frame_factor};
+    use crate::pair::{BodyOf, DIRECT_CONDITION_LIMIT, epsilon_from_extremes, frame_factor};
     use crate::projection::{
-        DIRECT_B2_LIMIT, DIRECT_MAX_ITERATIONS, Settled, direct_start, halley_at, norm2,
+        DIRECT_B2_LIMIT, DIRECT_MAX_ITERATIONS, DirectProjection, direct_start, halley_at, norm2,
     };
     use crate::shape::Body;
 
@@ -222,9 +222,9 @@ mod avx {
     #[inline(always)]
     fn select<const N: usize>(
         m: Mask4,
-        a: &Settled<F64x4, N>,
-        b: &Settled<F64x4, N>,
-    ) -> Settled<F64x4, N> {
+        a: &DirectProjection<N, F64x4>,
+        b: &DirectProjection<N, F64x4>,
+    ) -> DirectProjection<N, F64x4> {
         let pick = |x: F64x4, y: F64x4| F64x4::select(m, x, y);
         let mut out = *b;
         for k in 0..N {
@@ -241,7 +241,7 @@ mod avx {
     struct Four<const N: usize> {
         /// Bit k set when lane k settled on the direct route.
         settled: u32,
-        solved: Settled<F64x4, N>,
+        solved: DirectProjection<N, F64x4>,
         eps: F64x4,
         qi: [[F64x4; N]; N],
         li: [F64x4; N],
@@ -274,9 +274,16 @@ mod avx {
         let (c, b, f) = frame_factor(
             &in_i,
             &in_j,
-            Sides { q: &qi, l: &li },
-            Sides { q: &qj, l: &lj },
-            &inv_lj,
+            BodyOf {
+                q: &qi,
+                l: &li,
+                inv_l: &inv_li,
+            },
+            BodyOf {
+                q: &qj,
+                l: &lj,
+                inv_l: &inv_lj,
+            },
         );
         let eps = epsilon_from_extremes(imin, imax, jmin, jmax);
         let splat = F64x4::splat;
@@ -287,7 +294,7 @@ mod avx {
         let start = direct_start(&f, &c, b2);
         let mut u = start.u0;
         let zero = splat(0.0);
-        let mut solved = Settled {
+        let mut solved = DirectProjection {
             u: zero,
             x: [zero; N],
             c_minus_x: [zero; N],

@@ -40,10 +40,10 @@
 use crate::lanes::{Real, each};
 use crate::linalg::torque;
 use crate::pair::{
-    PairSolution, bounding_spheres_apart, centre_line, certified_separated, direct_solution,
-    setup_from, solve_direct, solve_pair_with, solve_svd,
+    BodyOf, PairSolution, bounding_spheres_apart, centre_line, certified_separated,
+    direct_solution, setup_from, solve_direct, solve_pair_with, solve_svd,
 };
-use crate::projection::Settled;
+use crate::projection::DirectProjection;
 use crate::shape::{Body, angular_velocities_3d};
 
 /// Gradient of a scalar pair quantity with respect to the placements of `i` and `j`.
@@ -225,7 +225,7 @@ fn grad_d2_parts<T: Real, const N: usize>(fr: &Frames<T, N>) -> GradientParts<T,
 #[inline(always)]
 pub(crate) fn direct_gradient<T: Real, const N: usize>(
     a: T,
-    settled: &Settled<T, N>,
+    settled: &DirectProjection<N, T>,
     body_i: BodyOf<'_, T, N>,
     delta: &[T; N],
 ) -> GradientParts<T, N> {
@@ -256,14 +256,6 @@ pub(crate) fn direct_gradient<T: Real, const N: usize>(
         torque_i: each(g.torque_i, axpy),
         torque_j: each(g.torque_j, axpy),
     }
-}
-
-/// The parts of body `i` that [`direct_gradient`] reads, in any [`Real`] arithmetic.
-#[derive(Clone, Copy)]
-pub(crate) struct BodyOf<'a, T, const N: usize> {
-    pub q: &'a [[T; N]; N],
-    pub l: &'a [T; N],
-    pub inv_l: &'a [T; N],
 }
 
 fn grad_u<const N: usize>(
@@ -391,18 +383,12 @@ fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGra
         for m in 0..N {
             delta[m] = ci[m] - cj[m];
         }
-        let settled = Settled {
-            u: d.u,
-            x: d.x,
-            c_minus_x: d.c_minus_x,
-            d2: d.d2,
-        };
         let body_i = BodyOf {
             q: &i.rotation(),
             l: &i.semi_axes(),
             inv_l: &st.inv_li,
         };
-        return (a * a, direct_gradient(a, &settled, body_i, &delta).into());
+        return (a * a, direct_gradient(a, d, body_i, &delta).into());
     }
     let sol = match direct {
         Some(d) => direct_solution(&st, &d),

@@ -299,20 +299,21 @@ pub(crate) fn setup_from<const N: usize>(
     j: &Body<N>,
     line: &CentreLine<N>,
 ) -> Setup<N> {
+    let inv_li = i.inv_semi_axes();
     let (c, b, f) = frame_factor(
         &line.in_i,
         &line.in_j,
-        Sides {
+        BodyOf {
             q: &i.rotation(),
             l: &i.semi_axes(),
+            inv_l: &inv_li,
         },
-        Sides {
+        BodyOf {
             q: &j.rotation(),
             l: &j.semi_axes(),
+            inv_l: &j.inv_semi_axes(),
         },
-        &j.inv_semi_axes(),
     );
-    let inv_li = i.inv_semi_axes();
     let (imin, imax, jmin, jmax) = (
         i.min_semi_axis(),
         i.bounding_radius(),
@@ -330,11 +331,13 @@ pub(crate) fn setup_from<const N: usize>(
     }
 }
 
-/// A body's rotation and semi-axes, in any [`Real`] arithmetic.
+/// A body's rotation, semi-axes and their reciprocals, in any [`Real`] arithmetic (one body,
+/// or four side by side): what the pair kernel's generic formulas read.
 #[derive(Clone, Copy)]
-pub(crate) struct Sides<'a, T, const N: usize> {
+pub(crate) struct BodyOf<'a, T, const N: usize> {
     pub q: &'a [[T; N]; N],
     pub l: &'a [T; N],
+    pub inv_l: &'a [T; N],
 }
 
 /// `c = P_i^−½ Q_iᵀ Δ`, `b = P_j^−½ Q_jᵀ Δ` (eq. 3) from the centre line in both frames, and
@@ -343,9 +346,8 @@ pub(crate) struct Sides<'a, T, const N: usize> {
 pub(crate) fn frame_factor<T: Real, const N: usize>(
     in_i: &[T; N],
     in_j: &[T; N],
-    i: Sides<'_, T, N>,
-    j: Sides<'_, T, N>,
-    inv_lj: &[T; N],
+    i: BodyOf<'_, T, N>,
+    j: BodyOf<'_, T, N>,
 ) -> ([T; N], [T; N], [[T; N]; N]) {
     // `c` and `b` keep their divisions: one rounding less in the quantities everything else is
     // measured from. (Multiplying by the bodies' cached reciprocals saved 3–4 % of a pair
@@ -367,7 +369,7 @@ pub(crate) fn frame_factor<T: Real, const N: usize>(
             for m in 1..N {
                 r = r + j.q[m][a] * i.q[m][bcol];
             }
-            f[a][bcol] = r * i.l[bcol] * inv_lj[a];
+            f[a][bcol] = r * i.l[bcol] * j.inv_l[a];
         }
     }
     (c, b, f)

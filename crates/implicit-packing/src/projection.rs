@@ -141,17 +141,18 @@ pub(crate) fn newton<F: Fn(f64) -> (f64, f64)>(
     z
 }
 
-/// Result of [`solve_outside_direct`].
+/// Result of [`solve_outside_direct`]: `U`, `X`, `c − X` and `d²` after the last step (`T`
+/// is `f64`; the crate's four-pair kernel uses the same struct with four lanes per value).
 #[derive(Debug, Clone, Copy)]
-pub struct DirectProjection<const N: usize> {
+pub struct DirectProjection<const N: usize, T = f64> {
     /// The multiplier `U > 0`.
-    pub u: f64,
+    pub u: T,
     /// `X`.
-    pub x: [f64; N],
+    pub x: [T; N],
     /// `c − X = U S X`.
-    pub c_minus_x: [f64; N],
+    pub c_minus_x: [T; N],
     /// `d² = |c − X|²`.
-    pub d2: f64,
+    pub d2: T,
 }
 
 /// Adjugate and determinant of a symmetric positive definite 2×2 or 3×3 matrix (hand-written:
@@ -248,13 +249,7 @@ pub fn solve_outside_direct<const N: usize>(
             return None;
         }
         if h.settled(u) {
-            let d = h.finish(&s, u);
-            return Some(DirectProjection {
-                u: d.u,
-                x: d.x,
-                c_minus_x: d.c_minus_x,
-                d2: d.d2,
-            });
+            return Some(h.finish(&s, u));
         }
         u = h.next(u, lo);
     }
@@ -379,15 +374,6 @@ pub(crate) fn halley_at<T: Real, const N: usize>(
     }
 }
 
-/// `U`, `X`, `c − X` and `d²` after the last step.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Settled<T, const N: usize> {
-    pub u: T,
-    pub x: [T; N],
-    pub c_minus_x: [T; N],
-    pub d2: T,
-}
-
 impl<T: Real, const N: usize> HalleyAt<T, N> {
     /// The iteration has settled: a Halley step shorter than `HALLEY_FINAL · U`.
     #[inline(always)]
@@ -408,7 +394,7 @@ impl<T: Real, const N: usize> HalleyAt<T, N> {
     /// x(U + δ) = x − δ z + δ² M S z + O(δ³), z = M S x = −dx/dU, M = (I + U S)⁻¹ = adj / det;
     /// c − X = U S X.
     #[inline(always)]
-    pub(crate) fn finish(&self, s: &[[T; N]; N], u: T) -> Settled<T, N> {
+    pub(crate) fn finish(&self, s: &[[T; N]; N], u: T) -> DirectProjection<N, T> {
         let u = u + self.step;
         let rd = T::splat(1.0) / self.det;
         let dr = self.step * rd;
@@ -420,7 +406,7 @@ impl<T: Real, const N: usize> HalleyAt<T, N> {
             x[a] = (self.ax[a] - dr * (self.az[a] - dr * w[a])) * rd;
             cmx[a] = u * ((self.sax[a] - dr * (self.saz[a] - dr * sw[a])) * rd);
         }
-        Settled {
+        DirectProjection {
             u,
             x,
             c_minus_x: cmx,
