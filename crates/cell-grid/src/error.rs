@@ -95,6 +95,12 @@ pub enum Error {
         /// The largest number accepted.
         max: usize,
     },
+    /// The skin of a [`PairList`](crate::PairList) is negative, NaN or infinite, or so large
+    /// that the enlarged reach has no normal `f64` square.
+    InvalidSkin {
+        /// The value given.
+        value: f64,
+    },
     /// An item index is not below the number of items.
     ItemOutOfRange {
         /// The index given.
@@ -159,6 +165,12 @@ impl fmt::Display for Error {
             ),
             Error::TooManyItems { count, max } => {
                 write!(f, "{count} items given, a grid holds at most {max}")
+            }
+            Error::InvalidSkin { value } => {
+                write!(
+                    f,
+                    "skin {value} is not a finite non-negative number that keeps the reach's square normal"
+                )
             }
             Error::ItemOutOfRange { index, len } => {
                 write!(f, "item {index} does not exist, the grid holds {len} items")

@@ -31,6 +31,10 @@
 //!   [`Grid::for_each_pair_within`] (distance from the caller's points),
 //!   [`Grid::for_each_close_pair`] (fast path, with minimum-image vectors), and with the
 //!   `rayon` feature their parallel versions.
+//! - [`PairList`]: a Verlet list over the grid, for items that move a little between
+//!   queries (an optimiser's or a simulation's steps): the pairs within the reach plus a
+//!   skin, kept until an item has moved more than half the skin; each query reports the exact
+//!   close pairs, in ascending `(i, j)` order, without re-sorting the items.
 //! - Neighbours of an item ([`Grid::for_each_neighbour`]) or of any point
 //!   ([`Grid::for_each_near_point`]); the non-empty cells ([`Grid::cells`]).
 //!
@@ -91,6 +95,7 @@ mod builder;
 mod error;
 mod grid;
 mod hash;
+mod pair_list;
 mod pairs;
 #[cfg(feature = "rayon")]
 mod parallel;
@@ -99,6 +104,7 @@ mod query;
 pub use builder::GridBuilder;
 pub use error::Error;
 pub use grid::{Cell, Grid, Layout};
+pub use pair_list::PairList;
 
 // The README's example is compiled and run as a doctest so that it cannot rot.
 #[cfg(doctest)]

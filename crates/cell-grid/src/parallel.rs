@@ -4,7 +4,9 @@
 
 use rayon::prelude::*;
 
+use crate::error::Error;
 use crate::grid::Grid;
+use crate::pair_list::PairList;
 use crate::pairs::Candidates;
 
 impl<const D: usize> Grid<D> {
@@ -76,5 +78,40 @@ impl<const D: usize> Grid<D> {
             })
             .reduce(&init, &reduce);
         reduce(cells, large)
+    }
+}
+
+impl<const D: usize> PairList<D> {
+    /// Parallel [`for_each_close_pair`](Self::for_each_close_pair) as a fold: the rows of the
+    /// list are cut into consecutive ranges of about equal numbers of pairs, each task folds
+    /// its pairs (in ascending `(i, j)` order) into its own `init()` accumulator, and the
+    /// accumulators are merged with `reduce` in the order of the ranges.
+    ///
+    /// # Errors
+    /// Those of [`refresh`](Self::refresh); nothing is folded then.
+    pub fn par_fold_close_pairs<T, I, G, R>(
+        &mut self,
+        points: &[[f64; D]],
+        init: I,
+        fold: G,
+        reduce: R,
+    ) -> Result<T, Error>
+    where
+        T: Send,
+        I: Fn() -> T + Sync + Send,
+        G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
+        R: Fn(T, T) -> T + Sync + Send,
+    {
+        self.refresh(points)?;
+        let chunks = self.row_chunks(8 * rayon::current_num_threads().max(1));
+        let list = &*self;
+        Ok(chunks
+            .into_par_iter()
+            .map(|rows| {
+                let mut acc = init();
+                list.close_pairs_in(points, rows, &mut |i, j, d, d2| fold(&mut acc, i, j, d, d2));
+                acc
+            })
+            .reduce(&init, &reduce))
     }
 }
