@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         false
     };
-    let (density, before, factor, report, check) = if dim == 2 {
+    let (density, before, factor, report, check, builds) = if dim == 2 {
         let mut p = Problem::<2>::new(vec![[2.0, 1.0]; m], kind)?;
         let x0 = if dense {
             lattice_start_of(&p, &LatticeStart::centred())
@@ -59,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.repair_factor,
             r.report,
             check,
+            p.pair_list_builds(),
         )
     } else {
         let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
@@ -75,13 +76,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.repair_factor,
             r.report,
             check,
+            p.pair_list_builds(),
         )
     };
     let elapsed = start.elapsed();
     println!("{check}");
     println!(
         "{dim}D m = {m} {kind:?}: density {density:.5} (before repair {before:.5}, factor {factor:.6}), \
-         {:.2} s, {:?}, {} outer / {} inner iterations, {} evaluations",
+         {:.2} s, {:?}, {} outer / {} inner iterations, {} evaluations, {builds} builds of the pair list",
         elapsed.as_secs_f64(),
         report.stop_reason,
         report.outer_iterations,
