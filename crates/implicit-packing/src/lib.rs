@@ -41,6 +41,7 @@ pub mod pack;
 pub mod pair;
 pub mod projection;
 pub mod shape;
+pub(crate) mod trig;
 
 pub use error::Error;
 pub use pair::{PairTerm, Route, epsilon, overlap_measure, pair_term, pair_term_by};
