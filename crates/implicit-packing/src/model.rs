@@ -316,22 +316,22 @@ impl<const N: usize> Problem<N> {
             }
             Some(g) => {
                 g.reset(x.len());
-                let (sum, count) = pair_sum_gradient(
-                    (list, centres),
-                    bodies,
-                    spins,
-                    &mut self.torques,
-                    &mut g.overlap,
-                )?;
+                let (sum, count) =
+                    pair_sum_gradient((list, centres), bodies, &mut self.torques, &mut g.overlap)?;
                 ev.overlap = sum;
                 ev.pairs = count;
+                // One pass over the bodies for both: the overlap's torques become angle
+                // derivatives (`∂/∂α_b = ω_α · Σ_pairs τ_b`), and the containment residuals
+                // with their gradients. At m = 1e5 the bodies no longer fit in the last-level
+                // cache, and each pass over them costs several ns per ellipsoid.
                 for (i, b) in bodies.iter().enumerate() {
+                    let spin = spin_rows(b, spins[i]);
+                    scatter_force_torque(&mut g.overlap, i, &[0.0; N], &self.torques[i], &spin);
                     let (r, cg) = containment_gradient(b, &container);
                     if r == 0.0 {
                         continue;
                     }
                     ev.containment += r;
-                    let spin = spin_rows(b, spins[i]);
                     scatter_force_torque(&mut g.containment, i, &cg.centre, &cg.torque, &spin);
                     for k in 0..self.kind.dimension_count(N) {
                         g.containment[nb + k] += cg.container[k];
@@ -739,7 +739,7 @@ fn scatter_force_torque<const N: usize>(
 }
 
 /// Adds a pair gradient to `out` (centres) and `torques` (per body, turned into angle
-/// derivatives by [`torques_to_angles`] once all pairs are summed).
+/// derivatives once all pairs are summed, see [`Problem::evaluate`]).
 #[inline(always)]
 fn add_pair<const N: usize>(
     out: &mut [f64],
@@ -756,18 +756,6 @@ fn add_pair<const N: usize>(
     for k in 0..3 {
         torques[i][k] += g.torque_i[k];
         torques[j][k] += g.torque_j[k];
-    }
-}
-
-/// `∂/∂α_b = ω_α · Σ_pairs τ_b` for every body: the angle part of the overlap gradient.
-fn torques_to_angles<const N: usize>(
-    out: &mut [f64],
-    torques: &[[f64; 3]],
-    bodies: &[Body<N>],
-    spins: &[[f64; 2]],
-) {
-    for (b, (t, &sc)) in torques.iter().zip(spins).enumerate() {
-        scatter_force_torque::<N>(out, b, &[0.0; N], t, &spin_rows(&bodies[b], sc));
     }
 }
 
@@ -793,7 +781,6 @@ fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3
 fn pair_sum_gradient<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
-    spins: &[[f64; 2]],
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> Result<(f64, usize), Error> {
@@ -816,7 +803,6 @@ fn pair_sum_gradient<const N: usize>(
     })
     .map_err(grid_error)?;
     queue.flush(bodies, &mut emit);
-    torques_to_angles::<N>(out, torques, bodies, spins);
     Ok((sum, count))
 }
 
@@ -839,7 +825,6 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
 fn pair_sum_gradient<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
-    spins: &[[f64; 2]],
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> Result<(f64, usize), Error> {
@@ -877,7 +862,6 @@ fn pair_sum_gradient<const N: usize>(
     for (i, j, g) in &terms {
         add_pair(out, torques, *i, *j, g);
     }
-    torques_to_angles::<N>(out, torques, bodies, spins);
     Ok((sum, count))
 }
 
