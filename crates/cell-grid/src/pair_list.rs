@@ -126,8 +126,10 @@ impl<const D: usize> PairList<D> {
             }
         };
         // The enlarged reach must be valid too: a skin so large that its square overflows is
-        // the skin's fault.
-        check_reach(reach_max + skin, |_| Error::InvalidSkin { value: skin })?;
+        // the skin's fault. (Without items there is no reach to enlarge.)
+        if reach_max > 0.0 {
+            check_reach(reach_max + skin, |_| Error::InvalidSkin { value: skin })?;
+        }
         let mut enlarged = builder;
         enlarged.reach = match enlarged.reach {
             Reach::Cutoff(c) => Reach::Cutoff(c + skin),

@@ -194,10 +194,12 @@ fn bad_input_is_reported_and_the_list_recovers() {
     // Good points again: rebuilt and exact.
     assert_eq!(reported(&mut list, &good).len(), 1);
 
-    // An empty scene has no pairs.
+    // An empty scene has no pairs, with or without a skin.
     let mut empty = PairList::new(GridBuilder::<3>::with_cutoff(1.0), 0.1).expect("valid");
     assert_eq!(reported(&mut empty, &[]).len(), 0);
     assert!(empty.is_empty());
+    let mut none = PairList::new(GridBuilder::<3>::with_radii(&[]), 0.0).expect("valid");
+    assert_eq!(reported(&mut none, &[]).len(), 0);
 }
 
 #[cfg(feature = "rayon")]

@@ -169,11 +169,12 @@ pub struct Problem<const N: usize> {
 /// has moved by `s/2`.
 ///
 /// Relative to the smallest radius so that, with mixed sizes, the skin adds at most a tenth
-/// of `2 r_min` to any pair's reach (about 20 % more listed pairs in 3D at packing density).
-/// In a local minimisation of 1 000 ellipsoids from the paper's start, a skin of a tenth of
-/// the largest radius was outrun 336 times in 195 000 queries (evaluations and Hessian–vector
-/// products), a twentieth 693 times: a rebuild costs about one evaluation, so either is
-/// amortised to below 1 %.
+/// of `2 r_min` to any pair's reach (16 % more listed than close pairs in the `model` bench, 3D
+/// at density 0.6). In a local minimisation of 1 000 ellipsoids from the paper's start (the
+/// `local_minimisation` example) the list was built 376 times in 97 512 evaluations and as many
+/// Hessian–vector products; a build costs about one evaluation, so its upkeep is amortised to
+/// below 0.5 %. (Counted on the same run with other skins, relative to the largest radius: a
+/// twentieth would have been outrun twice as often, a fifth half as often.)
 pub const PAIR_LIST_SKIN: f64 = 0.1;
 
 /// Number of rotation angles in dimension `n` (1 in 2D, 3 in 3D).
@@ -306,7 +307,7 @@ impl<const N: usize> Problem<N> {
         let spins = &self.spins;
         match gradient {
             None => {
-                let (sum, count) = pair_sum_value(list, centres, bodies)?;
+                let (sum, count) = pair_sum_value((list, centres), bodies)?;
                 ev.overlap = sum;
                 ev.pairs = count;
                 ev.containment = bodies
@@ -672,8 +673,7 @@ type Candidates<'a, const N: usize> = (&'a mut cell_grid::PairList<N>, &'a [[f64
 
 #[cfg(not(feature = "rayon"))]
 fn pair_sum_value<const N: usize>(
-    list: &mut cell_grid::PairList<N>,
-    centres: &[[f64; N]],
+    (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
 ) -> Result<(f64, usize), Error> {
     let mut sum = 0.0;
@@ -692,8 +692,7 @@ fn pair_sum_value<const N: usize>(
 
 #[cfg(feature = "rayon")]
 fn pair_sum_value<const N: usize>(
-    list: &mut cell_grid::PairList<N>,
-    centres: &[[f64; N]],
+    (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
 ) -> Result<(f64, usize), Error> {
     // Each task's queue is flushed before its sum is merged.

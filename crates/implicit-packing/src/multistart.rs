@@ -363,15 +363,17 @@ pub fn perturb<const N: usize>(
 }
 
 /// SplitMix64 (Steele, Lea, Flood 2014): small, fast and good enough to place perturbations;
-/// kept here so that runs are reproducible without a random-number dependency.
-struct SplitMix64(u64);
+/// kept here so that runs are reproducible without a random-number dependency (the crate's
+/// tests draw from it too).
+pub(crate) struct SplitMix64(u64);
 
 impl SplitMix64 {
-    fn new(seed: u64) -> Self {
+    pub(crate) fn new(seed: u64) -> Self {
         Self(seed)
     }
 
-    fn uniform(&mut self) -> f64 {
+    /// Uniform in `[0, 1)`.
+    pub(crate) fn uniform(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
