@@ -171,7 +171,7 @@ pub struct Problem<const N: usize> {
 /// Relative to the smallest radius so that, with mixed sizes, the skin adds at most a tenth
 /// of `2 r_min` to any pair's reach (16 % more listed than close pairs in the `model` bench, 3D
 /// at density 0.6). In a local minimisation of 1 000 ellipsoids from the paper's start (the
-/// `local_minimisation` example) the list was built 376 times in 97 512 evaluations and as many
+/// `local_minimisation` example) the list was built 394 times in 97 588 evaluations and as many
 /// Hessian–vector products; a build costs about one evaluation, so its upkeep is amortised to
 /// below 0.5 %. (Counted on the same run with other skins, relative to the largest radius: a
 /// twentieth would have been outrun twice as often, a fifth half as often.)
