@@ -12,8 +12,9 @@
 //! remainder, so `r` is within about an ulp of the exact remainder while `|n| < 2²⁰`. On
 //! `|r| ≤ π/4`, `sin r` and `cos r` are the minimax polynomials of fdlibm's `__kernel_sin` and
 //! `__kernel_cos` (degrees 13 and 14, errors below 2⁻⁵⁸ on the interval), and the quadrant
-//! `n mod 4` swaps and negates them. Measured against the C library on 10⁶ arguments in
-//! `[−10⁴, 10⁴]` and near multiples of `π/2`: at most 1 ulp apart (see the tests).
+//! `n mod 4` swaps and negates them. Measured against the C library on 9.2·10⁵ arguments
+//! (uniform in `[−1, 1]`, `[−10, 10]` and `[−10⁴, 10⁴]`, and at and next to the multiples of
+//! `π/2` up to ±3 142): at most 1 ulp apart (see the tests).
 //!
 //! Larger arguments (`|x| > 10⁵`, where the reduction would lose digits) and processors
 //! without AVX2 and FMA take the C library's `sin_cos`.
