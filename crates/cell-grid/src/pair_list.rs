@@ -325,30 +325,34 @@ impl<const D: usize> PairList<D> {
             }
         };
         for i in rows {
-            let pi = &points[i];
             let row = &self.partner[self.start[i]..self.start[i + 1]];
-            if let Some(radii) = &self.radii {
-                let ri = radii[i];
-                for &j in row {
-                    let d = delta(pi, &points[j as usize]);
-                    let s = ri + radii[j as usize];
-                    hits[n & (BATCH - 1)] = (i as u64) << 32 | u64::from(j);
-                    n += usize::from(dot(&d, &d) < s * s);
-                    if n == BATCH {
-                        emit(&hits);
-                        n = 0;
-                    }
+            // The two limits are chosen per row, outside the pair loop.
+            match &self.radii {
+                Some(radii) => {
+                    let ri = radii[i];
+                    let limit = |j: usize| {
+                        let s = ri + radii[j];
+                        s * s
+                    };
+                    scan_row(
+                        points,
+                        (i, row),
+                        &delta,
+                        limit,
+                        (&mut hits, &mut n),
+                        &mut emit,
+                    );
                 }
-            } else {
-                let lim = self.cutoff * self.cutoff;
-                for &j in row {
-                    let d = delta(pi, &points[j as usize]);
-                    hits[n & (BATCH - 1)] = (i as u64) << 32 | u64::from(j);
-                    n += usize::from(dot(&d, &d) < lim);
-                    if n == BATCH {
-                        emit(&hits);
-                        n = 0;
-                    }
+                None => {
+                    let lim = self.cutoff * self.cutoff;
+                    scan_row(
+                        points,
+                        (i, row),
+                        &delta,
+                        |_| lim,
+                        (&mut hits, &mut n),
+                        &mut emit,
+                    );
                 }
             }
         }
@@ -378,6 +382,30 @@ impl<const D: usize> PairList<D> {
 
 /// Buffered candidates per scan before `f` runs.
 const BATCH: usize = 64;
+
+/// Row `i` of the list against its partners `row`: each pair goes into the buffer, which
+/// advances only when the pair is closer than `limit(j)` (its squared reach); a full buffer
+/// is handed to `emit`.
+#[inline(always)]
+fn scan_row<const D: usize>(
+    points: &[[f64; D]],
+    (i, row): (usize, &[u32]),
+    delta: &impl Fn(&[f64; D], &[f64; D]) -> [f64; D],
+    limit: impl Fn(usize) -> f64,
+    (hits, n): (&mut [u64; BATCH], &mut usize),
+    emit: &mut impl FnMut(&[u64]),
+) {
+    let pi = &points[i];
+    for &j in row {
+        let d = delta(pi, &points[j as usize]);
+        hits[*n & (BATCH - 1)] = (i as u64) << 32 | u64::from(j);
+        *n += usize::from(dot(&d, &d) < limit(j as usize));
+        if *n == BATCH {
+            emit(&hits[..]);
+            *n = 0;
+        }
+    }
+}
 
 fn check_reach(value: f64, err: impl FnOnce(f64) -> Error) -> Result<f64, Error> {
     if crate::grid::valid_reach(value) {

@@ -677,17 +677,28 @@ fn pair_sum_value<const N: usize>(
     bodies: &[Body<N>],
 ) -> Result<(f64, usize), Error> {
     let mut sum = 0.0;
+    let count = through_kernel::<N, ValueOnly>((list, centres), bodies, &mut |_, _, &f| sum += f)?;
+    Ok((sum, count))
+}
+
+/// Every close pair through the kernel, four at a time; `emit` receives the results in the
+/// order of the pairs, so sums over them are those of a plain loop of scalar calls. Returns
+/// the number of close pairs.
+#[cfg(not(feature = "rayon"))]
+fn through_kernel<const N: usize, K: crate::batch::Kernel<N>>(
+    (list, centres): Candidates<'_, N>,
+    bodies: &[Body<N>],
+    emit: &mut impl FnMut(usize, usize, &K::Out),
+) -> Result<usize, Error> {
     let mut count = 0;
-    // Four pairs at a time through the kernel, the values added in the order of the pairs.
-    let mut queue = KernelQueue::<N, ValueOnly>::default();
-    let mut emit = |_: usize, _: usize, &f: &f64| sum += f;
+    let mut queue = KernelQueue::<N, K>::default();
     list.for_each_close_pair(centres, |i, j, _, _| {
         count += 1;
-        queue.push(bodies, i, j, &mut emit);
+        queue.push(bodies, i, j, emit);
     })
     .map_err(grid_error)?;
-    queue.flush(bodies, &mut emit);
-    Ok((sum, count))
+    queue.flush(bodies, emit);
+    Ok(count)
 }
 
 #[cfg(feature = "rayon")]
@@ -786,22 +797,13 @@ fn pair_sum_gradient<const N: usize>(
     torques.clear();
     torques.resize(bodies.len(), [0.0; 3]);
     let mut sum = 0.0;
-    let mut count = 0;
-    // Four pairs at a time through the kernel; the terms come back in the order of the pairs,
-    // so the sums are those of a plain loop over `pair_gradient`.
-    let mut queue = KernelQueue::<N, WithGradient>::default();
     let mut emit = |i: usize, j: usize, &(f, ref g): &Term<N>| {
         if f > 0.0 {
             sum += f;
             add_pair(out, torques, i, j, g);
         }
     };
-    list.for_each_close_pair(centres, |i, j, _, _| {
-        count += 1;
-        queue.push(bodies, i, j, &mut emit);
-    })
-    .map_err(grid_error)?;
-    queue.flush(bodies, &mut emit);
+    let count = through_kernel::<N, WithGradient>((list, centres), bodies, &mut emit)?;
     Ok((sum, count))
 }
 
