@@ -98,15 +98,21 @@ fn has_lanes() -> bool {
 /// Collects the pairs that need the kernel and solves them four at a time.
 ///
 /// [`KernelQueue::push`] applies the bounding-sphere and centre-line tests at once (a pair
-/// they settle has `f = 0` and is dropped); the others wait until four are there. Every
-/// solved pair is handed to `emit(i, j, result)` in the order the pairs were pushed, so a sum
-/// over the emitted results adds them in the same order as a loop of scalar calls.
+/// they settle has `f = 0` and is dropped); the others wait, and are solved four at a time
+/// once [`CAPACITY`] of them are there (or at [`KernelQueue::flush`]). Every solved pair is
+/// handed to `emit(i, j, result)` in the order the pairs were pushed, so a sum over the
+/// emitted results adds them in the same order as a loop of scalar calls.
 ///
-/// The four pairs are held in a fixed array, not a `Vec`: the model allocates nothing per
+/// Why wait for so many: whether a candidate needs the kernel is a coin toss (about a third
+/// do, at random), and so is whether it is the fourth. Branches on either were mispredicted
+/// on a large share of the candidates; now the certificate's verdict only advances a count,
+/// and the one branch left, on a full queue, is taken once per [`CAPACITY`] pairs.
+///
+/// The pairs are held in a fixed array, not a `Vec`: the model allocates nothing per
 /// evaluation.
 #[derive(Debug, Clone)]
 pub(crate) struct KernelQueue<const N: usize, K> {
-    waiting: [Waiting<N>; LANES],
+    waiting: [Waiting<N>; CAPACITY],
     len: usize,
     kernel: core::marker::PhantomData<K>,
 }
@@ -123,7 +129,7 @@ impl<const N: usize, K> Default for KernelQueue<N, K> {
             },
         };
         Self {
-            waiting: [empty; LANES],
+            waiting: [empty; CAPACITY],
             len: 0,
             kernel: core::marker::PhantomData,
         }
@@ -132,9 +138,12 @@ impl<const N: usize, K> Default for KernelQueue<N, K> {
 
 const LANES: usize = 4;
 
+/// Pairs a [`KernelQueue`] holds before it solves them (a multiple of [`LANES`]; 4.6 kB of
+/// centre lines in 3D, which stay in the first-level cache).
+const CAPACITY: usize = 64;
+
 impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
-    /// Adds the pair `(i, j)` of `bodies`; solves the four waiting pairs when it is the
-    /// fourth.
+    /// Adds the pair `(i, j)` of `bodies`; solves the waiting pairs when the queue is full.
     #[inline]
     pub(crate) fn push(
         &mut self,
@@ -148,39 +157,43 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
             return;
         }
         let line = centre_line(bi, bj);
-        // About two thirds of the candidates are certified apart, at random: a branch on the
-        // verdict would be mispredicted often. The pair is written in any case and the count
-        // advances only when it must be solved.
+        // Written in any case; the count advances only for a pair that must be solved.
         let keep = !certified_separated(bi, bj, &line);
         self.waiting[self.len] = Waiting { i, j, line };
         self.len += usize::from(keep);
-        if self.len == LANES {
-            self.len = 0;
-            self.solve_four(bodies, emit);
+        if self.len == CAPACITY {
+            self.solve_fours(bodies, emit);
         }
     }
 
-    /// Solves the pairs still waiting (fewer than four), one at a time.
+    /// Solves every waiting pair: four at a time, the last (fewer than four) one at a time.
     pub(crate) fn flush(
         &mut self,
         bodies: &[Body<N>],
         emit: &mut impl FnMut(usize, usize, &K::Out),
     ) {
+        self.solve_fours(bodies, emit);
         for w in &self.waiting[..self.len] {
             emit(w.i, w.j, &K::one(&bodies[w.i], &bodies[w.j]));
         }
         self.len = 0;
     }
 
-    fn solve_four(&self, bodies: &[Body<N>], emit: &mut impl FnMut(usize, usize, &K::Out)) {
-        let w = &self.waiting;
-        for (k, out) in K::four(bodies, w).iter().enumerate() {
-            let (i, j) = (w[k].i, w[k].j);
-            match out {
-                Some(o) => emit(i, j, o),
-                None => emit(i, j, &K::one(&bodies[i], &bodies[j])),
+    /// Solves the waiting pairs four at a time and keeps the last (fewer than four) waiting.
+    fn solve_fours(&mut self, bodies: &[Body<N>], emit: &mut impl FnMut(usize, usize, &K::Out)) {
+        let (fours, _) = self.waiting[..self.len].as_chunks::<LANES>();
+        for w in fours {
+            for (k, out) in K::four(bodies, w).iter().enumerate() {
+                let (i, j) = (w[k].i, w[k].j);
+                match out {
+                    Some(o) => emit(i, j, o),
+                    None => emit(i, j, &K::one(&bodies[i], &bodies[j])),
+                }
             }
         }
+        let solved = fours.len() * LANES;
+        self.waiting.copy_within(solved..self.len, 0);
+        self.len -= solved;
     }
 }
 
