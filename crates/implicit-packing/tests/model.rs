@@ -83,14 +83,26 @@ fn grid_sum_equals_all_pairs_sum() {
         assert!(ev.overlap > 0.0);
         // The same terms added in the same (i, j) order: the same bits, however the kernel
         // queue groups and delays the pairs.
-        assert_eq!(ev.overlap.to_bits(), all.to_bits(), "{} {}", ev.overlap, all);
+        assert_eq!(
+            ev.overlap.to_bits(),
+            all.to_bits(),
+            "{} {}",
+            ev.overlap,
+            all
+        );
         assert!(ev.pairs < m * (m - 1) / 2);
     }
     let (axes, x) = config2(&mut rng, 400, 0.6);
     let mut p = Problem::<2>::new(axes, ContainerKind::Ellipsoid).unwrap();
     let ev = p.evaluate(&x, None).unwrap();
     let all = p.overlap_all_pairs(&x).unwrap();
-    assert_eq!(ev.overlap.to_bits(), all.to_bits(), "{} {}", ev.overlap, all);
+    assert_eq!(
+        ev.overlap.to_bits(),
+        all.to_bits(),
+        "{} {}",
+        ev.overlap,
+        all
+    );
 }
 
 fn fd_check(
