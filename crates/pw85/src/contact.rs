@@ -29,8 +29,8 @@
 //!   algorithm and the contact function", J. Comput. Phys. 58 (1985) 409–416.
 //! - `pw85-theory.rst` (the PW85 library's theory chapter): equation numbers in this crate.
 
-use crate::arith::is_positive;
 use crate::arith::{Arith, Dd, DdT, Mag};
+use crate::arith::{is_positive, select_gt, select_sign};
 use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
 use crate::poly::{OddsForm, OddsSearch, RationalForm, Search, coefficients_2d, pencil3};
@@ -265,7 +265,7 @@ impl Prepared {
         solution: Solution,
         exact: impl FnOnce() -> RationalForm,
     ) -> Contact {
-        let estimate = Self::estimate(solution.weighted_amplification(&self.bound, scale));
+        let estimate = Self::estimate(solution.weighted_amplification::<FMA>(&self.bound, scale));
         if estimate <= REFINE_ABOVE {
             return scale.contact(&solution, estimate, false);
         }
@@ -403,7 +403,28 @@ pub(crate) struct Solution {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct OddsPoint {
     pub u_a_b: [f64; 3],
-    pub reversed: bool,
+    pub side: Side,
+}
+
+/// Which way [`orient`] turned the pencil: reversed (Q1 and Q2 swapped, λ ↔ 1 − λ) when the sign
+/// bit is set. A double rather than a `bool` so that choosing by it is a blend of registers
+/// ([`crate::arith::select_sign`]): the side is a coin toss on ordinary input, and as a branch
+/// it was mispredicted once per call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Side(f64);
+
+impl Side {
+    /// Reversed when `x > y`.
+    #[inline(always)]
+    pub(crate) fn of<const FMA: bool>(x: f64, y: f64) -> Self {
+        Side(select_gt::<FMA>(x, y, -1.0, 1.0))
+    }
+
+    /// `swap` when reversed, else `keep`.
+    #[inline(always)]
+    pub(crate) fn pick<const FMA: bool>(self, keep: f64, swap: f64) -> f64 {
+        select_sign::<FMA>(self.0, swap, keep)
+    }
 }
 
 impl Solution {
@@ -423,15 +444,18 @@ impl Solution {
     /// of its expression tree ([`DEPTH_ALPHA`], [`DEPTH_BETA`]): u times this bounds the
     /// relative error of f(λ₀) caused by the rounding of the `f64` coefficients.
     #[inline(always)]
-    pub(crate) fn weighted_amplification(&self, bound: &RationalForm, scale: Scale) -> f64 {
+    pub(crate) fn weighted_amplification<const FMA: bool>(
+        &self,
+        bound: &RationalForm,
+        scale: Scale,
+    ) -> f64 {
         let weighted = depth_weighted(&bound.alpha, &bound.beta);
         match self.odds {
             Some(OddsPoint {
                 u_a_b: [u, big_a, big_b],
-                reversed,
+                side,
             }) => {
-                let (alpha, beta) =
-                    oriented(weighted, |keep, swap| if reversed { swap } else { keep });
+                let (alpha, beta) = oriented(weighted, |keep, swap| side.pick::<FMA>(keep, swap));
                 odds_amplification(
                     &alpha,
                     &beta,
@@ -540,16 +564,16 @@ pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
 /// two spheres of the ellipsoids' radial extents along r12.
 #[inline(always)]
 pub(crate) fn solve<const FMA: bool>(r: &RationalForm) -> Solution {
-    let (form, u0, reversed) = orient(r);
+    let (form, u0, side) = orient::<FMA>(r);
     let odds = OddsForm::new(&form.alpha, &form.beta);
     let mut search = OddsSearch::new(u0);
     while !search.done {
-        search.advance(odds.halley_terms::<FMA>(search.u));
+        search.advance::<FMA>(odds.halley_terms::<FMA>(search.u));
     }
     if search.fallback {
         return solve_lambda(r);
     }
-    Solution::at(&form, search.u, reversed)
+    Solution::at::<FMA>(&form, search.u, side)
 }
 
 /// The bracketed Newton iteration in λ itself ([`RationalForm::search_step`]), for the pencils
@@ -575,21 +599,15 @@ pub(crate) fn solve_lambda(r: &RationalForm) -> Solution {
 /// exceeds 1 the reversed form (Q1 and Q2 swapped, λ ↔ 1 − λ) is solved instead, so that the
 /// variable is small at whichever end the maximiser lies near and keeps its relative precision
 /// (λ₀ = 1 − 1e-12 is not representable to better than 1e-4 relative in its distance to 1).
-/// Returns the form to solve, u at the start and whether it is reversed.
+/// Returns the form to solve, u at the start and the side.
 #[inline(always)]
-pub(crate) fn orient(r: &RationalForm) -> (RationalForm, f64, bool) {
+pub(crate) fn orient<const FMA: bool>(r: &RationalForm) -> (RationalForm, f64, Side) {
     let (x, y) = (r.alpha[2] * r.beta[0], r.alpha[0] * r.beta[3]);
-    // Selects rather than a branch: the side is a coin toss on ordinary input, and a
-    // mispredicted branch here costs as much as the selects and the reversal together.
-    let reversed = x > y;
-    let (alpha, beta) = oriented(
-        (r.alpha, r.beta),
-        |keep: f64, swap: f64| {
-            if reversed { swap } else { keep }
-        },
-    );
+    // Blends rather than a branch: the side is a coin toss on ordinary input.
+    let side = Side::of::<FMA>(x, y);
+    let (alpha, beta) = oriented((r.alpha, r.beta), |keep, swap| side.pick::<FMA>(keep, swap));
     let form = RationalForm { alpha, beta };
-    (form, (x.min(y) / x.max(y)).sqrt(), reversed)
+    (form, (x.min(y) / x.max(y)).sqrt(), side)
 }
 
 impl Solution {
@@ -598,16 +616,16 @@ impl Solution {
     /// u ≥ 0, so evaluated without cancellation), f = u A / ((1 + u) B) (eq. 15), a = A / (1 + u)² and
     /// b = B / (1 + u)³ (eq. 16).
     #[inline(always)]
-    pub(crate) fn at(form: &RationalForm, u: f64, reversed: bool) -> Self {
+    pub(crate) fn at<const FMA: bool>(form: &RationalForm, u: f64, side: Side) -> Self {
         let [t, s, f, a, b, big_a, big_b] = odds_solution(&form.alpha, &form.beta, u);
         Solution {
-            lambda: if reversed { s } else { t },
+            lambda: side.pick::<FMA>(t, s),
             f,
             a,
             b,
             odds: Some(OddsPoint {
                 u_a_b: [u, big_a, big_b],
-                reversed,
+                side,
             }),
         }
     }
@@ -826,7 +844,7 @@ mod calibration {
             let scale = Scale::of(&fast).unwrap();
             let s1 = solve::<false>(&scale.apply(&fast));
             let bound = coefficients::<Mag>(&r, &q1, &q2).to_f64();
-            let est = Prepared::estimate(s1.weighted_amplification(&bound, scale));
+            let est = Prepared::estimate(s1.weighted_amplification::<false>(&bound, scale));
             let exact = coefficients::<Dd>(&r, &q1, &q2).to_f64();
             let scale2 = Scale::of(&exact).unwrap();
             let s2 = solve::<false>(&scale2.apply(&exact));

@@ -18,8 +18,8 @@
 use crate::arith::Mag;
 use crate::arith::is_positive;
 use crate::contact::{
-    Scale, check_finite, check_inputs_finite, check_positive_definite, check_positive_definite_2d,
-    orient,
+    Scale, Side, check_finite, check_inputs_finite, check_positive_definite,
+    check_positive_definite_2d, orient,
 };
 use crate::dispatch::multiversion;
 use crate::error::{Argument, Error};
@@ -286,12 +286,9 @@ impl CrudeBound {
     /// k_b D^dim / b + k_a |r|² D^(dim−1) / a is s^(dim−3) (k_b E^dim / B + k_a |r|² E^(dim−1) / A):
     /// one division.
     #[inline(always)]
-    fn relative(&self, u: f64, reversed: bool, a: f64, b: f64) -> f64 {
-        let (d1, d2) = if reversed {
-            (self.d2, self.d1)
-        } else {
-            (self.d1, self.d2)
-        };
+    fn relative<const FMA: bool>(&self, u: f64, side: Side, a: f64, b: f64) -> f64 {
+        let d1 = side.pick::<FMA>(self.d1, self.d2);
+        let d2 = side.pick::<FMA>(self.d2, self.d1);
         let e = d1 + u * d2;
         let (en, w) = if self.dim == 3 {
             (e * e, 1.0)
@@ -346,7 +343,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
         return Some(true);
     }
     let scale = Scale::of(rational)?;
-    let (form, u0, reversed) = orient(&scale.apply(rational));
+    let (form, u0, side) = orient::<FMA>(&scale.apply(rational));
     // The step's polynomials are formed only if the first iterate does not decide (most
     // verdicts need only p there).
     let p_coefficients = odds_numerator(&form.alpha, &form.beta);
@@ -365,7 +362,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
         let big_b = (b0 + b1 * u) + (b2 + b3 * u) * u2;
         let s = 1.0 / (1.0 + u);
         let f = u * big_a / ((1.0 + u) * big_b) * ratio;
-        let err = bound.relative(u, reversed, big_a * a_scale, big_b * b_scale);
+        let err = bound.relative::<FMA>(u, side, big_a * a_scale, big_b * b_scale);
         // NaN (a degenerate pencil) gives up too.
         if !is_positive(1e-3 - err) {
             return None;
@@ -408,7 +405,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
             return None;
         }
         let odds = odds.get_or_insert_with(|| OddsForm::new(&form.alpha, &form.beta));
-        search.advance(odds.halley_terms::<FMA>(u));
+        search.advance::<FMA>(odds.halley_terms::<FMA>(u));
     }
     None
 }

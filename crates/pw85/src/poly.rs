@@ -24,8 +24,8 @@
 //! cancellation sits in the coefficients themselves, where it can be measured and, when needed,
 //! removed with extra precision (see [`crate::contact_function`]).
 
-use crate::arith::is_positive;
 use crate::arith::{Arith, Fused, mul_add};
+use crate::arith::{is_positive, select_gt};
 use crate::sym::{
     Sym3, adjugate_generic, det_generic, det_sym, frobenius_generic, lift6, mixed_adjugate_generic,
     quadratic_form_generic, solve_ldlt, xt_adj_x,
@@ -512,7 +512,7 @@ impl OddsSearch {
     /// rule to four searches with selects; a change here must be made there too, and the
     /// batch test compares the two bit for bit.)
     #[inline(always)]
-    pub(crate) fn advance(&mut self, (p, n, v, step): (f64, f64, f64, f64)) {
+    pub(crate) fn advance<const FMA: bool>(&mut self, (p, n, v, step): (f64, f64, f64, f64)) {
         let u = self.u;
         self.iterations += 1;
         // Below 1e-60 the products of the step (N², p N V) could underflow and the step lose
@@ -522,11 +522,9 @@ impl OddsSearch {
             self.fallback = true;
             return;
         }
-        if p > 0.0 {
-            self.lo = u;
-        } else {
-            self.hi = u;
-        }
+        // Blends, not a branch: which side of the root the iterate fell is a coin toss.
+        self.lo = select_gt::<FMA>(p, 0.0, u, self.lo);
+        self.hi = select_gt::<FMA>(p, 0.0, self.hi, u);
         let (lo, hi) = (self.lo, self.hi);
         let next = u - step;
         let small = step.abs() <= HALLEY_LAST_STEP * u;
