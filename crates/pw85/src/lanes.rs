@@ -157,12 +157,19 @@ pub(crate) trait EndsLanes: Arith {
     fn of(a: f64, b: f64) -> Self;
     /// [x(Q1), x(Q2), Σ|terms| of x(Q1), Σ|terms| of x(Q2)].
     fn lanes(self) -> [f64; 4];
+    /// The two ends exchanged: `of(b, a)` from `of(a, b)`, by moving lanes.
+    fn swapped(self) -> Self;
 }
 
 impl EndsLanes for Ends4 {
     #[inline(always)]
     fn of(a: f64, b: f64) -> Self {
         Ends4(V4([a, b, a.abs(), b.abs()]))
+    }
+    #[inline(always)]
+    fn swapped(self) -> Self {
+        let [a, b, ma, mb] = self.0.0;
+        Ends4(V4([b, a, mb, ma]))
     }
     #[inline(always)]
     fn lanes(self) -> [f64; 4] {
@@ -182,7 +189,8 @@ mod avx {
     use super::EndsLanes;
     use crate::arith::Arith;
     use core::arch::x86_64::{
-        __m256d, _mm256_add_pd, _mm256_addsub_pd, _mm256_mul_pd, _mm256_setr_pd, _mm256_storeu_pd,
+        __m256d, _mm256_add_pd, _mm256_addsub_pd, _mm256_mul_pd, _mm256_permute2f128_pd,
+        _mm256_setr_pd, _mm256_storeu_pd,
     };
     use core::ops::{Add, Mul, Sub};
 
@@ -247,6 +255,11 @@ mod avx {
             // SAFETY: as in `of`; `out` has room for four doubles.
             unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
             [out[0], out[2], out[1], out[3]]
+        }
+        #[inline(always)]
+        fn swapped(self) -> Self {
+            // SAFETY: as in `of`. The 128-bit halves hold the two ends.
+            Self(unsafe { _mm256_permute2f128_pd::<0x01>(self.0, self.0) })
         }
     }
 }

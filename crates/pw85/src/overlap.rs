@@ -69,7 +69,7 @@ multiversion! {
 
 #[inline(always)]
 fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    check_inputs_finite(r12, q1, q2)?;
+    check_inputs_finite::<FMA>(r12, q1, q2)?;
     let adj1 = adjugate_generic(q1);
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);

@@ -654,7 +654,7 @@ pub(crate) fn coefficients_with_bound<E: crate::lanes::EndsLanes>(
     q2: &Sym3,
 ) -> (RationalForm, RationalForm) {
     let ends: [E; 6] = core::array::from_fn(|i| E::of(q1[i], q2[i]));
-    let swapped: [E; 6] = core::array::from_fn(|i| E::of(q2[i], q1[i]));
+    let swapped: [E; 6] = ends.map(E::swapped);
     let rr = crate::sym::outer_generic::<E>(r12);
     let adj = adjugate_generic(&ends);
     // Lanes: (β₀, β₃), (α₀, α₂), (β₁, β₂) and α₁ (first lane; the second is M(Q2, Q1)).

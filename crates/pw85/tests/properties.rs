@@ -258,6 +258,45 @@ fn two_d_equals_the_3d_embedding() {
     }
 }
 
+/// Every one of the fifteen inputs, made NaN, +∞ or −∞ in turn, is named by its argument and
+/// index, by the contact function and by the overlap test (the fast probe reads the inputs as
+/// overlapping vectors; none may be missed).
+#[test]
+fn every_non_finite_input_is_named() {
+    let q1 = [2.0, 0.1, 0.2, 1.5, 0.3, 1.0];
+    let q2 = [1.0, -0.1, 0.0, 2.0, 0.2, 3.0];
+    let r = [1.0, 2.0, -0.5];
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for position in 0..15 {
+            let (mut r, mut q1, mut q2) = (r, q1, q2);
+            let (argument, index) = match position {
+                0..3 => (Argument::R12, position),
+                3..9 => (Argument::Q1, position - 3),
+                _ => (Argument::Q2, position - 9),
+            };
+            match position {
+                0..3 => r[index] = bad,
+                3..9 => q1[index] = bad,
+                _ => q2[index] = bad,
+            }
+            for result in [
+                contact_function(&r, &q1, &q2).map(|_| ()),
+                overlap(&r, &q1, &q2).map(|_| ()),
+            ] {
+                match result {
+                    Err(Error::NonFinite {
+                        argument: a,
+                        index: i,
+                        ..
+                    }) => assert_eq!((a, i), (argument, index), "{bad} at {position}"),
+                    other => panic!("{bad} at {position}: {other:?}"),
+                }
+            }
+        }
+    }
+    assert!(contact_function(&r, &q1, &q2).is_ok());
+}
+
 #[test]
 fn bad_input_gives_typed_errors() {
     let q = [1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
