@@ -10,7 +10,6 @@
 //! [`crate::contact_function`] (same arithmetic in each lane, same stopping rule), only
 //! computed side by side.
 
-use crate::REFINE_ABOVE;
 use crate::arith::Arith;
 use crate::contact::{
     Prepared, Scale, Solution, check_positive_definite, depth_weighted, odds_amplification,
@@ -392,8 +391,7 @@ fn solve_x4<const FMA: bool>(
     let [t, s, f, sa, sb, big_a, big_b] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
-    let amplification =
-        odds_amplification(&bound_alpha, &bound_beta, [u, big_a, big_b, inv_a, inv_b]);
+    let (x, d) = odds_amplification(&bound_alpha, &bound_beta, [u, big_a, big_b, inv_a, inv_b]);
     for k in 0..LANES {
         let Some(scale) = scales[k] else {
             continue;
@@ -402,8 +400,9 @@ fn solve_x4<const FMA: bool>(
             out[k] = scalar(k);
             continue;
         }
-        let estimate = Prepared::estimate(amplification.0[k]);
-        out[k] = Ok(if estimate <= REFINE_ABOVE {
+        let fraction = (x.0[k], d.0[k]);
+        out[k] = Ok(if !Prepared::needs_refinement(fraction) {
+            let estimate = Prepared::estimate(fraction.0 / fraction.1);
             let solution = Solution {
                 lambda: lambda.0[k],
                 f: f.0[k],
