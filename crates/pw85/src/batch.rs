@@ -385,13 +385,17 @@ fn solve_x4<const FMA: bool>(
     let u0: [f64; LANES] =
         core::array::from_fn(|k| (x.0[k].min(y.0[k]) / x.0[k].max(y.0[k])).sqrt());
 
-    let (u, fallback) = maximise4::<FMA>(&alpha, &beta, u0);
+    let (u, [last_u, last_a, last_b], fallback) = maximise4::<FMA>(&alpha, &beta, u0);
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
-    let [t, s, f, sa, sb, big_a, big_b] = odds_solution(&alpha, &beta, u);
+    let [t, s, f, sa, sb, _, _] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
-    let (x, d) = odds_amplification(&bound_alpha, &bound_beta, [u, big_a, big_b, inv_a, inv_b]);
+    let (x, d) = odds_amplification(
+        &bound_alpha,
+        &bound_beta,
+        [last_u, last_a, last_b, inv_a, inv_b],
+    );
     for k in 0..LANES {
         let Some(scale) = scales[k] else {
             continue;

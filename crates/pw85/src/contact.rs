@@ -411,6 +411,15 @@ pub(crate) struct Solution {
 }
 
 /// A point of the odds iteration: [u, A(u), B(u)] of the oriented form, and its orientation.
+///
+/// The error estimate is formed at the iterate of the last evaluation, not at the returned
+/// u one accepted step beyond it: there A and B are known when the last step is computed,
+/// so the estimate no longer waits at the end of the call for A and B at the final u (the
+/// tail of every call, with the divisions of μ² and λ). The accepted step is at most
+/// [`crate::poly::HALLEY_LAST_STEP`] relative, so the estimate's ratios of polynomials with
+/// non-negative coefficients move by a factor below (1 + 3e-5)⁶ between the two points;
+/// [`odds_amplification`] allows 1.001. (An exit on a collapsed bracket returns that
+/// iterate itself.)
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct OddsPoint {
     pub u_a_b: [f64; 3],
@@ -527,8 +536,9 @@ pub(crate) fn odds_amplification<T: Arith>(
     let u2 = u * u;
     let bound_a = (a0 + a1 * u) + a2 * u2;
     let bound_b = (b0 + b1 * u) + (b2 + b3 * u) * u2;
+    // 1.001: the estimate is taken one accepted step before the returned u ([`OddsPoint`]).
     (
-        bound_a * inv_alpha * big_b + bound_b * inv_beta * big_a,
+        (bound_a * inv_alpha * big_b + bound_b * inv_beta * big_a) * T::lift(1.001),
         big_a * big_b,
     )
 }
@@ -585,13 +595,16 @@ pub(crate) fn solve<const FMA: bool>(r: &RationalForm) -> Solution {
     let (form, u0, side) = orient::<FMA>(r);
     let odds = OddsForm::new(&form.alpha, &form.beta);
     let mut search = OddsSearch::new(u0);
+    let mut last = [u0, 0.0, 0.0];
     while !search.done {
-        search.advance::<FMA>(odds.halley_terms::<FMA>(search.u));
+        let terms = odds.halley_terms::<FMA>(search.u);
+        last = [search.u, terms.a, terms.b];
+        search.advance::<FMA>(terms.step_terms());
     }
     if search.fallback {
         return solve_lambda(r);
     }
-    Solution::at::<FMA>(&form, search.u, side)
+    Solution::at::<FMA>(&form, search.u, side, last)
 }
 
 /// The bracketed Newton iteration in λ itself ([`RationalForm::search_step`]), for the pencils
@@ -632,19 +645,22 @@ impl Solution {
     /// The solution at the odds u of the (oriented) `form`: λ = u / (1 + u), and with
     /// A(u) = α₀ + α₁u + α₂u², B(u) = β₀ + β₁u + β₂u² + β₃u³ (non-negative coefficients and
     /// u ≥ 0, so evaluated without cancellation), f = u A / ((1 + u) B) (eq. 15), a = A / (1 + u)² and
-    /// b = B / (1 + u)³ (eq. 16).
+    /// b = B / (1 + u)³ (eq. 16). `last` is [u, A(u), B(u)] where the iteration evaluated
+    /// last, one step before u: the error estimate is formed there ([`OddsPoint`]).
     #[inline(always)]
-    pub(crate) fn at<const FMA: bool>(form: &RationalForm, u: f64, side: Side) -> Self {
-        let [t, s, f, a, b, big_a, big_b] = odds_solution(&form.alpha, &form.beta, u);
+    pub(crate) fn at<const FMA: bool>(
+        form: &RationalForm,
+        u: f64,
+        side: Side,
+        last: [f64; 3],
+    ) -> Self {
+        let [t, s, f, a, b, _, _] = odds_solution(&form.alpha, &form.beta, u);
         Solution {
             lambda: side.pick::<FMA>(t, s),
             f,
             a,
             b,
-            odds: Some(OddsPoint {
-                u_a_b: [u, big_a, big_b],
-                side,
-            }),
+            odds: Some(OddsPoint { u_a_b: last, side }),
         }
     }
 

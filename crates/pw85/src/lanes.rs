@@ -653,22 +653,35 @@ impl<L: Lane4> OddsSearch4<L> {
 /// The odds iteration of [`crate::contact_function`] ([`crate::poly::OddsSearch`]) on four
 /// pairs at once, from the starting points `u0`: the Halley terms and the step rule are both
 /// computed for all lanes together ([`OddsSearch4::advance`]); a stopped lane's state is
-/// frozen.
+/// frozen. Returns the maximisers, [u, A(u), B(u)] at each lane's last evaluation (as
+/// [`crate::contact`]'s scalar solve keeps them) and the lanes that need the λ iteration.
 #[inline(always)]
 fn maximise4_in<const FMA: bool, L: Lane4>(
     alpha: &[V4; 3],
     beta: &[V4; 4],
     u0: [f64; LANES],
-) -> (V4, [bool; LANES]) {
+) -> (V4, [V4; 3], [bool; LANES]) {
     let odds = OddsForm::new(
         &alpha.map(|x| L::from_array(x.0)),
         &beta.map(|x| L::from_array(x.0)),
     );
     let mut search = OddsSearch4::<L>::new(u0);
+    let mut last = [search.u, L::lift(0.0), L::lift(0.0)];
     while !L::all(search.done) {
-        search.advance(odds.halley_terms::<FMA>(search.u));
+        let terms = odds.halley_terms::<FMA>(search.u);
+        let active = L::not(search.done);
+        last = [
+            search.u.or_else(active, last[0]),
+            terms.a.or_else(active, last[1]),
+            terms.b.or_else(active, last[2]),
+        ];
+        search.advance(terms.step_terms());
     }
-    (V4(search.u.to_array()), L::bools(search.fallback))
+    (
+        V4(search.u.to_array()),
+        last.map(|x| V4(x.to_array())),
+        L::bools(search.fallback),
+    )
 }
 
 /// The Bernstein coefficients of four pairs (one per lane) and their Σ|terms| (the
@@ -721,13 +734,14 @@ pub(crate) fn coefficients4<const FMA: bool>(
 
 /// [`maximise4_in`] on the oriented, normalised coefficients of four lanes, in the lane type
 /// of the build (`FMA`: the AVX2 + FMA build, one 256-bit register per quantity). Returns the
-/// maximisers u₀ and the lanes that need the λ iteration instead.
+/// maximisers u₀, [u, A(u), B(u)] at the last evaluation and the lanes that need the λ
+/// iteration instead.
 #[inline(always)]
 pub(crate) fn maximise4<const FMA: bool>(
     alpha: &[V4; 3],
     beta: &[V4; 4],
     u0: [f64; LANES],
-) -> (V4, [bool; LANES]) {
+) -> (V4, [V4; 3], [bool; LANES]) {
     #[cfg(target_arch = "x86_64")]
     if FMA {
         return maximise4_in::<FMA, avx4::V4Avx>(alpha, beta, u0);

@@ -405,7 +405,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
             return None;
         }
         let odds = odds.get_or_insert_with(|| OddsForm::new(&form.alpha, &form.beta));
-        search.advance::<FMA>(odds.halley_terms::<FMA>(u));
+        search.advance::<FMA>(odds.halley_terms::<FMA>(u).step_terms());
     }
     None
 }

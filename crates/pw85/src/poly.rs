@@ -333,7 +333,7 @@ pub(crate) fn f_value<T: Arith + core::ops::Div<Output = T>>(
 /// p is the numerator c(λ) of f′ (eqs. 18–20) in the variable u: a polynomial of degree 6 with
 /// p(0) = α₀β₀ > 0 and leading coefficient −α₂β₃ < 0, whose one positive root is the maximiser
 /// u₀ = λ₀ / (1 − λ₀). Its coefficients are formed once per pair; afterwards every iterate
-/// costs only the evaluation of p, V = A B and their first two derivatives (Estrin's scheme:
+/// costs only the evaluation of p, A, B and their first two derivatives (Estrin's scheme:
 /// few dependent operations), which is what the latency-bound iteration needs. The root of p
 /// is well conditioned: iterated to convergence in `f64` it came out within 5e-16 relative of
 /// 60-digit roots of the same coefficients on the worst bench pairs, where the λ form of the
@@ -344,10 +344,38 @@ pub(crate) struct OddsForm<T> {
     p: [T; 7],
     dp: [T; 6],
     ddp: [T; 5],
-    /// V = A B and its derivatives.
-    v: [T; 6],
-    dv: [T; 5],
-    ddv: [T; 4],
+    /// A, B and the coefficients of A′, A″ = 2α₂, B′ and B″.
+    alpha: [T; 3],
+    beta: [T; 4],
+    da: [T; 2],
+    dda: T,
+    db: [T; 3],
+    ddb: [T; 2],
+}
+
+/// What one Halley evaluation ([`OddsForm::halley_terms`]) yields at u: the terms of the step
+/// rule, and A(u), B(u), from which the error estimate is formed at the last iterate.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HalleyTerms<T> {
+    /// p(u).
+    pub p: T,
+    /// N = p′V − pV′.
+    pub n: T,
+    /// V = A B.
+    pub v: T,
+    /// The next iterate is u − step.
+    pub step: T,
+    /// A(u) and B(u).
+    pub a: T,
+    pub b: T,
+}
+
+impl<T: Copy> HalleyTerms<T> {
+    /// (p, N, V, step): what the step rule reads.
+    #[inline(always)]
+    pub(crate) fn step_terms(&self) -> (T, T, T, T) {
+        (self.p, self.n, self.v, self.step)
+    }
 }
 
 /// Σ cₖ uᵏ by Estrin's scheme, given u, u² and u⁴ (N ≤ 8): pairs cₖ + cₖ₊₁u first, then
@@ -380,30 +408,25 @@ fn estrin<const FMA: bool, T: Fused, const N: usize>(c: &[T; N], u: T, u2: T, u4
 }
 
 impl<T: Arith + core::ops::Neg<Output = T>> OddsForm<T> {
-    /// The coefficients of p, V and their derivatives from the Bernstein coefficients α, β
-    /// (which are the monomial coefficients of A and B).
+    /// The coefficients of p, A, B and their derivatives from the Bernstein coefficients α,
+    /// β (which are the monomial coefficients of A and B).
     #[inline(always)]
     pub(crate) fn new(alpha: &[T; 3], beta: &[T; 4]) -> Self {
         let c = T::lift;
-        let [a0, a1, a2] = *alpha;
-        let [b0, b1, b2, b3] = *beta;
+        let [_, a1, a2] = *alpha;
+        let [_, b1, b2, b3] = *beta;
         let p = odds_numerator(alpha, beta);
-        let v = [
-            a0 * b0,
-            a0 * b1 + a1 * b0,
-            a0 * b2 + a1 * b1 + a2 * b0,
-            a0 * b3 + a1 * b2 + a2 * b1,
-            a1 * b3 + a2 * b2,
-            a2 * b3,
-        ];
         let k = |k: usize| c(k as f64);
         Self {
             p,
             dp: core::array::from_fn(|i| k(i + 1) * p[i + 1]),
             ddp: core::array::from_fn(|i| k((i + 1) * (i + 2)) * p[i + 2]),
-            v,
-            dv: core::array::from_fn(|i| k(i + 1) * v[i + 1]),
-            ddv: core::array::from_fn(|i| k((i + 1) * (i + 2)) * v[i + 2]),
+            alpha: *alpha,
+            beta: *beta,
+            da: [a1, a2.twice()],
+            dda: a2.twice(),
+            db: [b1, b2.twice(), c(3.0) * b3],
+            ddb: [b2.twice(), c(6.0) * b3],
         }
     }
 
@@ -418,9 +441,11 @@ impl<T: Arith + core::ops::Neg<Output = T>> OddsForm<T> {
     /// ```
     ///
     /// One division; Halley's cubic convergence takes 2.5 evaluations on average from the
-    /// sphere estimate, where Newton's took 3.15 (bench distribution).
+    /// sphere estimate, where Newton's took 3.15 (bench distribution). V and its derivatives
+    /// come from those of A and B (V′ = A′B + AB′, V″ = A″B + 2A′B′ + AB″), which gives A(u)
+    /// and B(u) for the error estimate at no extra cost.
     #[inline(always)]
-    pub(crate) fn halley_terms<const FMA: bool>(&self, u: T) -> (T, T, T, T)
+    pub(crate) fn halley_terms<const FMA: bool>(&self, u: T) -> HalleyTerms<T>
     where
         T: Fused + core::ops::Div<Output = T>,
     {
@@ -429,13 +454,25 @@ impl<T: Arith + core::ops::Neg<Output = T>> OddsForm<T> {
         let p = estrin::<FMA, T, 7>(&self.p, u, u2, u4);
         let dp = estrin::<FMA, T, 6>(&self.dp, u, u2, u4);
         let ddp = estrin::<FMA, T, 5>(&self.ddp, u, u2, u4);
-        let v = estrin::<FMA, T, 6>(&self.v, u, u2, u4);
-        let dv = estrin::<FMA, T, 5>(&self.dv, u, u2, u4);
-        let ddv = estrin::<FMA, T, 4>(&self.ddv, u, u2, u4);
+        let a = estrin::<FMA, T, 3>(&self.alpha, u, u2, u4);
+        let da = estrin::<FMA, T, 2>(&self.da, u, u2, u4);
+        let b = estrin::<FMA, T, 4>(&self.beta, u, u2, u4);
+        let db = estrin::<FMA, T, 3>(&self.db, u, u2, u4);
+        let ddb = estrin::<FMA, T, 2>(&self.ddb, u, u2, u4);
+        let v = a * b;
+        let dv = mul_add::<FMA, T>(da, b, a * db);
+        let ddv = mul_add::<FMA, T>(self.dda, b, mul_add::<FMA, T>(da.twice(), db, a * ddb));
         let n = mul_add::<FMA, T>(dp, v, -(p * dv));
         let num = (p + p) * n;
         let den = mul_add::<FMA, T>(n + n, dp, -(p * mul_add::<FMA, T>(ddp, v, -(p * ddv))));
-        (p, n, v, num / den)
+        HalleyTerms {
+            p,
+            n,
+            v,
+            step: num / den,
+            a,
+            b,
+        }
     }
 }
 
