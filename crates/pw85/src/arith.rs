@@ -86,12 +86,14 @@ pub(crate) fn mul_add<const FMA: bool, T: Fused>(a: T, b: T, c: T) -> T {
 pub(crate) fn select_gt<const FMA: bool>(x: f64, y: f64, a: f64, b: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if FMA {
-        use core::arch::x86_64::{_mm_blendv_pd, _mm_cmpgt_sd, _mm_cvtsd_f64, _mm_set_sd};
+        use core::arch::x86_64::{_mm_blendv_pd, _mm_cmpgt_pd, _mm_cvtsd_f64, _mm_set1_pd};
         // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function, after
-        // the processor was checked to have AVX2 (which includes SSE4.1's BLENDVPD).
+        // the processor was checked to have AVX2 (which includes SSE4.1's BLENDVPD). Both
+        // lanes carry the operands (`set1`, not `set_sd`: the zeroing move it compiles to is
+        // one that valgrind cannot decode, and the upper lane is never read).
         return unsafe {
-            let mask = _mm_cmpgt_sd(_mm_set_sd(x), _mm_set_sd(y));
-            _mm_cvtsd_f64(_mm_blendv_pd(_mm_set_sd(b), _mm_set_sd(a), mask))
+            let mask = _mm_cmpgt_pd(_mm_set1_pd(x), _mm_set1_pd(y));
+            _mm_cvtsd_f64(_mm_blendv_pd(_mm_set1_pd(b), _mm_set1_pd(a), mask))
         };
     }
     if x > y { a } else { b }
@@ -106,11 +108,8 @@ pub(crate) fn select_sign<const FMA: bool>(mask: f64, a: f64, b: f64) -> f64 {
         use core::arch::x86_64::{_mm_blendv_pd, _mm_cvtsd_f64, _mm_set_sd};
         // SAFETY: as in `select_gt`; BLENDVPD reads only the sign bit of the mask.
         return unsafe {
-            _mm_cvtsd_f64(_mm_blendv_pd(
-                _mm_set_sd(b),
-                _mm_set_sd(a),
-                _mm_set_sd(mask),
-            ))
+            let pick = _mm_blendv_pd(_mm_set_sd(b), _mm_set_sd(a), _mm_set_sd(mask));
+            _mm_cvtsd_f64(pick)
         };
     }
     if mask.is_sign_negative() { a } else { b }
