@@ -461,10 +461,16 @@ impl<T: Arith + core::ops::Neg<Output = T>> OddsForm<T> {
         let ddb = estrin::<FMA, T, 2>(&self.ddb, u, u2, u4);
         let v = a * b;
         let dv = mul_add::<FMA, T>(da, b, a * db);
-        let ddv = mul_add::<FMA, T>(self.dda, b, mul_add::<FMA, T>(da.twice(), db, a * ddb));
+        let ddv = mul_add::<FMA, T>(a, ddb, self.dda * b) + da.twice() * db;
         let n = mul_add::<FMA, T>(dp, v, -(p * dv));
         let num = (p + p) * n;
-        let den = mul_add::<FMA, T>(n + n, dp, -(p * mul_add::<FMA, T>(ddp, v, -(p * ddv))));
+        // 2 N p′ − p (p″V − p V″), grouped so that the products of p start before N and V″
+        // are known: a shorter chain to the division than multiplying the bracket by p.
+        let den = mul_add::<FMA, T>(
+            n,
+            dp.twice(),
+            mul_add::<FMA, T>(p * p, ddv, -((p * ddp) * v)),
+        );
         HalleyTerms {
             p,
             n,
