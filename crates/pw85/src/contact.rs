@@ -209,7 +209,9 @@ impl Prepared {
     /// NaN fails the test, so it refines, as before.
     #[inline(always)]
     pub(crate) fn needs_refinement((x, d): (f64, f64)) -> bool {
-        !(UNIT_ROUNDOFF * x <= (REFINE_ABOVE - EVAL) * d)
+        use core::cmp::Ordering::{Equal, Less};
+        let within = (UNIT_ROUNDOFF * x).partial_cmp(&((REFINE_ABOVE - EVAL) * d));
+        !matches!(within, Some(Less | Equal))
     }
 
     /// Validates and computes the coefficients; `FMA` says whether this is the AVX2 + FMA
