@@ -432,7 +432,7 @@ impl<T: Arith + core::ops::Neg<Output = T>> OddsForm<T> {
 
     /// Halley's step on h = p / V (= (1 + u) d ln f / d ln u: dividing by V = A B removes the
     /// clusters of roots of A and B near u = 0 that make p itself steep when one ellipsoid is
-    /// much smaller than the other), at u: returns (p, N, V, step) with
+    /// much smaller than the other), at u: returns p, N, V, the step and A, B ([`HalleyTerms`]), with
     /// N = p′V − pV′ and the next iterate u − step, where
     ///
     /// ```text
