@@ -388,7 +388,7 @@ fn solve_x4<const FMA: bool>(
     let (u, [last_u, last_a, last_b], fallback) = maximise4::<FMA>(&alpha, &beta, u0);
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
-    let [t, s, f, sa, sb, _, _] = odds_solution(&alpha, &beta, u);
+    let [t, s, f, sa, sb] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
     let (x, d) = odds_amplification(

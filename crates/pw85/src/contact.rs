@@ -556,7 +556,7 @@ pub(crate) fn amplification<T: Arith + core::ops::Div<Output = T>>(
     ba / (a * scale_alpha) + bb / (b * scale_beta)
 }
 
-/// [`Solution::at`] in any arithmetic: [λ, 1 − λ, f, a, b, A, B] at the odds u of an oriented
+/// [`Solution::at`] in any arithmetic: [λ, 1 − λ, f, a, b] at the odds u of an oriented
 /// form.
 ///
 /// With A(u) = α₀ + α₁u + α₂u², B(u) = β₀ + β₁u + β₂u² + β₃u³ (non-negative coefficients and
@@ -567,7 +567,7 @@ pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
     alpha: &[T; 3],
     beta: &[T; 4],
     u: T,
-) -> [T; 7] {
+) -> [T; 5] {
     let [a0, a1, a2] = *alpha;
     let [b0, b1, b2, b3] = *beta;
     let one = T::lift(1.0);
@@ -584,8 +584,6 @@ pub(crate) fn odds_solution<T: Arith + core::ops::Div<Output = T>>(
         u * big_a / ((one + u) * big_b),
         s * s * big_a,
         s * s * s * big_b,
-        big_a,
-        big_b,
     ]
 }
 
@@ -656,7 +654,7 @@ impl Solution {
         side: Side,
         last: [f64; 3],
     ) -> Self {
-        let [t, s, f, a, b, _, _] = odds_solution(&form.alpha, &form.beta, u);
+        let [t, s, f, a, b] = odds_solution(&form.alpha, &form.beta, u);
         Solution {
             lambda: side.pick::<FMA>(t, s),
             f,
