@@ -189,9 +189,9 @@ mod avx {
     use super::EndsLanes;
     use crate::arith::Arith;
     use core::arch::x86_64::{
-        __m256d, _mm_cvtsd_f64, _mm_unpackhi_pd, _mm256_add_pd, _mm256_addsub_pd,
-        _mm256_castpd256_pd128, _mm256_extractf128_pd, _mm256_mul_pd, _mm256_permute2f128_pd,
-        _mm256_setr_pd,
+        __m256d, _mm_cvtsd_f64, _mm_unpackhi_pd, _mm256_add_pd, _mm256_addsub_pd, _mm256_and_pd,
+        _mm256_blend_pd, _mm256_castpd256_pd128, _mm256_castsi256_pd, _mm256_extractf128_pd,
+        _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set1_pd, _mm256_setr_epi64x,
     };
     use core::ops::{Add, Mul, Sub};
 
@@ -248,7 +248,13 @@ mod avx {
         fn of(a: f64, b: f64) -> Self {
             debug_assert!(crate::dispatch::has_avx2_fma());
             // SAFETY: only called in the AVX2 build (see the type).
-            Self(unsafe { _mm256_setr_pd(a, a.abs(), b, b.abs()) })
+            Self(unsafe {
+                let both = _mm256_blend_pd::<0b1100>(_mm256_set1_pd(a), _mm256_set1_pd(b));
+                _mm256_and_pd(
+                    both,
+                    _mm256_castsi256_pd(_mm256_setr_epi64x(-1, i64::MAX, -1, i64::MAX)),
+                )
+            })
         }
         #[inline(always)]
         fn lanes(self) -> [f64; 4] {

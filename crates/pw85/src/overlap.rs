@@ -348,7 +348,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
     // verdicts need only p there).
     let p_coefficients = odds_numerator(&form.alpha, &form.beta);
     let mut odds: Option<OddsForm<f64>> = None;
-    let mut search = OddsSearch::new(u0);
+    let mut search = OddsSearch::new(u0, crate::poly::Tiny::NORMALISED);
     let [a0, a1, a2] = form.alpha;
     let [b0, b1, b2, b3] = form.beta;
     let ratio = scale.ratio();

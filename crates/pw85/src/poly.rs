@@ -523,6 +523,8 @@ pub(crate) struct OddsSearch {
     iterations: u32,
     /// The search has finished.
     pub done: bool,
+    /// Below these V and |N| the step's products could underflow ([`Tiny`]).
+    tiny: Tiny,
     /// The values left the range where the step is trustworthy (coefficients spanning
     /// hundreds of decades, NaN): the caller must use the λ iteration instead.
     pub fallback: bool,
@@ -534,10 +536,37 @@ pub(crate) struct OddsSearch {
 /// pair, 1e-4 would leave 2e-13); the λ iteration it replaces left up to 8e-12.
 pub(crate) const HALLEY_LAST_STEP: f64 = 3e-5;
 
+/// The values of V = A B and |N| below which [`OddsSearch::advance`] gives up (the λ
+/// iteration takes over): 1e-60 for a normalised form (largest α and largest β in [1, 2)),
+/// where the products of the step (N², p N V) would otherwise come near underflow and lose
+/// their digits silently. For a form whose α and β were not divided by their powers of two
+/// sα and sβ, V is sα sβ times and N (sα sβ)² times its normalised value, exactly, and so
+/// are these thresholds: the decisions are the same.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tiny {
+    v: f64,
+    n: f64,
+}
+
+impl Tiny {
+    /// The thresholds of a normalised form.
+    pub(crate) const NORMALISED: Tiny = Tiny { v: 1e-60, n: 1e-60 };
+
+    /// The thresholds of a form sα sβ = `product` times its normalised one (a power of two
+    /// in [2⁻¹²⁸, 2¹²⁸], so that these are exact).
+    #[inline(always)]
+    pub(crate) fn scaled(product: f64) -> Tiny {
+        Tiny {
+            v: 1e-60 * product,
+            n: 1e-60 * product * product,
+        }
+    }
+}
+
 impl OddsSearch {
     /// A search from `u0`; one that cannot start (u0 not a positive number) is a fallback.
     #[inline(always)]
-    pub(crate) fn new(u0: f64) -> Self {
+    pub(crate) fn new(u0: f64, tiny: Tiny) -> Self {
         let ok = u0 > 0.0 && u0 < f64::INFINITY;
         Self {
             u: u0,
@@ -546,6 +575,7 @@ impl OddsSearch {
             iterations: 0,
             done: !ok,
             fallback: !ok,
+            tiny,
         }
     }
 
@@ -558,9 +588,9 @@ impl OddsSearch {
     pub(crate) fn advance<const FMA: bool>(&mut self, (p, n, v, step): (f64, f64, f64, f64)) {
         let u = self.u;
         self.iterations += 1;
-        // Below 1e-60 the products of the step (N², p N V) could underflow and the step lose
+        // Below `tiny` the products of the step (N², p N V) could underflow and the step lose
         // its digits silently; NaN fails the test too.
-        if !(v > 1e-60 && n.abs() > 1e-60) || self.iterations > 100 {
+        if !(v > self.tiny.v && n.abs() > self.tiny.n) || self.iterations > 100 {
             self.done = true;
             self.fallback = true;
             return;

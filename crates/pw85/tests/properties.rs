@@ -482,6 +482,50 @@ fn halley_does_not_stop_where_the_derivative_vanishes() {
     }
 }
 
+/// Scaling r12 by a power of two ν and the matrices by ν² is exact, and μ² and λ do not
+/// change. The solver works on the coefficients as they are where their scale is moderate and
+/// normalises them where it is not; the two must give the same bits (the normalisation
+/// is exact too). ν = 2^±11 and beyond take the normalised path, 2^±5 the other.
+#[test]
+fn power_of_two_scalings_give_the_same_bits() {
+    let mut rng = Rng(0x5CA1E);
+    let bits = |c: pw85::Contact| (c.mu2.to_bits(), c.lambda.to_bits(), c.refined);
+    for i in 0..1000 {
+        let decades = [0.5, 2.0, 4.0][i % 3];
+        let (q1, q2) = (rng.ellipsoid(decades), rng.ellipsoid(decades));
+        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let base = bits(contact_function(&r, &q1, &q2).unwrap());
+        let angle = rng.range(0.0, 6.3);
+        let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
+        let e2 = from_axes_angle_2d(&[0.3, 0.2], -angle).unwrap();
+        let r2 = [r[0], r[1]];
+        let base_2d = bits(contact_function_2d(&r2, &e1, &e2).unwrap());
+        for k in [-60, -24, -11, -5, 5, 11, 24, 60] {
+            let nu = 2f64.powi(k);
+            let (r, q1, q2) = (
+                r.map(|x| nu * x),
+                q1.map(|x| nu * nu * x),
+                q2.map(|x| nu * nu * x),
+            );
+            assert_eq!(
+                bits(contact_function(&r, &q1, &q2).unwrap()),
+                base,
+                "ν = 2^{k}"
+            );
+            let (r2, e1, e2) = (
+                r2.map(|x| nu * x),
+                e1.map(|x| nu * nu * x),
+                e2.map(|x| nu * nu * x),
+            );
+            assert_eq!(
+                bits(contact_function_2d(&r2, &e1, &e2).unwrap()),
+                base_2d,
+                "2D, ν = 2^{k}"
+            );
+        }
+    }
+}
+
 /// The 2D batch (lane-wise solve shared with 3D) equals `contact_function_2d` bit for bit,
 /// typed errors, coincident centres, refinements and extreme shapes included.
 #[test]
