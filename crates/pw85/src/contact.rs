@@ -262,13 +262,13 @@ impl Prepared {
     /// ([`Scale::moderate`]) the form is solved as it is, with the fallback thresholds
     /// scaled instead, and the normalisation (the largest coefficients, their exponents)
     /// only decides a branch: it leaves the dependency chain between the coefficients and
-    /// the first iterate (contact_function 91 -> 85 ns on the bench pairs).
+    /// the first iterate.
     ///
     /// Returns the `Result` itself, built where it is returned: the rare paths are
     /// functions of their own, so that the common one writes its fields once. Merging a
     /// `Contact` from several paths made the compiler assemble it on the stack and copy it
-    /// with a 16-byte load across two 8-byte stores, which store forwarding cannot serve:
-    /// 105 -> 97 ns without it.
+    /// with a 16-byte load across two 8-byte stores, which store forwarding cannot serve
+    /// (the load waits until the stores have retired and reached the cache).
     #[inline(always)]
     pub(crate) fn contact<const FMA: bool>(
         &self,
@@ -291,9 +291,26 @@ impl Prepared {
     }
 
     /// [`Prepared::contact`] on the normalised form, for pairs whose coefficients are too
-    /// large or too small to be solved as they are.
+    /// large or too small to be solved as they are (ellipsoids a million times smaller or
+    /// larger than unit size, say). Out of line, and in the AVX2 + FMA build compiled with
+    /// those features again: a function of its own does not inherit them.
     #[inline(never)]
     fn normalised_contact<const FMA: bool>(
+        &self,
+        scale: Scale,
+        exact: impl FnOnce() -> RationalForm,
+    ) -> Result<Contact, Error> {
+        #[cfg(target_arch = "x86_64")]
+        if FMA {
+            // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function,
+            // after the processor was checked to have both.
+            return unsafe { normalised_contact_avx2(self, scale, exact) };
+        }
+        self.normalised_contact_in::<FMA>(scale, exact)
+    }
+
+    #[inline(always)]
+    fn normalised_contact_in<const FMA: bool>(
         &self,
         scale: Scale,
         exact: impl FnOnce() -> RationalForm,
@@ -346,12 +363,52 @@ impl Prepared {
         exact: impl FnOnce() -> RationalForm,
         fallback: Scale,
     ) -> Contact {
+        // A function of its own is compiled without the AVX2 and FMA features of its
+        // caller; in that build it hands over to a twin compiled with them (without, each
+        // blend and fused multiply–add of the solve would be a call).
+        #[cfg(target_arch = "x86_64")]
+        if FMA {
+            // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function,
+            // after the processor was checked to have both.
+            return unsafe { refine_avx2(self, exact, fallback) };
+        }
+        self.refine_in::<FMA>(exact, fallback)
+    }
+
+    #[inline(always)]
+    fn refine_in<const FMA: bool>(
+        &self,
+        exact: impl FnOnce() -> RationalForm,
+        fallback: Scale,
+    ) -> Contact {
         let refined = exact();
         let scale = Scale::of(&refined).unwrap_or(fallback);
         let solution = solve::<FMA>(&scale.apply(&refined));
         let estimate = GAMMA_DD * solution.amplification(&self.bound, scale) + EVAL;
         scale.contact(&solution, estimate, true)
     }
+}
+
+/// [`Prepared::refine`] compiled with AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn refine_avx2(
+    prepared: &Prepared,
+    exact: impl FnOnce() -> RationalForm,
+    fallback: Scale,
+) -> Contact {
+    prepared.refine_in::<true>(exact, fallback)
+}
+
+/// [`Prepared::normalised_contact`] compiled with AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn normalised_contact_avx2(
+    prepared: &Prepared,
+    scale: Scale,
+    exact: impl FnOnce() -> RationalForm,
+) -> Result<Contact, Error> {
+    prepared.normalised_contact_in::<true>(scale, exact)
 }
 
 impl Contact {
@@ -499,6 +556,29 @@ impl Side {
     pub(crate) fn pick<const FMA: bool>(self, keep: f64, swap: f64) -> f64 {
         select_sign::<FMA>(self.0, swap, keep)
     }
+
+    /// [`oriented`] by this side. Written out rather than as `oriented` with a closure: a
+    /// closure is compiled without the AVX2 target feature of the function it appears in,
+    /// and when the optimiser did not inline it, each pick became a call into a closure
+    /// that itself called the blend intrinsic out of line (six calls per contact function;
+    /// 100 -> 86 ns when inlined).
+    #[inline(always)]
+    pub(crate) fn orient<const FMA: bool>(
+        self,
+        (alpha, beta): ([f64; 3], [f64; 4]),
+    ) -> ([f64; 3], [f64; 4]) {
+        let [a0, a1, a2] = alpha;
+        let [b0, b1, b2, b3] = beta;
+        (
+            [self.pick::<FMA>(a0, a2), a1, self.pick::<FMA>(a2, a0)],
+            [
+                self.pick::<FMA>(b0, b3),
+                self.pick::<FMA>(b1, b2),
+                self.pick::<FMA>(b2, b1),
+                self.pick::<FMA>(b3, b0),
+            ],
+        )
+    }
 }
 
 impl Solution {
@@ -530,7 +610,7 @@ impl Solution {
                 u_a_b: [u, big_a, big_b],
                 side,
             }) => {
-                let (alpha, beta) = oriented(weighted, |keep, swap| side.pick::<FMA>(keep, swap));
+                let (alpha, beta) = side.orient::<FMA>(weighted);
                 odds_amplification(
                     &alpha,
                     &beta,
@@ -698,7 +778,7 @@ pub(crate) fn orient<const FMA: bool>(r: &RationalForm) -> (RationalForm, f64, S
     let (x, y) = (r.alpha[2] * r.beta[0], r.alpha[0] * r.beta[3]);
     // Blends rather than a branch: the side is a coin toss on ordinary input.
     let side = Side::of::<FMA>(x, y);
-    let (alpha, beta) = oriented((r.alpha, r.beta), |keep, swap| side.pick::<FMA>(keep, swap));
+    let (alpha, beta) = side.orient::<FMA>((r.alpha, r.beta));
     let form = RationalForm { alpha, beta };
     (form, (x.min(y) / x.max(y)).sqrt(), side)
 }

@@ -247,6 +247,9 @@ mod avx {
         #[inline(always)]
         fn of(a: f64, b: f64) -> Self {
             debug_assert!(crate::dispatch::has_avx2_fma());
+            // Two broadcasts, a blend and a mask: as `_mm256_setr_pd(a, |a|, b, |b|)` the
+            // optimiser rebuilt the lanes from the finiteness probe's vector loads with
+            // lane permutations and a stack round trip, on the path to every coefficient.
             // SAFETY: only called in the AVX2 build (see the type).
             Self(unsafe {
                 let both = _mm256_blend_pd::<0b1100>(_mm256_set1_pd(a), _mm256_set1_pd(b));
