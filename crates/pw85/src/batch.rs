@@ -12,8 +12,8 @@
 
 use crate::arith::Arith;
 use crate::contact::{
-    Prepared, Scale, Solution, check_positive_definite, depth_weighted, odds_amplification,
-    odds_solution, oriented,
+    Prepared, Scale4, check_positive_definite, depth_weighted, odds_amplification, odds_solution,
+    oriented, positive_definite4,
 };
 use crate::dispatch::multiversion;
 use crate::error::Argument;
@@ -221,7 +221,7 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
         beta: [V4::lift(0.0); 4],
         bound_alpha: [V4::lift(0.0); 3],
         bound_beta: [V4::lift(0.0); 4],
-        scales: [None; LANES],
+        valid: [false; LANES],
     };
     for (k, p) in pairs.iter().enumerate().take(LANES) {
         let prepared = match Prepared::new_2d(&p.r12, &p.q1, &p.q2) {
@@ -240,10 +240,7 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
             lanes.beta[i].0[k] = r.beta[i];
             lanes.bound_beta[i].0[k] = b.beta[i];
         }
-        lanes.scales[k] = Scale::of(&r);
-        if lanes.scales[k].is_none() {
-            out[k] = Ok(Contact::COINCIDENT);
-        }
+        lanes.valid[k] = true;
     }
     solve_x4::<FMA>(
         &lanes,
@@ -285,26 +282,28 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     let b: [V4; 6] = core::array::from_fn(|i| V4::from_fn(|k| lane[k].q2[i]));
     let (c, m) = coefficients4::<FMA>(r, a, b);
 
-    // Per lane, the decisions of the scalar path before its iteration: validation, then
-    // r12 = 0 (no scale). Everything after is computed four lanes at a time.
-    let mut scales: [Option<Scale>; LANES] = [None; LANES];
-    for k in 0..LANES {
-        let p = &pairs[k];
-        if !finite[k] {
-            out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
-            continue;
-        }
-        let checked = check_positive_definite(Argument::Q1, &p.q1, c.beta[0].0[k], m.1[0].0[k])
-            .and_then(|()| {
-                check_positive_definite(Argument::Q2, &p.q2, c.beta[3].0[k], m.1[3].0[k])
-            });
-        if let Err(e) = checked {
-            out[k] = Err(e);
-            continue;
-        }
-        scales[k] = Scale::of(&lane_form(&c.alpha, &c.beta, k));
-        if scales[k].is_none() {
-            out[k] = Ok(Contact::COINCIDENT);
+    // Per lane, the validation of the scalar path; in the common case (every lane finite
+    // and clearly positive definite, as the cheap tests decide) in one branch for all four.
+    let mut valid = [true; LANES];
+    let clear = finite.iter().all(|&f| f)
+        & positive_definite4(&a, c.beta[0], m.1[0])
+        & positive_definite4(&b, c.beta[3], m.1[3]);
+    if !clear {
+        for k in 0..LANES {
+            let p = &pairs[k];
+            if !finite[k] {
+                out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
+                valid[k] = false;
+                continue;
+            }
+            let checked = check_positive_definite(Argument::Q1, &p.q1, c.beta[0].0[k], m.1[0].0[k])
+                .and_then(|()| {
+                    check_positive_definite(Argument::Q2, &p.q2, c.beta[3].0[k], m.1[3].0[k])
+                });
+            if let Err(e) = checked {
+                out[k] = Err(e);
+                valid[k] = false;
+            }
         }
     }
     let lanes = Lanes {
@@ -312,7 +311,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
         beta: c.beta,
         bound_alpha: m.0,
         bound_beta: m.1,
-        scales,
+        valid,
     };
     solve_x4::<FMA>(
         &lanes,
@@ -322,14 +321,14 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     );
 }
 
-/// Four validated pairs side by side: their `f64` Bernstein coefficients and Σ|terms|, one
-/// lane each, and the normalisation of each lane (`None`: the lane is answered already).
+/// Four pairs side by side: their `f64` Bernstein coefficients and Σ|terms|, one lane each,
+/// and which lanes passed validation (the others are answered already).
 struct Lanes {
     alpha: [V4; 3],
     beta: [V4; 4],
     bound_alpha: [V4; 3],
     bound_beta: [V4; 4],
-    scales: [Option<Scale>; LANES],
+    valid: [bool; LANES],
 }
 
 /// The rational form of lane `k`.
@@ -353,21 +352,26 @@ fn solve_x4<const FMA: bool>(
     scalar: impl Fn(usize) -> Result<Contact, Error>,
     exact: impl Fn(usize) -> RationalForm,
 ) {
-    let scales = lanes.scales;
-    let Some(first) = scales.iter().position(Option::is_some) else {
+    // r12 = 0 (no scale) in a valid lane: μ² = 0.
+    let (scales, positive) = Scale4::of(&lanes.alpha, &lanes.beta);
+    let live: [bool; LANES] = core::array::from_fn(|k| lanes.valid[k] && positive[k]);
+    for k in 0..LANES {
+        if lanes.valid[k] && !positive[k] {
+            out[k] = Ok(Contact::COINCIDENT);
+        }
+    }
+    let Some(first) = live.iter().position(|&l| l) else {
         return;
     };
     // Lanes answered already carry a live lane's pair through the arithmetic.
-    let source: [usize; LANES] =
-        core::array::from_fn(|k| if scales[k].is_some() { k } else { first });
-    let scale: [Scale; LANES] = core::array::from_fn(|k| scales[source[k]].unwrap_or(Scale::UNIT));
+    let source: [usize; LANES] = core::array::from_fn(|k| if live[k] { k } else { first });
+    let scale = scales.picked(&source);
     let pick = |x: V4| V4::from_fn(|k| x.0[source[k]]);
     let (alpha, beta) = (lanes.alpha.map(pick), lanes.beta.map(pick));
     let (bound_alpha, bound_beta) = (lanes.bound_alpha.map(pick), lanes.bound_beta.map(pick));
 
     // Scale::apply and orient, lane-wise (the same operations).
-    let inv_a = V4::from_fn(|k| scale[k].inverses().0);
-    let inv_b = V4::from_fn(|k| scale[k].inverses().1);
+    let (inv_a, inv_b) = scale.inverses();
     let alpha = alpha.map(|x| V4::from_fn(|k| (x.0[k] * inv_a.0[k]).max(0.0)));
     let beta = beta.map(|x| V4::from_fn(|k| (x.0[k] * inv_b.0[k]).max(0.0)));
     let x = alpha[2] * beta[0];
@@ -388,7 +392,7 @@ fn solve_x4<const FMA: bool>(
     let (u, [last_u, last_a, last_b], fallback) = maximise4::<FMA>(&alpha, &beta, u0);
 
     // Solution::at and the error estimate of Prepared::finish, lane-wise.
-    let [t, s, f, sa, sb] = odds_solution(&alpha, &beta, u);
+    let [t, s, f, _, _] = odds_solution(&alpha, &beta, u);
     let lambda = swap(t, s);
     let (bound_alpha, bound_beta) = oriented(depth_weighted(&bound_alpha, &bound_beta), swap);
     let (x, d) = odds_amplification(
@@ -396,31 +400,33 @@ fn solve_x4<const FMA: bool>(
         &bound_beta,
         [last_u, last_a, last_b, inv_a, inv_b],
     );
+    // Scale::contact, lane-wise.
+    let mu2 = f * scale.ratio();
     for k in 0..LANES {
-        let Some(scale) = scales[k] else {
+        if !live[k] {
             continue;
-        };
+        }
         if fallback[k] {
             out[k] = scalar(k);
             continue;
         }
         let fraction = (x.0[k], d.0[k]);
-        out[k] = Ok(if !Prepared::needs_refinement(fraction) {
-            let estimate = Prepared::estimate(fraction.0 / fraction.1);
-            let solution = Solution {
-                lambda: lambda.0[k],
-                f: f.0[k],
-                a: sa.0[k],
-                b: sb.0[k],
-                odds: None,
-            };
-            scale.contact(&solution, estimate, false)
-        } else {
+        if Prepared::needs_refinement(fraction) {
             let prepared = Prepared {
                 rational: lane_form(&lanes.alpha, &lanes.beta, k),
                 bound: lane_form(&lanes.bound_alpha, &lanes.bound_beta, k),
             };
-            prepared.refine::<FMA>(|| exact(k), scale)
+            out[k] = Ok(prepared.refine::<FMA>(|| exact(k), scale.lane(k)));
+            continue;
+        }
+        // Written where it is stored: a `Contact` merged from both paths was assembled on
+        // the stack with 8-byte stores and copied with one 32-byte load, which store
+        // forwarding cannot serve.
+        out[k] = Ok(Contact {
+            mu2: mu2.0[k],
+            lambda: lambda.0[k],
+            error_estimate: Prepared::estimate(fraction.0 / fraction.1),
+            refined: false,
         });
     }
 }
@@ -428,6 +434,41 @@ fn solve_x4<const FMA: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lanes at scales where the largest α or β is subnormal or beyond 2¹⁰²³ (their
+    /// normalisation takes the other branch of the power of two, and they are refined),
+    /// mixed with ordinary lanes in one chunk: still the scalar function's bits.
+    #[test]
+    fn batch_equals_scalar_at_extreme_scales() {
+        let q1 = crate::shape::from_axes_angles(&[1.0, 0.3, 0.2], &[0.3, 1.1, 2.0]).unwrap();
+        let q2 = crate::shape::from_axes_angles(&[0.5, 0.4, 0.1], &[2.3, 0.2, 0.7]).unwrap();
+        let scaled = |k: f64, r12: [f64; 3]| Pair {
+            r12: r12.map(|x| x * k),
+            q1: q1.map(|x| x * k * k),
+            q2: q2.map(|x| x * k * k),
+        };
+        let mut pairs = Vec::new();
+        for (i, &k) in [1.0, 1e-52, 3e51, 1e-53, 2e-52, 1e-55, 1.0, 5e51]
+            .iter()
+            .enumerate()
+        {
+            let t = i as f64;
+            pairs.push(scaled(k, [0.9 + 0.1 * t, -0.3, 0.2 * t]));
+        }
+        let batch = contact_functions(&pairs);
+        let mut other_branch = 0;
+        for (p, b) in pairs.iter().zip(&batch) {
+            let s = crate::contact_function(&p.r12, &p.q1, &p.q2);
+            assert_eq!(format!("{s:?}"), format!("{b:?}"));
+            let form = crate::contact::exact_coefficients(&p.r12, &p.q1, &p.q2);
+            let normal = |xs: &[f64]| {
+                let largest = xs.iter().fold(0.0_f64, |m, &x| m.max(x));
+                (f64::MIN_POSITIVE..2f64.powi(1023)).contains(&largest)
+            };
+            other_branch += usize::from(!normal(&form.alpha) || !normal(&form.beta));
+        }
+        assert!(other_branch >= 4, "{other_branch}");
+    }
 
     #[test]
     fn batch_equals_scalar_bit_for_bit_including_errors() {

@@ -868,12 +868,6 @@ impl Scale {
         (self.alpha, self.beta)
     }
 
-    /// Their reciprocals.
-    #[inline(always)]
-    pub(crate) fn inverses(&self) -> (f64, f64) {
-        (self.inv_alpha, self.inv_beta)
-    }
-
     /// α / β: f of the normalised form times this is f of the original one.
     #[inline(always)]
     pub(crate) fn ratio(&self) -> f64 {
@@ -900,6 +894,123 @@ impl Scale {
             refined,
         }
     }
+}
+
+/// [`Scale::of`] for four lanes at once, from the lanes' largest α and β (`None` where one
+/// is not positive: r12 = 0); the same operations, so the same bits, without moving each
+/// lane's coefficients through memory.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Scale4 {
+    alpha: crate::lanes::V4,
+    beta: crate::lanes::V4,
+    inv_alpha: crate::lanes::V4,
+    inv_beta: crate::lanes::V4,
+}
+
+impl Scale4 {
+    /// The scales of the lanes' forms (α and β coefficients, one lane per pair), and which
+    /// lanes have one.
+    #[inline(always)]
+    pub(crate) fn of(
+        alpha: &[crate::lanes::V4; 3],
+        beta: &[crate::lanes::V4; 4],
+    ) -> (Self, [bool; crate::lanes::LANES]) {
+        use crate::lanes::V4;
+        let largest = |xs: &[V4]| {
+            xs.iter().fold(V4::from_fn(|_| 0.0), |m, x| {
+                V4::from_fn(|k| m.0[k].max(x.0[k]))
+            })
+        };
+        let (a, b) = (largest(alpha), largest(beta));
+        let positive = core::array::from_fn(|k| a.0[k] > 0.0 && b.0[k] > 0.0);
+        let (alpha, inv_alpha) = powers_of_two_below4(a);
+        let (beta, inv_beta) = powers_of_two_below4(b);
+        (
+            Self {
+                alpha,
+                beta,
+                inv_alpha,
+                inv_beta,
+            },
+            positive,
+        )
+    }
+
+    /// Lane `k` as a [`Scale`].
+    #[inline(always)]
+    pub(crate) fn lane(&self, k: usize) -> Scale {
+        Scale {
+            alpha: self.alpha.0[k],
+            beta: self.beta.0[k],
+            inv_alpha: self.inv_alpha.0[k],
+            inv_beta: self.inv_beta.0[k],
+        }
+    }
+
+    /// The lanes picked from `source` (a lane index per lane).
+    #[inline(always)]
+    pub(crate) fn picked(&self, source: &[usize; crate::lanes::LANES]) -> Self {
+        let pick = |x: crate::lanes::V4| crate::lanes::V4::from_fn(|k| x.0[source[k]]);
+        Self {
+            alpha: pick(self.alpha),
+            beta: pick(self.beta),
+            inv_alpha: pick(self.inv_alpha),
+            inv_beta: pick(self.inv_beta),
+        }
+    }
+
+    /// 1/sα and 1/sβ, lane-wise.
+    #[inline(always)]
+    pub(crate) fn inverses(&self) -> (crate::lanes::V4, crate::lanes::V4) {
+        (self.inv_alpha, self.inv_beta)
+    }
+
+    /// sα / sβ lane-wise, as [`Scale::ratio`].
+    #[inline(always)]
+    pub(crate) fn ratio(&self) -> crate::lanes::V4 {
+        self.alpha * self.inv_beta
+    }
+}
+
+/// [`power_of_two_below`] lane-wise, with selects instead of the branch.
+#[inline(always)]
+fn powers_of_two_below4(x: crate::lanes::V4) -> (crate::lanes::V4, crate::lanes::V4) {
+    use crate::lanes::V4;
+    let exponent: [u64; crate::lanes::LANES] =
+        core::array::from_fn(|k| (x.0[k].to_bits() >> 52) & 0x7ff);
+    let normal = |k: usize| (1..2046).contains(&exponent[k]);
+    let power = V4::from_fn(|k| f64::from_bits(exponent[k] << 52));
+    let inverse = V4::from_fn(|k| f64::from_bits((2046 - exponent[k].min(2045)) << 52));
+    let reciprocal = V4::from_fn(|k| 1.0 / x.0[k]);
+    (
+        V4::from_fn(|k| if normal(k) { power.0[k] } else { x.0[k] }),
+        V4::from_fn(|k| {
+            if normal(k) {
+                inverse.0[k]
+            } else {
+                reciprocal.0[k]
+            }
+        }),
+    )
+}
+
+/// Whether the cheap sufficient tests of [`check_positive_definite`] pass in every lane
+/// (Q11 > 0, the leading 2×2 minor and det Q beyond their rounding bounds), given each
+/// lane's det Q and its Σ|terms|: then the checks would all return `Ok` without looking
+/// further, and the lanes need not be checked one by one.
+#[inline(always)]
+pub(crate) fn positive_definite4(
+    q: &[crate::lanes::V4; 6],
+    det: crate::lanes::V4,
+    det_magnitude: crate::lanes::V4,
+) -> bool {
+    (0..crate::lanes::LANES).fold(true, |all, k| {
+        let (q0, q1, q3) = (q[0].0[k], q[1].0[k], q[3].0[k]);
+        let minor = q0 * q3 - q1 * q1;
+        all & (q0 > 0.0)
+            & (minor > GAMMA_F64 * (q0 * q3 + q1 * q1))
+            & (det.0[k] > GAMMA_F64 * det_magnitude.0[k])
+    })
 }
 
 /// The largest power of two ≤ x and its reciprocal, for positive finite x; x itself and 1 / x
