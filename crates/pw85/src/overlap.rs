@@ -140,6 +140,7 @@ fn undecided_avx2(
     q2: &Sym3,
     extents: Option<[f64; 2]>,
 ) -> Result<bool, Error> {
+    crate::dispatch::align_frame();
     undecided_in::<true>(r12, q1, q2, extents)
 }
 
