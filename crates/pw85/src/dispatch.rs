@@ -51,6 +51,33 @@ macro_rules! multiversion {
 }
 pub(crate) use multiversion;
 
+/// Defines `$name::<FMA>` as a function of its own (not inlined) that runs
+/// `$body::<FMA>`. A function of its own is compiled without its caller's AVX2 and FMA
+/// features, and its blends and fused multiply–adds would be calls; with `FMA` (the caller
+/// is the AVX2 + FMA build of a dispatched function) it therefore hands over to a twin
+/// compiled with them.
+macro_rules! out_of_line {
+    ($(#[$meta:meta])* fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $body:ident;) => {
+        $(#[$meta])*
+        #[inline(never)]
+        fn $name<const FMA: bool>($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if FMA {
+                #[target_feature(enable = "avx2,fma")]
+                fn with_avx2($($arg: $ty),*) -> $ret {
+                    $crate::dispatch::align_frame();
+                    $body::<true>($($arg),*)
+                }
+                // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched
+                // function, after the processor was checked to have both.
+                return unsafe { with_avx2($($arg),*) };
+            }
+            $body::<FMA>($($arg),*)
+        }
+    };
+}
+pub(crate) use out_of_line;
+
 /// Whether the processor has AVX2 and FMA (cached by the standard library after the first
 /// call).
 #[cfg(target_arch = "x86_64")]

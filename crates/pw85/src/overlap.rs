@@ -24,7 +24,7 @@ use crate::contact::{
     Scale, Side, check_finite, check_inputs_finite, check_positive_definite,
     check_positive_definite_2d, orient,
 };
-use crate::dispatch::multiversion;
+use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
 use crate::poly::{
     OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at,
@@ -106,42 +106,20 @@ fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Re
     undecided::<FMA>(r12, q1, q2, Some(extents))
 }
 
-/// The verdict on a pair the axis test left open: the contact-point test at the λ̂ the
-/// axis test's extents give (if they are in its range), then the bounded search.
-///
-/// Out of line, and recomputing the little it shares with the axis test: inlined, the
-/// values it needs stayed live across the axis test, and the common path (three pairs in
-/// four) paid for spilling them to the stack: 28.4 ns per axis-decided pair with the
-/// contact-point test inline, 27.2 ns out of line.
-#[inline(never)]
-fn undecided<const FMA: bool>(
-    r12: &[f64; 3],
-    q1: &Sym3,
-    q2: &Sym3,
-    extents: Option<[f64; 2]>,
-) -> Result<bool, Error> {
-    // A function of its own is compiled without its caller's AVX2 and FMA features; in that
-    // build it hands over to a twin compiled with them (see `Prepared::refine`).
-    #[cfg(target_arch = "x86_64")]
-    if FMA {
-        // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function, after
-        // the processor was checked to have both.
-        return unsafe { undecided_avx2(r12, q1, q2, extents) };
-    }
-    undecided_in::<FMA>(r12, q1, q2, extents)
-}
-
-/// [`undecided`] compiled with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn undecided_avx2(
-    r12: &[f64; 3],
-    q1: &Sym3,
-    q2: &Sym3,
-    extents: Option<[f64; 2]>,
-) -> Result<bool, Error> {
-    crate::dispatch::align_frame();
-    undecided_in::<true>(r12, q1, q2, extents)
+out_of_line! {
+    /// The verdict on a pair the axis test left open: the contact-point test at the λ̂ the
+    /// axis test's extents give (if they are in its range), then the bounded search.
+    ///
+    /// Out of line, and recomputing the little it shares with the axis test: inlined, the
+    /// values it needs stayed live across the axis test, and the common path (three pairs
+    /// in four) paid for spilling them to the stack: 30.4 ns per axis-decided pair with the
+    /// contact-point test inline, 27.1 ns out of line.
+    fn undecided(
+        r12: &[f64; 3],
+        q1: &Sym3,
+        q2: &Sym3,
+        extents: Option<[f64; 2]>,
+    ) -> Result<bool, Error> => undecided_in;
 }
 
 #[inline(always)]
@@ -170,25 +148,12 @@ fn undecided_in<const FMA: bool>(
     searched::<FMA>(r12, q1, q2)
 }
 
-/// The bounded search, and the full contact function if that does not decide either (one
-/// pair in 160 on the bench), out of line so that the contact-point test keeps its
-/// registers.
-#[cold]
-#[inline(never)]
-fn searched<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    #[cfg(target_arch = "x86_64")]
-    if FMA {
-        // SAFETY: as in `undecided`.
-        return unsafe { searched_avx2(r12, q1, q2) };
-    }
-    searched_in::<FMA>(r12, q1, q2)
-}
-
-/// [`searched`] compiled with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn searched_avx2(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    searched_in::<true>(r12, q1, q2)
+out_of_line! {
+    /// The bounded search, and the full contact function if that does not decide either
+    /// (one pair in 160 on the bench), out of line so that the contact-point test keeps its
+    /// registers.
+    #[cold]
+    fn searched(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> => searched_in;
 }
 
 #[inline(always)]
@@ -427,7 +392,7 @@ impl AxisTest {
 /// λ̂ = ρ₁/(ρ₁ + ρ₂) from the radial extents of the axis test (exact for spheres), i.e.
 /// Q(λ̂) ∝ M = ρ₂Q₁ + ρ₁Q₂, n = adj(M) r12 and x₀ − c₁ = (ρ₂/det M) Q₁ n. On the bench's
 /// pairs it decides 25 390 of the 26 009 the axis test leaves (97.6 %), the point with its
-/// slides 95.5 % of the overlapping ones; λ̂ = ½ decided 78.6 %, the point without slides
+/// slides 95.5 % of the overlapping ones; λ̂ = ½ decided 91.6 %, the point without slides
 /// 64.8 % of the overlapping.
 ///
 /// Rounding: the certificates are evaluated at the computed n and x₀, whatever their own
