@@ -726,6 +726,31 @@ mod tests {
         (None, test.claims::<FMA>(extents).verdict())
     }
 
+    /// A random pair (semi-axes 10^(−decades·U), U uniform, random orientations and
+    /// direction) with the centres placed so that μ² = `target(next)`, the whole
+    /// configuration then scaled by k (r by k, Q by k², which leaves μ² unchanged); and μ²
+    /// in double-double.
+    fn random_pair(
+        next: &mut impl FnMut() -> f64,
+        decades: f64,
+        k: f64,
+        target: impl FnOnce(&mut dyn FnMut() -> f64) -> f64,
+    ) -> ([f64; 3], Sym3, Sym3, f64) {
+        let mut ellipsoid = |decades: f64| {
+            let axes: [f64; 3] = core::array::from_fn(|_| 10f64.powf(-decades * next()));
+            let q: [f64; 4] = core::array::from_fn(|_| 2.0 * next() - 1.0);
+            crate::shape::from_axes_quaternion(&axes, &q).unwrap()
+        };
+        let (q1, q2) = (ellipsoid(decades), ellipsoid(decades));
+        let dir = [next() - 0.5, next() - 0.5, next() - 0.5];
+        let unit = crate::contact_function_refined(&dir, &q1, &q2).unwrap().mu2;
+        let target = target(next);
+        let r = dir.map(|x| x * (target / unit).sqrt() * k);
+        let (q1, q2) = (q1.map(|x| x * k * k), q2.map(|x| x * k * k));
+        let exact = crate::contact_function_refined(&r, &q1, &q2).unwrap().mu2;
+        (r, q1, q2, exact)
+    }
+
     fn axis_verdict(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Option<bool> {
         stage_verdicts::<false>(r12, q1, q2).0
     }
@@ -740,24 +765,13 @@ mod tests {
         let mut next = crate::test_rng::uniform_stream(0xC0417u64);
         let (mut open, mut decided, mut decided_scaled, mut decided_near) = (0, 0, 0, 0);
         for i in 0..40_000 {
-            let mut ellipsoid = |decades: f64| {
-                let axes: [f64; 3] = core::array::from_fn(|_| 10f64.powf(-decades * next()));
-                let q: [f64; 4] = core::array::from_fn(|_| 2.0 * next() - 1.0);
-                crate::shape::from_axes_quaternion(&axes, &q).unwrap()
-            };
             let decades = [0.0, 1.0, 2.0, 6.0][i % 4];
-            let (q1, q2) = (ellipsoid(decades), ellipsoid(decades));
-            let dir = [next() - 0.5, next() - 0.5, next() - 0.5];
-            let unit = crate::contact_function_refined(&dir, &q1, &q2).unwrap().mu2;
-            let target = match (i / 4) % 3 {
+            let k = [1.0, 1e-45, 1e45, 1e-25, 1e25][(i / 12) % 5];
+            let (r, q1, q2, exact) = random_pair(&mut next, decades, k, |next| match (i / 4) % 3 {
                 0 => 2f64.powf(0.6 * next() - 0.3),
                 1 => 1.0 + 0.1 * (next() - 0.5),
                 _ => 1.0 + 2e-9 * (next() - 0.5),
-            };
-            let k = [1.0, 1e-45, 1e45, 1e-25, 1e25][(i / 12) % 5];
-            let r = dir.map(|x| x * (target / unit).sqrt() * k);
-            let (q1, q2) = (q1.map(|x| x * k * k), q2.map(|x| x * k * k));
-            let exact = crate::contact_function_refined(&r, &q1, &q2).unwrap().mu2;
+            });
             let mut builds = vec![stage_verdicts::<false>(&r, &q1, &q2)];
             #[cfg(target_arch = "x86_64")]
             if crate::dispatch::has_avx2_fma() {
@@ -796,24 +810,12 @@ mod tests {
         let mut next = crate::test_rng::uniform_stream(0xA515u64);
         let (mut decided, mut decided_scaled, mut decided_spheres) = (0, 0, 0);
         for i in 0..20_000 {
-            let mut ellipsoid = |decades: f64| {
-                let axes: [f64; 3] = core::array::from_fn(|_| 10f64.powf(-decades * next()));
-                let q: [f64; 4] = core::array::from_fn(|_| 2.0 * next() - 1.0);
-                crate::shape::from_axes_quaternion(&axes, &q).unwrap()
-            };
             let decades = [0.0, 1.0, 4.0][i % 3];
-            let (q1, q2) = (ellipsoid(decades), ellipsoid(decades));
-            let dir = [next() - 0.5, next() - 0.5, next() - 0.5];
-            let unit = crate::contact_function_refined(&dir, &q1, &q2).unwrap().mu2;
-            let target = match i % 4 {
+            let k = [1.0, 1e-45, 1e45, 1e-25, 1e25][(i / 4) % 5];
+            let (r, q1, q2, exact) = random_pair(&mut next, decades, k, |next| match i % 4 {
                 0 | 1 => 2f64.powf(6.0 * next() - 3.0),
                 _ => 1.0 + 2e-9 * (next() - 0.5),
-            };
-            // Scaling r by k and Q by k² leaves μ² unchanged.
-            let k = [1.0, 1e-45, 1e45, 1e-25, 1e25][(i / 4) % 5];
-            let r = dir.map(|x| x * (target / unit).sqrt() * k);
-            let (q1, q2) = (q1.map(|x| x * k * k), q2.map(|x| x * k * k));
-            let exact = crate::contact_function_refined(&r, &q1, &q2).unwrap().mu2;
+            });
             if let Some(verdict) = axis_verdict(&r, &q1, &q2) {
                 assert!(
                     (exact - 1.0).abs() > 1e-13,
