@@ -13,7 +13,7 @@
 use crate::arith::Arith;
 use crate::contact::{
     Prepared, Scale4, check_positive_definite, depth_weighted, odds_amplification, odds_solution,
-    oriented, positive_definite4,
+    oriented, positive_definite4, refine,
 };
 use crate::dispatch::multiversion;
 use crate::error::Argument;
@@ -416,7 +416,7 @@ fn solve_x4<const FMA: bool>(
                 rational: lane_form(&lanes.alpha, &lanes.beta, k),
                 bound: lane_form(&lanes.bound_alpha, &lanes.bound_beta, k),
             };
-            out[k] = Ok(prepared.refine::<FMA>(|| exact(k), scale.lane(k)));
+            out[k] = Ok(refine::<FMA>(&prepared, || exact(k), scale.lane(k)));
             continue;
         }
         // Written where it is stored: a `Contact` merged from both paths was assembled on

@@ -31,7 +31,7 @@
 
 use crate::arith::{Arith, Dd, DdT, Mag};
 use crate::arith::{is_positive, select_gt, select_sign};
-use crate::dispatch::multiversion;
+use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
 use crate::poly::{OddsForm, OddsSearch, RationalForm, Search, coefficients_2d, pencil3};
 use crate::sym::{Sym2, Sym3, mat_vec};
@@ -177,8 +177,8 @@ pub(crate) fn exact_coefficients_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Rat
 /// As [`contact_function`].
 pub fn contact_function_refined(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
     let prepared = Prepared::new::<false>(r12, q1, q2)?;
-    Ok(match prepared.normalised() {
-        Some((scale, _)) => prepared.refine::<false>(|| exact_coefficients(r12, q1, q2), scale),
+    Ok(match Scale::of(&prepared.rational) {
+        Some(scale) => refine::<false>(&prepared, || exact_coefficients(r12, q1, q2), scale),
         None => Contact::COINCIDENT,
     })
 }
@@ -278,64 +278,16 @@ impl Prepared {
             return Ok(Contact::COINCIDENT);
         };
         let Some(tiny) = scale.moderate() else {
-            return self.normalised_contact::<FMA>(scale, exact);
+            return normalised_contact::<FMA>(self, scale, exact);
         };
         let Some(solution) = solve_odds::<FMA>(&Scale::UNIT.apply(&self.rational), tiny) else {
-            return self.lambda_contact::<FMA>(scale, exact);
+            return lambda_contact::<FMA>(self, scale, exact);
         };
         let (x, d) = solution.weighted_amplification::<FMA>(&self.bound, Scale::UNIT);
         if Self::needs_refinement((x, d)) {
-            return Ok(self.refine::<FMA>(exact, scale));
+            return Ok(refine::<FMA>(self, exact, scale));
         }
         Ok(Scale::UNIT.contact(&solution, Self::estimate(x / d), false))
-    }
-
-    /// [`Prepared::contact`] on the normalised form, for pairs whose coefficients are too
-    /// large or too small to be solved as they are (ellipsoids a million times smaller or
-    /// larger than unit size, say). Out of line, and in the AVX2 + FMA build compiled with
-    /// those features again: a function of its own does not inherit them.
-    #[inline(never)]
-    fn normalised_contact<const FMA: bool>(
-        &self,
-        scale: Scale,
-        exact: impl FnOnce() -> RationalForm,
-    ) -> Result<Contact, Error> {
-        #[cfg(target_arch = "x86_64")]
-        if FMA {
-            // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function,
-            // after the processor was checked to have both.
-            return unsafe { normalised_contact_avx2(self, scale, exact) };
-        }
-        self.normalised_contact_in::<FMA>(scale, exact)
-    }
-
-    #[inline(always)]
-    fn normalised_contact_in<const FMA: bool>(
-        &self,
-        scale: Scale,
-        exact: impl FnOnce() -> RationalForm,
-    ) -> Result<Contact, Error> {
-        let solution = solve::<FMA>(&scale.apply(&self.rational));
-        Ok(self.finish::<FMA>(scale, solution, exact))
-    }
-
-    /// [`Prepared::contact`] where the odds iteration gave up: the λ iteration on the
-    /// normalised form.
-    #[cold]
-    #[inline(never)]
-    fn lambda_contact<const FMA: bool>(
-        &self,
-        scale: Scale,
-        exact: impl FnOnce() -> RationalForm,
-    ) -> Result<Contact, Error> {
-        let solution = solve_lambda(&scale.apply(&self.rational));
-        Ok(self.finish::<FMA>(scale, solution, exact))
-    }
-
-    /// The normalised form to solve, or `None` when r12 = 0 (f ≡ 0).
-    #[inline(always)]
-    pub(crate) fn normalised(&self) -> Option<(Scale, RationalForm)> {
-        Scale::of(&self.rational).map(|s| (s, s.apply(&self.rational)))
     }
 
     /// μ² from the solution, after checking the error bound and, when it is too large,
@@ -349,66 +301,76 @@ impl Prepared {
     ) -> Contact {
         let (x, d) = solution.weighted_amplification::<FMA>(&self.bound, scale);
         if Self::needs_refinement((x, d)) {
-            return self.refine::<FMA>(exact, scale);
+            return refine::<FMA>(self, exact, scale);
         }
         scale.contact(&solution, Self::estimate(x / d), false)
     }
-
-    /// The rare path: re-solve with double-double coefficients. Kept out of line so that the
-    /// common path stays small.
-    #[cold]
-    #[inline(never)]
-    pub(crate) fn refine<const FMA: bool>(
-        &self,
-        exact: impl FnOnce() -> RationalForm,
-        fallback: Scale,
-    ) -> Contact {
-        // A function of its own is compiled without the AVX2 and FMA features of its
-        // caller; in that build it hands over to a twin compiled with them (without, each
-        // blend and fused multiply–add of the solve would be a call).
-        #[cfg(target_arch = "x86_64")]
-        if FMA {
-            // SAFETY: `FMA` is true only in the AVX2 + FMA build of a dispatched function,
-            // after the processor was checked to have both.
-            return unsafe { refine_avx2(self, exact, fallback) };
-        }
-        self.refine_in::<FMA>(exact, fallback)
-    }
-
-    #[inline(always)]
-    fn refine_in<const FMA: bool>(
-        &self,
-        exact: impl FnOnce() -> RationalForm,
-        fallback: Scale,
-    ) -> Contact {
-        let refined = exact();
-        let scale = Scale::of(&refined).unwrap_or(fallback);
-        let solution = solve::<FMA>(&scale.apply(&refined));
-        let estimate = GAMMA_DD * solution.amplification(&self.bound, scale) + EVAL;
-        scale.contact(&solution, estimate, true)
-    }
 }
 
-/// [`Prepared::refine`] compiled with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn refine_avx2(
-    prepared: &Prepared,
-    exact: impl FnOnce() -> RationalForm,
-    fallback: Scale,
-) -> Contact {
-    prepared.refine_in::<true>(exact, fallback)
+out_of_line! {
+    /// [`Prepared::contact`] on the normalised form, for pairs whose coefficients are too
+    /// large or too small to be solved as they are (ellipsoids a million times smaller or
+    /// larger than unit size, say).
+    fn normalised_contact(
+        prepared: &Prepared,
+        scale: Scale,
+        exact: impl FnOnce() -> RationalForm,
+    ) -> Result<Contact, Error> => normalised_contact_in;
 }
 
-/// [`Prepared::normalised_contact`] compiled with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn normalised_contact_avx2(
+#[inline(always)]
+fn normalised_contact_in<const FMA: bool>(
     prepared: &Prepared,
     scale: Scale,
     exact: impl FnOnce() -> RationalForm,
 ) -> Result<Contact, Error> {
-    prepared.normalised_contact_in::<true>(scale, exact)
+    let solution = solve::<FMA>(&scale.apply(&prepared.rational));
+    Ok(prepared.finish::<FMA>(scale, solution, exact))
+}
+
+out_of_line! {
+    /// [`Prepared::contact`] where the odds iteration gave up: the λ iteration on the
+    /// normalised form.
+    #[cold]
+    fn lambda_contact(
+        prepared: &Prepared,
+        scale: Scale,
+        exact: impl FnOnce() -> RationalForm,
+    ) -> Result<Contact, Error> => lambda_contact_in;
+}
+
+#[inline(always)]
+fn lambda_contact_in<const FMA: bool>(
+    prepared: &Prepared,
+    scale: Scale,
+    exact: impl FnOnce() -> RationalForm,
+) -> Result<Contact, Error> {
+    let solution = solve_lambda(&scale.apply(&prepared.rational));
+    Ok(prepared.finish::<FMA>(scale, solution, exact))
+}
+
+out_of_line! {
+    /// The rare path: re-solve with double-double coefficients. Kept out of line so that the
+    /// common path stays small.
+    #[cold]
+    pub(crate) fn refine(
+        prepared: &Prepared,
+        exact: impl FnOnce() -> RationalForm,
+        fallback: Scale,
+    ) -> Contact => refine_in;
+}
+
+#[inline(always)]
+fn refine_in<const FMA: bool>(
+    prepared: &Prepared,
+    exact: impl FnOnce() -> RationalForm,
+    fallback: Scale,
+) -> Contact {
+    let refined = exact();
+    let scale = Scale::of(&refined).unwrap_or(fallback);
+    let solution = solve::<FMA>(&scale.apply(&refined));
+    let estimate = GAMMA_DD * solution.amplification(&prepared.bound, scale) + EVAL;
+    scale.contact(&solution, estimate, true)
 }
 
 impl Contact {

@@ -7,28 +7,10 @@
 //! of the batched path fit one 256-bit register. Other architectures get the portable build.
 
 /// Defines `$name` as a dispatcher to `$body`, compiled with AVX2 + FMA when the processor
-/// has them. With `=> fused $body`, the body takes a `const FMA: bool` telling it whether
+/// has them. The body (`=> fused $body`) takes a `const FMA: bool` telling it whether
 /// fused multiply–adds are hardware instructions (true in the AVX2 + FMA build); without
 /// them `mul_add` would be a slow library call, so the portable build keeps `a * b + c`.
 macro_rules! multiversion {
-    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $body:path;) => {
-        $(#[$meta])*
-        $vis fn $name($($arg: $ty),*) -> $ret {
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx2,fma")]
-                fn with_avx2($($arg: $ty),*) -> $ret {
-                    $body($($arg),*)
-                }
-                if $crate::dispatch::has_avx2_fma() {
-                    // SAFETY: `with_avx2` only needs AVX2 and FMA, and the processor was just
-                    // checked to have both.
-                    return unsafe { with_avx2($($arg),*) };
-                }
-            }
-            $body($($arg),*)
-        }
-    };
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => fused $body:ident;) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) -> $ret {
@@ -57,10 +39,10 @@ pub(crate) use multiversion;
 /// is the AVX2 + FMA build of a dispatched function) it therefore hands over to a twin
 /// compiled with them.
 macro_rules! out_of_line {
-    ($(#[$meta:meta])* fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $body:ident;) => {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $body:ident;) => {
         $(#[$meta])*
         #[inline(never)]
-        fn $name<const FMA: bool>($($arg: $ty),*) -> $ret {
+        $vis fn $name<const FMA: bool>($($arg: $ty),*) -> $ret {
             #[cfg(target_arch = "x86_64")]
             if FMA {
                 #[target_feature(enable = "avx2,fma")]
