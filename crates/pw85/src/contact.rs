@@ -967,12 +967,23 @@ pub(crate) fn positive_definite4(
     det_magnitude: crate::lanes::V4,
 ) -> bool {
     (0..crate::lanes::LANES).fold(true, |all, k| {
-        let (q0, q1, q3) = (q[0].0[k], q[1].0[k], q[3].0[k]);
-        let minor = q0 * q3 - q1 * q1;
-        all & (q0 > 0.0)
-            & (minor > GAMMA_F64 * (q0 * q3 + q1 * q1))
-            & (det.0[k] > GAMMA_F64 * det_magnitude.0[k])
+        let det_floor = GAMMA_F64 * det_magnitude.0[k];
+        all & clearly_positive_definite([q[0].0[k], q[1].0[k], q[3].0[k]], det.0[k], det_floor)
     })
+}
+
+/// The cheap sufficient tests of [`check_positive_definite`] in one expression without
+/// branches: Q11 > 0, the leading 2×2 minor beyond its rounding bound, and det Q above
+/// `det_floor` (at least γ times a bound on its terms). Where they hold, the check returns
+/// `Ok` without its exact fallbacks. `q` is (Q11, Q12, Q22).
+#[inline(always)]
+pub(crate) fn clearly_positive_definite(
+    [q11, q12, q22]: [f64; 3],
+    det: f64,
+    det_floor: f64,
+) -> bool {
+    let minor = q11 * q22 - q12 * q12;
+    (q11 > 0.0) & (minor > GAMMA_F64 * (q11 * q22 + q12 * q12)) & (det > det_floor)
 }
 
 /// The largest power of two ≤ x and its reciprocal, for positive finite x; x itself and 1 / x

@@ -22,7 +22,7 @@ use crate::arith::Mag;
 use crate::arith::{is_positive, select_gt};
 use crate::contact::{
     Scale, Side, check_finite, check_inputs_finite, check_positive_definite,
-    check_positive_definite_2d, orient,
+    check_positive_definite_2d, clearly_positive_definite, orient,
 };
 use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
@@ -252,13 +252,11 @@ fn check_both_positive_definite(
     det: [f64; 2],
     diagonal_product: [f64; 2],
 ) -> Result<(), Error> {
+    // det > 1e-12 · 6 Q11 Q22 Q33 is where `det_magnitude` takes the cheap bound.
     let clear = |q: &Sym3, det: f64, p: f64| {
-        let minor2 = q[0] * q[3] - q[1] * q[1];
-        u8::from(q[0] > 0.0)
-            & u8::from(minor2 > GAMMA * (q[0] * q[3] + q[1] * q[1]))
-            & u8::from(det > 1e-12 * 6.0 * p)
+        clearly_positive_definite([q[0], q[1], q[3]], det, 1e-12 * 6.0 * p)
     };
-    if clear(q1, det[0], diagonal_product[0]) & clear(q2, det[1], diagonal_product[1]) == 1 {
+    if clear(q1, det[0], diagonal_product[0]) & clear(q2, det[1], diagonal_product[1]) {
         return Ok(());
     }
     check_each_positive_definite(q1, q2, det, diagonal_product)
