@@ -858,9 +858,8 @@ impl Scale {
     }
 }
 
-/// [`Scale::of`] for four lanes at once, from the lanes' largest α and β (`None` where one
-/// is not positive: r12 = 0); the same operations, so the same bits, without moving each
-/// lane's coefficients through memory.
+/// [`Scale::of`] for four lanes at once, from the lanes' largest α and β; the same
+/// operations, so the same bits, without moving each lane's coefficients through memory.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Scale4 {
     alpha: crate::lanes::V4,
@@ -871,7 +870,7 @@ pub(crate) struct Scale4 {
 
 impl Scale4 {
     /// The scales of the lanes' forms (α and β coefficients, one lane per pair), and which
-    /// lanes have one.
+    /// lanes have one (where [`Scale::of`] is not `None`; false for r12 = 0).
     #[inline(always)]
     pub(crate) fn of(
         alpha: &[crate::lanes::V4; 3],

@@ -96,13 +96,8 @@ fn invariant_under_rotation_scaling_swap_and_translation() {
             base.mu2
         );
 
-        let nu: f64 = rng.range(1e-3, 1e3);
-        let c = contact_function(
-            &r.map(|x| nu * x),
-            &q1.map(|x| nu * nu * x),
-            &q2.map(|x| nu * nu * x),
-        )
-        .unwrap();
+        let (r_nu, q1_nu, q2_nu) = scaled(rng.range(1e-3, 1e3), r, q1, q2);
+        let c = contact_function(&r_nu, &q1_nu, &q2_nu).unwrap();
         assert!(
             rel(c.mu2, base.mu2) < 1e-13,
             "scaling: {} vs {}",
@@ -486,6 +481,17 @@ fn halley_does_not_stop_where_the_derivative_vanishes() {
 /// change. The solver works on the coefficients as they are where their scale is moderate and
 /// normalises them where it is not; the two must give the same bits (the normalisation
 /// is exact too). ν = 2^±11 and beyond take the normalised path, 2^±5 the other.
+/// r scaled by ν and the two matrices by ν², in 3D or 2D.
+fn scaled<const D: usize, const S: usize>(
+    nu: f64,
+    r: [f64; D],
+    q1: [f64; S],
+    q2: [f64; S],
+) -> ([f64; D], [f64; S], [f64; S]) {
+    let square = |q: [f64; S]| q.map(|x| nu * nu * x);
+    (r.map(|x| nu * x), square(q1), square(q2))
+}
+
 #[test]
 fn power_of_two_scalings_give_the_same_bits() {
     let mut rng = Rng(0x5CA1E);
@@ -502,21 +508,13 @@ fn power_of_two_scalings_give_the_same_bits() {
         let base_2d = bits(contact_function_2d(&r2, &e1, &e2).unwrap());
         for k in [-60, -24, -11, -5, 5, 11, 24, 60] {
             let nu = 2f64.powi(k);
-            let (r, q1, q2) = (
-                r.map(|x| nu * x),
-                q1.map(|x| nu * nu * x),
-                q2.map(|x| nu * nu * x),
-            );
+            let (r, q1, q2) = scaled(nu, r, q1, q2);
             assert_eq!(
                 bits(contact_function(&r, &q1, &q2).unwrap()),
                 base,
                 "ν = 2^{k}"
             );
-            let (r2, e1, e2) = (
-                r2.map(|x| nu * x),
-                e1.map(|x| nu * nu * x),
-                e2.map(|x| nu * nu * x),
-            );
+            let (r2, e1, e2) = scaled(nu, r2, e1, e2);
             assert_eq!(
                 bits(contact_function_2d(&r2, &e1, &e2).unwrap()),
                 base_2d,
