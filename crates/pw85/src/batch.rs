@@ -224,12 +224,15 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
         valid: [false; LANES],
     };
     for (k, p) in pairs.iter().enumerate().take(LANES) {
-        let prepared = match Prepared::new_2d(&p.r12, &p.q1, &p.q2) {
-            Ok(prepared) => prepared,
-            Err(e) => {
-                out[k] = Err(e);
-                continue;
-            }
+        // Lanes outside the fast path's window, with NaN or ±∞, or refused as not positive
+        // definite get the scalar function (its rescue, its typed error).
+        let prepared = match crate::contact::inputs_finite_2d(&p.r12, &p.q1, &p.q2) {
+            Ok(true) => Prepared::new_2d(&p.r12, &p.q1, &p.q2).ok(),
+            _ => None,
+        };
+        let Some(prepared) = prepared else {
+            out[k] = crate::contact_function_2d(&p.r12, &p.q1, &p.q2);
+            continue;
         };
         let (r, b) = (prepared.rational, prepared.bound);
         for i in 0..3 {
@@ -259,8 +262,9 @@ const STAND_IN: Pair = Pair {
 
 #[inline(always)]
 fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    // The finiteness probe of `check_inputs_finite` (Σ (x − x), NaN for NaN and ±∞), four
-    // lanes at a time; a lane that fails it gets the scalar function and its typed error.
+    // The probe of `check_inputs_finite` (Σ (x·P − x·P), NaN for NaN, ±∞ and entries beyond
+    // the fast path's window), four lanes at a time; a lane that fails it gets the scalar
+    // function: its typed error, or its rescue of a pair at extreme scales.
     let inputs = |p: &Pair| -> [f64; 15] {
         core::array::from_fn(|i| match i {
             0..3 => p.r12[i],
@@ -271,7 +275,7 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
     let all: [[f64; 15]; LANES] = core::array::from_fn(|k| inputs(&pairs[k]));
     #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
     let probe = (0..15).fold(V4::from_fn(|_| 0.0), |acc, i| {
-        let x = V4::from_fn(|k| all[k][i]);
+        let x = V4::from_fn(|k| all[k][i] * crate::extreme::PROBE);
         acc + (x - x)
     });
     let finite: [bool; LANES] = core::array::from_fn(|k| probe.0[k] == 0.0);
@@ -300,8 +304,10 @@ fn contact_x4_portable<const FMA: bool>(pairs: &[Pair], out: &mut [Result<Contac
                 .and_then(|()| {
                     check_positive_definite(Argument::Q2, &p.q2, c.beta[3].0[k], m.1[3].0[k])
                 });
-            if let Err(e) = checked {
-                out[k] = Err(e);
+            if checked.is_err() {
+                // The scalar function's error, or its answer where the refusal came from an
+                // underflow or overflow of the determinants.
+                out[k] = crate::contact_function(&p.r12, &p.q1, &p.q2);
                 valid[k] = false;
             }
         }
@@ -352,12 +358,14 @@ fn solve_x4<const FMA: bool>(
     scalar: impl Fn(usize) -> Result<Contact, Error>,
     exact: impl Fn(usize) -> RationalForm,
 ) {
-    // r12 = 0 (no scale) in a valid lane: μ² = 0.
+    // A valid lane without a scale (r12 = 0, or coefficients that underflowed) or with one
+    // near the subnormal range gets the scalar function, which tells the two apart.
     let (scales, positive) = Scale4::of(&lanes.alpha, &lanes.beta);
-    let live: [bool; LANES] = core::array::from_fn(|k| lanes.valid[k] && positive[k]);
+    let live: [bool; LANES] =
+        core::array::from_fn(|k| lanes.valid[k] && positive[k] && scales.lane(k).is_normal());
     for k in 0..LANES {
-        if lanes.valid[k] && !positive[k] {
-            out[k] = Ok(Contact::COINCIDENT);
+        if lanes.valid[k] && !live[k] {
+            out[k] = scalar(k);
         }
     }
     let Some(first) = live.iter().position(|&l| l) else {

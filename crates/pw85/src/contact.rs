@@ -142,7 +142,34 @@ pub(crate) fn contact_function_portable<const FMA: bool>(
     q1: &Sym3,
     q2: &Sym3,
 ) -> Result<Contact, Error> {
-    Prepared::new::<FMA>(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2))
+    if !check_inputs_finite::<FMA>(r12, q1, q2)? {
+        return crate::extreme::contact_function(r12, q1, q2);
+    }
+    match Prepared::new::<FMA>(r12, q1, q2) {
+        Ok(prepared) => prepared.contact::<FMA>(
+            || exact_coefficients(r12, q1, q2),
+            || crate::extreme::rescue(r12, q1, q2),
+        ),
+        Err(e) => crate::extreme::after_error(e, r12, q1, q2),
+    }
+}
+
+multiversion! {
+    /// [`contact_function`] without the rescue of pairs outside the fast path's window: the
+    /// kernel that [`crate::extreme`] runs on the rescaled pair (dispatched like
+    /// [`contact_function`], so that a rescaled pair gives the same bits).
+    pub(crate) fn contact_function_unrescued(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error>
+        => fused contact_function_unrescued_portable;
+}
+
+#[inline(always)]
+fn contact_function_unrescued_portable<const FMA: bool>(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+) -> Result<Contact, Error> {
+    check_inputs_finite::<FMA>(r12, q1, q2)?;
+    Prepared::new::<FMA>(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2), || None)
 }
 
 multiversion! {
@@ -176,6 +203,21 @@ pub(crate) fn exact_coefficients_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Rat
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_function_refined(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
+    check_inputs_finite::<false>(r12, q1, q2)?;
+    if crate::extreme::within_window(r12, q1, q2) {
+        contact_function_refined_unrescued(r12, q1, q2)
+    } else {
+        crate::extreme::contact_function_refined(r12, q1, q2)
+    }
+}
+
+/// [`contact_function_refined`] without the rescue of pairs outside the window.
+pub(crate) fn contact_function_refined_unrescued(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+) -> Result<Contact, Error> {
+    check_inputs_finite::<false>(r12, q1, q2)?;
     let prepared = Prepared::new::<false>(r12, q1, q2)?;
     Ok(match Scale::of(&prepared.rational) {
         Some(scale) => refine::<false>(&prepared, || exact_coefficients(r12, q1, q2), scale),
@@ -214,7 +256,7 @@ impl Prepared {
         !matches!(within, Some(Less | Equal))
     }
 
-    /// Validates and computes the coefficients; `FMA` says whether this is the AVX2 + FMA
+    /// Validates (the inputs' finiteness is the caller's) and computes the coefficients; `FMA` says whether this is the AVX2 + FMA
     /// build of a dispatched function (which selects the vector-register form of the
     /// four-lane pass, [`crate::lanes::Ends4Avx`]).
     #[inline(always)]
@@ -223,7 +265,6 @@ impl Prepared {
         q1: &Sym3,
         q2: &Sym3,
     ) -> Result<Self, Error> {
-        check_inputs_finite::<FMA>(r12, q1, q2)?;
         // The coefficients and their error bound in one pass (four SIMD lanes).
         #[cfg(target_arch = "x86_64")]
         let (rational, bound) = if FMA {
@@ -240,11 +281,9 @@ impl Prepared {
         Ok(Self { rational, bound })
     }
 
+    /// The ellipses' twin of [`Prepared::new`] (the inputs' finiteness is the caller's).
     #[inline(always)]
     pub(crate) fn new_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Self, Error> {
-        check_finite(Argument::R12, r12)?;
-        check_finite(Argument::Q1, q1)?;
-        check_finite(Argument::Q2, q2)?;
         check_positive_definite_2d(Argument::Q1, q1)?;
         check_positive_definite_2d(Argument::Q2, q2)?;
         Ok(Self {
@@ -270,14 +309,22 @@ impl Prepared {
     /// with a 16-byte load across two 8-byte stores, which store forwarding cannot serve
     /// (the load waits until the stores have retired and reached the cache).
     #[inline(always)]
+    ///
+    /// `rescue` is asked where the coefficients may have under- or overflowed (no scale, or
+    /// one far from 1): `Some` answer from [`crate::extreme`] when the inputs lie outside the
+    /// window where the coefficients are exact, `None` when the answer here stands.
     pub(crate) fn contact<const FMA: bool>(
         &self,
         exact: impl FnOnce() -> RationalForm,
+        rescue: impl FnOnce() -> Option<Result<Contact, Error>>,
     ) -> Result<Contact, Error> {
         let Some(scale) = Scale::of(&self.rational) else {
-            return Ok(Contact::COINCIDENT);
+            return rescue().unwrap_or(Ok(Contact::COINCIDENT));
         };
         let Some(tiny) = scale.moderate() else {
+            if let Some(rescued) = rescue() {
+                return rescued;
+            }
             return normalised_contact::<FMA>(self, scale, exact);
         };
         let Some(solution) = solve_odds::<FMA>(&Scale::UNIT.apply(&self.rational), tiny) else {
@@ -397,7 +444,53 @@ pub(crate) fn contact_function_2d_portable<const FMA: bool>(
     q1: &Sym2,
     q2: &Sym2,
 ) -> Result<Contact, Error> {
-    Prepared::new_2d(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients_2d(r12, q1, q2))
+    if !inputs_finite_2d(r12, q1, q2)? {
+        return crate::extreme::contact_function_2d(r12, q1, q2);
+    }
+    match Prepared::new_2d(r12, q1, q2) {
+        Ok(prepared) => prepared.contact::<FMA>(
+            || exact_coefficients_2d(r12, q1, q2),
+            || crate::extreme::rescue_2d(r12, q1, q2),
+        ),
+        Err(e) => crate::extreme::after_error_2d(e, r12, q1, q2),
+    }
+}
+
+multiversion! {
+    /// [`contact_function_2d`] without the rescue of pairs outside the window (see
+    /// [`contact_function_unrescued`]).
+    pub(crate) fn contact_function_2d_unrescued(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
+        => fused contact_function_2d_unrescued_portable;
+}
+
+#[inline(always)]
+fn contact_function_2d_unrescued_portable<const FMA: bool>(
+    r12: &[f64; 2],
+    q1: &Sym2,
+    q2: &Sym2,
+) -> Result<Contact, Error> {
+    inputs_finite_2d(r12, q1, q2)?;
+    Prepared::new_2d(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients_2d(r12, q1, q2), || None)
+}
+
+/// The ellipses' twin of [`check_inputs_finite`]: `Ok(true)` inside the fast path's window,
+/// `Ok(false)` for finite entries beyond it, the typed error for NaN or ±∞.
+#[inline(always)]
+pub(crate) fn inputs_finite_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
+    #[allow(clippy::eq_op)] // x·P − x·P: NaN for NaN, ±∞ and entries beyond the window.
+    let d = |x: f64| {
+        let y = x * crate::extreme::PROBE;
+        y - y
+    };
+    if (d(r12[0]) + d(q1[0]) + d(q2[0])) + (d(r12[1]) + d(q1[1]) + d(q2[1])) + (d(q1[2]) + d(q2[2]))
+        == 0.0
+    {
+        return Ok(true);
+    }
+    check_finite(Argument::R12, r12)?;
+    check_finite(Argument::Q1, q1)?;
+    check_finite(Argument::Q2, q2)?;
+    Ok(false)
 }
 
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
@@ -717,11 +810,16 @@ pub(crate) fn solve_odds<const FMA: bool>(
 #[cold]
 #[inline(never)]
 pub(crate) fn solve_lambda(r: &RationalForm) -> Solution {
-    let t0 = r.initial_guess();
-    let (form, mut search, reversed) = if t0 > 0.5 {
-        (r.reversed(), Search::new(1.0 - t0), true)
+    // The sphere start λ = 1 / (1 + ρ) with ρ = ρ₂/ρ₁, taken at the end it lies near: for
+    // ρ < 1 the reversed form starts from 1 − λ = ρ / (1 + ρ) itself, which keeps its digits
+    // where λ rounds to 1 (a second ellipsoid 1e16 times smaller than the first).
+    let ratio = r.sphere_ratio();
+    let (form, mut search, reversed) = if !(ratio > 0.0 && ratio < f64::INFINITY) {
+        (*r, Search::new(0.5), false)
+    } else if ratio < 1.0 {
+        (r.reversed(), Search::new(ratio / (1.0 + ratio)), true)
     } else {
-        (*r, Search::new(t0), false)
+        (*r, Search::new(1.0 / (1.0 + ratio)), false)
     };
     while !search.done {
         form.search_step(&mut search);
@@ -822,6 +920,14 @@ impl Scale {
         let within = |x: f64, e: u64| x >= power(1023 - e) && x <= power(1023 + e);
         (within(self.alpha, 500) && within(self.beta, 500) && within(product, 128))
             .then(|| crate::poly::Tiny::scaled(product))
+    }
+
+    /// Whether both powers are far from the subnormal range (2⁻⁹⁰⁰ and above), where the
+    /// coefficients kept their precision.
+    #[inline(always)]
+    pub(crate) fn is_normal(&self) -> bool {
+        const SMALLEST: f64 = f64::from_bits((1023 - 900) << 52);
+        self.alpha >= SMALLEST && self.beta >= SMALLEST
     }
 
     /// The powers of two that α and β were divided by.
@@ -1002,20 +1108,24 @@ fn power_of_two_below(x: f64) -> (f64, f64) {
     }
 }
 
-/// All fifteen inputs finite, checked in one pass (x − x is NaN exactly for NaN and ±∞, and a
-/// sum is NaN iff a term is); the slow search for the culprit runs only when the check fails.
+/// All fifteen inputs finite and inside the fast path's window, checked in one pass
+/// (x·P − x·P is NaN exactly for NaN, ±∞ and |x| beyond 2^241, with P = [`crate::extreme::PROBE`],
+/// and a sum is NaN iff a term is): `Ok(true)`. The slow search for a culprit runs only when
+/// the check fails: the typed error for NaN or ±∞, `Ok(false)` for finite entries beyond the
+/// window (answered by [`crate::extreme`]).
 #[inline(always)]
 pub(crate) fn check_inputs_finite<const FMA: bool>(
     r12: &[f64; 3],
     q1: &Sym3,
     q2: &Sym3,
-) -> Result<(), Error> {
+) -> Result<bool, Error> {
     if all_finite::<FMA>(r12, q1, q2) {
-        return Ok(());
+        return Ok(true);
     }
     check_finite(Argument::R12, r12)?;
     check_finite(Argument::Q1, q1)?;
-    check_finite(Argument::Q2, q2)
+    check_finite(Argument::Q2, q2)?;
+    Ok(false)
 }
 
 /// The probe of [`check_inputs_finite`]. In the AVX2 build the fifteen differences are four
@@ -1029,16 +1139,18 @@ fn all_finite<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> bool {
         // the processor was checked to have AVX2. Every load reads inside its array: [0, 4)
         // and [2, 6) of the six entries, [0, 2) and [2] of r12.
         return unsafe {
+            let probe = _mm256_set1_pd(crate::extreme::PROBE);
             let d4 = |p: *const f64| {
-                let x = _mm256_loadu_pd(p);
+                let x = _mm256_mul_pd(_mm256_loadu_pd(p), probe);
                 _mm256_sub_pd(x, x)
             };
             let q = _mm256_add_pd(
                 _mm256_add_pd(d4(q1.as_ptr()), d4(q1.as_ptr().add(2))),
                 _mm256_add_pd(d4(q2.as_ptr()), d4(q2.as_ptr().add(2))),
             );
-            let r = _mm_loadu_pd(r12.as_ptr());
-            let r2 = _mm_load_sd(r12.as_ptr().add(2));
+            let probe2 = _mm_set1_pd(crate::extreme::PROBE);
+            let r = _mm_mul_pd(_mm_loadu_pd(r12.as_ptr()), probe2);
+            let r2 = _mm_mul_sd(_mm_load_sd(r12.as_ptr().add(2)), probe2);
             let r = _mm_add_pd(_mm_sub_pd(r, r), _mm_sub_pd(r2, r2));
             let s = _mm_add_pd(
                 _mm_add_pd(_mm256_castpd256_pd128(q), _mm256_extractf128_pd::<1>(q)),
@@ -1048,8 +1160,11 @@ fn all_finite<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> bool {
             _mm_movemask_pd(_mm_cmp_pd::<_CMP_ORD_Q>(s, s)) == 0b11
         };
     }
-    #[allow(clippy::eq_op)] // x − x is the point: NaN for NaN and ±∞, 0 otherwise.
-    let d = |x: f64| x - x;
+    #[allow(clippy::eq_op)] // x·P − x·P is the point: NaN for NaN, ±∞ and huge x, 0 otherwise.
+    let d = |x: f64| {
+        let y = x * crate::extreme::PROBE;
+        y - y
+    };
     // Four independent chains: fewer dependent additions than one.
     let chains: [f64; 4] = [
         d(r12[0]) + d(q1[2]) + d(q1[5]) + d(q2[3]),

@@ -55,6 +55,7 @@ pub mod batch;
 mod contact;
 mod dispatch;
 mod error;
+mod extreme;
 #[cfg(feature = "nalgebra")]
 pub mod interop;
 mod lanes;

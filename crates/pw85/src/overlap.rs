@@ -21,8 +21,8 @@
 use crate::arith::Mag;
 use crate::arith::{is_positive, select_gt};
 use crate::contact::{
-    Scale, Side, check_finite, check_inputs_finite, check_positive_definite,
-    check_positive_definite_2d, clearly_positive_definite, orient,
+    Scale, Side, check_inputs_finite, check_positive_definite, check_positive_definite_2d,
+    clearly_positive_definite, orient,
 };
 use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
@@ -72,14 +72,18 @@ multiversion! {
 
 #[inline(always)]
 fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    check_inputs_finite::<FMA>(r12, q1, q2)?;
+    if !check_inputs_finite::<FMA>(r12, q1, q2)? {
+        return crate::extreme::overlap(r12, q1, q2);
+    }
     let adj1 = adjugate_generic(q1);
     let adj2 = adjugate_generic(q2);
     let det1 = det_generic(q1, &adj1);
     let det2 = det_generic(q2, &adj2);
     // Q11 Q22 Q33 bounds each of the six terms of det Q (|Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ)).
     let (p1, p2) = (q1[0] * q1[3] * q1[5], q2[0] * q2[3] * q2[5]);
-    check_both_positive_definite(q1, q2, [det1, det2], [p1, p2])?;
+    if let Err(e) = check_both_positive_definite(q1, q2, [det1, det2], [p1, p2]) {
+        return crate::extreme::after_error(e, r12, q1, q2).map(|c| c.mu2 < 1.0);
+    }
 
     let rr = outer_generic::<f64>(r12);
     let axis = AxisTest {
@@ -211,11 +215,14 @@ fn overlap_2d_portable<const FMA: bool>(
     q1: &Sym2,
     q2: &Sym2,
 ) -> Result<bool, Error> {
-    check_finite(Argument::R12, r12)?;
-    check_finite(Argument::Q1, q1)?;
-    check_finite(Argument::Q2, q2)?;
-    check_positive_definite_2d(Argument::Q1, q1)?;
-    check_positive_definite_2d(Argument::Q2, q2)?;
+    if !crate::contact::inputs_finite_2d(r12, q1, q2)? {
+        return crate::extreme::overlap_2d(r12, q1, q2);
+    }
+    if let Err(e) = check_positive_definite_2d(Argument::Q1, q1)
+        .and_then(|()| check_positive_definite_2d(Argument::Q2, q2))
+    {
+        return crate::extreme::after_error_2d(e, r12, q1, q2).map(|c| c.mu2 < 1.0);
+    }
     let r2 = r12[0] * r12[0] + r12[1] * r12[1];
     let (det1, det2) = (q1[0] * q1[2] - q1[1] * q1[1], q2[0] * q2[2] - q2[1] * q2[1]);
     // In 2D, λmin = det / λmax ≥ det / tr.

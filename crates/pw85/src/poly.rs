@@ -266,9 +266,14 @@ impl RationalForm {
     /// whose radii are the radial extents ρᵢ = (r̂ᵀ Qᵢ⁻¹ r̂)^(−1/2) of the ellipsoids along r12,
     /// λ = ρ₁ / (ρ₁ + ρ₂), with ρ₂/ρ₁ = sqrt((α₀/β₀)/(α₂/β₃)).
     pub fn initial_guess(&self) -> f64 {
-        let ratio = (self.alpha[0] * self.beta[3] / (self.alpha[2] * self.beta[0])).sqrt();
-        let t = 1.0 / (1.0 + ratio);
+        let t = 1.0 / (1.0 + self.sphere_ratio());
         if t > 0.0 && t < 1.0 { t } else { 0.5 }
+    }
+
+    /// ρ₂/ρ₁ = sqrt((α₀/β₀)/(α₂/β₃)) of [`RationalForm::initial_guess`] (NaN or ±∞ for a
+    /// degenerate form).
+    pub(crate) fn sphere_ratio(&self) -> f64 {
+        (self.alpha[0] * self.beta[3] / (self.alpha[2] * self.beta[0])).sqrt()
     }
 }
 

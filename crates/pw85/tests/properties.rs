@@ -599,3 +599,380 @@ fn batch_equals_scalar_bit_for_bit_on_extreme_pairs() {
     // The set exercises the rare paths, not only the ordinary one.
     assert!(refined > 100, "only {refined} refined pairs");
 }
+
+/// x · 2^e for any e (two steps where 2^e alone is not a double): exact unless the result
+/// overflows or is subnormal.
+fn times_power_of_two(x: f64, e: i32) -> f64 {
+    let half = e / 2;
+    x * 2f64.powi(half) * 2f64.powi(e - half)
+}
+
+/// The checks of one scaled pair against its unscaled contact `base`: μ² scaled by 2^`mu2_shift`
+/// exactly (or +∞ with the verdict "apart" beyond the double range, or within the subnormal
+/// range's absolute resolution with the verdict "overlap"), λ bit-identical, and `overlap`
+/// agreeing.
+/// Whether every entry survives x → x · 2^e → x (no rounding into the subnormal range): then
+/// the scaled pair is exactly the scaled geometry.
+fn exactly_scaled(xs: &[f64], e: i32) -> bool {
+    xs.iter()
+        .all(|&x| times_power_of_two(times_power_of_two(x, e), -e) == x)
+}
+
+fn assert_scaled(
+    what: &str,
+    base: pw85::Contact,
+    mu2_shift: i32,
+    contact: Result<pw85::Contact, Error>,
+    verdict: Result<bool, Error>,
+) {
+    let c = contact.unwrap_or_else(|e| panic!("{what}: {e}"));
+    let v = verdict.unwrap_or_else(|e| panic!("{what}: overlap: {e}"));
+    let expected = times_power_of_two(base.mu2, mu2_shift);
+    assert!(!c.mu2.is_nan(), "{what}: NaN");
+    if expected >= f64::MIN_POSITIVE {
+        assert_eq!(
+            c.mu2.to_bits(),
+            expected.to_bits(),
+            "{what}: μ² {} vs {expected}",
+            c.mu2
+        );
+        assert_eq!(c.lambda.to_bits(), base.lambda.to_bits(), "{what}: λ");
+    } else {
+        assert!(
+            (c.mu2 - expected).abs() <= f64::MIN_POSITIVE,
+            "{what}: μ² {} vs {expected}",
+            c.mu2
+        );
+    }
+    if expected == f64::INFINITY {
+        assert!(!v, "{what}: an infinite μ² is apart");
+    }
+    if (expected - 1.0).abs() > 1e-12 {
+        assert_eq!(v, expected < 1.0, "{what}: verdict at μ² = {expected}");
+    }
+}
+
+/// μ² is invariant under r12 → ν r12, Q → ν² Q, and scales as s² under r12 → s r12: with powers
+/// of two both are exact, so every finite double gives the unscaled pair's bits (scaled), or
+/// +∞ / a subnormal where the true μ² leaves the double range. Uniform scalings across
+/// 2^±500 (ν² = 2^±1000), r12 alone across 2^±1000, both matrices alone across 2^±1000; the
+/// scalar, overlap, 2D and batch forms.
+#[test]
+fn every_power_of_two_scaling_across_the_double_range_is_exact() {
+    let mut rng = Rng(0x0E87_E0E5);
+    let mut pairs = Vec::new();
+    let mut pairs_2d = Vec::new();
+    for i in 0..120 {
+        let decades = [0.5, 2.0, 4.0][i % 3];
+        let (q1, q2) = (rng.ellipsoid(decades), rng.ellipsoid(decades));
+        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let base = contact_function(&r, &q1, &q2).unwrap();
+        let angle = rng.range(0.0, 6.3);
+        let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
+        let e2 = from_axes_angle_2d(&[0.3, 0.2], -angle).unwrap();
+        let r2 = [r[0], r[1]];
+        let base_2d = contact_function_2d(&r2, &e1, &e2).unwrap();
+        for k in [
+            -500, -400, -300, -241, -200, -120, 120, 200, 241, 300, 400, 500,
+        ] {
+            let exact = exactly_scaled(&r, k)
+                && exactly_scaled(&q1, 2 * k)
+                && exactly_scaled(&q2, 2 * k)
+                && exactly_scaled(&e1, 2 * k)
+                && exactly_scaled(&e2, 2 * k);
+            if !exact {
+                continue;
+            }
+            let nu = times_power_of_two(1.0, k);
+            let (rs, a, b) = scaled(nu, r, q1, q2);
+            let what = format!("pair {i}, ν = 2^{k}");
+            assert_scaled(
+                &what,
+                base,
+                0,
+                contact_function(&rs, &a, &b),
+                overlap(&rs, &a, &b),
+            );
+            let (rs2, a2, b2) = scaled(nu, r2, e1, e2);
+            assert_scaled(
+                &format!("2D {what}"),
+                base_2d,
+                0,
+                contact_function_2d(&rs2, &a2, &b2),
+                overlap_2d(&rs2, &a2, &b2),
+            );
+            pairs.push(pw85::batch::Pair {
+                r12: rs,
+                q1: a,
+                q2: b,
+            });
+            pairs_2d.push(pw85::batch::Pair2d {
+                r12: rs2,
+                q1: a2,
+                q2: b2,
+            });
+        }
+        for k in [
+            -1000, -700, -540, -300, -100, 100, 300, 511, 512, 513, 700, 1000,
+        ] {
+            if !(exactly_scaled(&r, k)
+                && exactly_scaled(&q1, k)
+                && exactly_scaled(&q2, k)
+                && exactly_scaled(&r2, k))
+            {
+                continue;
+            }
+            let rs = r.map(|x| times_power_of_two(x, k));
+            let what = format!("pair {i}, r12 · 2^{k}");
+            assert_scaled(
+                &what,
+                base,
+                2 * k,
+                contact_function(&rs, &q1, &q2),
+                overlap(&rs, &q1, &q2),
+            );
+            let (a, b) = (
+                q1.map(|x| times_power_of_two(x, k)),
+                q2.map(|x| times_power_of_two(x, k)),
+            );
+            let what = format!("pair {i}, Q · 2^{k}");
+            assert_scaled(
+                &what,
+                base,
+                -k,
+                contact_function(&r, &a, &b),
+                overlap(&r, &a, &b),
+            );
+            let rs2 = r2.map(|x| times_power_of_two(x, k));
+            assert_scaled(
+                &format!("2D {what}"),
+                base_2d,
+                2 * k,
+                contact_function_2d(&rs2, &e1, &e2),
+                overlap_2d(&rs2, &e1, &e2),
+            );
+            pairs.push(pw85::batch::Pair { r12: rs, q1, q2 });
+            pairs_2d.push(pw85::batch::Pair2d {
+                r12: rs2,
+                q1: e1,
+                q2: e2,
+            });
+        }
+    }
+    // Most scalings keep every input bit (the others are skipped above).
+    assert!(pairs.len() > 2000, "{} scaled pairs", pairs.len());
+    // The batches: the scalar function's bits, lane by lane, whatever their neighbours.
+    let batch = pw85::batch::contact_functions(&pairs);
+    let batch_2d = pw85::batch::contact_functions_2d(&pairs_2d);
+    let verdicts = pw85::batch::overlaps(&pairs);
+    for (k, p) in pairs.iter().enumerate() {
+        let scalar = contact_function(&p.r12, &p.q1, &p.q2).unwrap();
+        let lane = batch[k].unwrap();
+        assert_eq!(lane.mu2.to_bits(), scalar.mu2.to_bits(), "batch lane {k}");
+        assert_eq!(
+            lane.lambda.to_bits(),
+            scalar.lambda.to_bits(),
+            "batch lane {k}"
+        );
+        assert_eq!(
+            verdicts[k],
+            overlap(&p.r12, &p.q1, &p.q2),
+            "batch verdict {k}"
+        );
+        let p2 = &pairs_2d[k];
+        let scalar_2d = contact_function_2d(&p2.r12, &p2.q1, &p2.q2).unwrap();
+        assert_eq!(
+            batch_2d[k].unwrap().mu2.to_bits(),
+            scalar_2d.mu2.to_bits(),
+            "2D lane {k}"
+        );
+    }
+}
+
+/// The cases of the issue that found the double range's edges, with their closed forms: unit
+/// spheres 1e155·√2 apart (μ² beyond the double range: +∞, apart), spheres of radius 1e-52 at
+/// 3e-52, and spheres whose Q is 1e±104, 1e±110, 1e±308 times the identity.
+#[test]
+fn spheres_at_the_edges_of_the_double_range() {
+    let sphere = |q: f64| [q, 0.0, 0.0, q, 0.0, q];
+    let unit = sphere(1.0);
+    for r in [
+        [1e155, 1e155, 0.0],
+        [1e155, 0.0, 0.0],
+        [1e300, 0.0, 0.0],
+        [f64::MAX, f64::MAX, f64::MAX],
+    ] {
+        let c = contact_function(&r, &unit, &unit).unwrap();
+        assert_eq!(c.mu2, f64::INFINITY, "{r:?}");
+        assert!(!overlap(&r, &unit, &unit).unwrap(), "{r:?}");
+    }
+    for (radius, distance) in [
+        (1e-52, 3e-52),
+        (1e52, 3e52),
+        (1e-154, 3e-154),
+        (1e154, 3e154),
+        (1e-160, 1e-161),
+    ] {
+        let q = sphere(radius * radius);
+        let r = [distance, 0.0, 0.0];
+        // From the stored Q (a subnormal radius² keeps only part of its digits).
+        let exact = (distance / (2.0 * q[0].sqrt())).powi(2);
+        let c = contact_function(&r, &q, &q).unwrap();
+        assert!(
+            rel(c.mu2, exact) < 1e-13,
+            "radius {radius:e}: μ² = {} vs {exact}",
+            c.mu2
+        );
+        assert_eq!(overlap(&r, &q, &q).unwrap(), exact < 1.0);
+        let q2d = [q[0], 0.0, q[0]];
+        let c = contact_function_2d(&[distance, 0.0], &q2d, &q2d).unwrap();
+        assert!(
+            rel(c.mu2, exact) < 1e-13,
+            "2D radius {radius:e}: μ² = {}",
+            c.mu2
+        );
+    }
+    for s in [1e104, 1e-110, 1e308, 1e-308, f64::MAX, f64::MIN_POSITIVE] {
+        let q = sphere(s);
+        let r = [3.0 * s.sqrt(), 0.0, 0.0];
+        let c = contact_function(&r, &q, &q).unwrap_or_else(|e| panic!("Q = {s:e} I: {e}"));
+        assert!(rel(c.mu2, 2.25) < 1e-13, "Q = {s:e} I: μ² = {}", c.mu2);
+        assert!(!overlap(&r, &q, &q).unwrap());
+    }
+}
+
+/// A second ellipsoid 10^k times smaller than the first, k up to 150 (and the first one
+/// smaller): μ² = d² / (R1 + R2)² to 1e-13 at every ratio. The λ iteration used to start from
+/// λ = 1 / (1 + ρ) rounded to 1 and stopped at λ = 1 − 2⁻²⁷ from k = 16 on.
+#[test]
+fn size_ratios_up_to_1e150_keep_mu2_exact() {
+    for k in 0..=150 {
+        let rho = 10f64.powi(-k);
+        let (big, small) = (
+            [1.0, 0.0, 0.0, 1.0, 0.0, 1.0],
+            [rho * rho, 0.0, 0.0, rho * rho, 0.0, rho * rho],
+        );
+        let exact = 9.0 / ((1.0 + rho) * (1.0 + rho));
+        let r = [3.0, 0.0, 0.0];
+        for (what, q1, q2) in [("small second", big, small), ("small first", small, big)] {
+            let c = contact_function(&r, &q1, &q2).unwrap_or_else(|e| panic!("10^-{k}: {e}"));
+            assert!(
+                rel(c.mu2, exact) < 1e-13,
+                "{what}, 10^-{k}: μ² = {} vs {exact}",
+                c.mu2
+            );
+            assert!(!overlap(&r, &q1, &q2).unwrap());
+        }
+        let (b2, s2) = ([1.0, 0.0, 1.0], [rho * rho, 0.0, rho * rho]);
+        let c = contact_function_2d(&[3.0, 0.0], &b2, &s2).unwrap();
+        assert!(rel(c.mu2, exact) < 1e-13, "2D 10^-{k}: μ² = {}", c.mu2);
+    }
+}
+
+/// Valid matrices whose determinants leave the double range are not refused: positive
+/// definiteness is decided on each matrix balanced by its own diagonal. A matrix that is not
+/// positive definite is still refused at every scale, naming the failing minor.
+#[test]
+fn positive_definiteness_is_decided_whatever_the_units() {
+    let r = [1.0, 0.5, 0.25];
+    for e in [-1000, -600, -300, 300, 600, 1000] {
+        let s = times_power_of_two(1.0, e);
+        let q: Sym3 = [2.0, 0.5, 0.1, 1.0, 0.2, 3.0].map(|x| x * s);
+        let rs = r.map(|x| x * times_power_of_two(1.0, e / 2));
+        let c = contact_function(&rs, &q, &q).unwrap_or_else(|err| panic!("2^{e}: {err}"));
+        assert!(c.mu2.is_finite() && c.mu2 > 0.0, "2^{e}");
+        let not: Sym3 = [1.0, 2.0, 0.0, 1.0, 0.0, 1.0].map(|x| x * s);
+        let err = contact_function(&rs, &q, &not).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                Error::NotPositiveDefinite {
+                    argument: Argument::Q2,
+                    minor: 2,
+                    ..
+                }
+            ),
+            "2^{e}: {err}"
+        );
+        assert_eq!(overlap(&rs, &q, &not).unwrap_err(), err);
+    }
+    // Axes 2^±300 apart on the axes: det Q = 2^−1200 · … underflows, the matrix is valid.
+    let q: Sym3 = [
+        times_power_of_two(1.0, 600),
+        0.0,
+        0.0,
+        times_power_of_two(1.0, -600),
+        0.0,
+        1.0,
+    ];
+    let c = contact_function(&[0.0, 0.0, 4.0], &q, &q).unwrap();
+    assert!(rel(c.mu2, 4.0) < 1e-13, "μ² = {}", c.mu2);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Random finite doubles of every exponent into every entry: never a panic, never NaN;
+    /// an answer or a typed refusal, the verdict agreeing with μ², and the answer unchanged
+    /// (to the bit) under a uniform power-of-two rescaling that keeps the pair representable.
+    #[test]
+    fn finite_doubles_of_every_exponent(
+        mantissas in prop::array::uniform15(-1.0f64..1.0),
+        exponents in prop::array::uniform15(-340i32..340),
+        shift in -120i32..120,
+    ) {
+        let x: [f64; 15] = core::array::from_fn(|i| times_power_of_two(mantissas[i], exponents[i]));
+        let r = [x[0], x[1], x[2]];
+        let q1: Sym3 = core::array::from_fn(|i| x[3 + i]);
+        let q2: Sym3 = core::array::from_fn(|i| x[9 + i]);
+        let c = contact_function(&r, &q1, &q2);
+        let v = overlap(&r, &q1, &q2);
+        prop_assert_eq!(c.is_ok(), v.is_ok());
+        if let (Ok(c), Ok(v)) = (c, v) {
+            prop_assert!(c.mu2 >= 0.0, "μ² = {}", c.mu2);
+            prop_assert!((0.0..=1.0).contains(&c.lambda));
+            if (c.mu2 - 1.0).abs() > 1e-9 {
+                prop_assert_eq!(v, c.mu2 < 1.0);
+            }
+            let (rs, a, b) = scaled(times_power_of_two(1.0, shift), r, q1, q2);
+            let s = contact_function(&rs, &a, &b).unwrap();
+            if c.mu2 >= f64::MIN_POSITIVE && c.mu2 < f64::INFINITY {
+                prop_assert!(rel(s.mu2, c.mu2) < 1e-13, "2^{}: {} vs {}", shift, s.mu2, c.mu2);
+            }
+        }
+        let r2 = [x[0], x[1]];
+        let (e1, e2) = ([x[3], x[4], x[5]], [x[9], x[10], x[11]]);
+        if let Ok(c) = contact_function_2d(&r2, &e1, &e2) {
+            prop_assert!(c.mu2 >= 0.0 && (0.0..=1.0).contains(&c.lambda));
+        }
+    }
+
+    /// Valid ellipsoids of every size: axes 2^[−330, 330) each, any orientation, any
+    /// separation: always an answer, never a refusal.
+    #[test]
+    fn valid_ellipsoids_of_every_size_are_answered(
+        e1 in prop::array::uniform3(-100i32..100),
+        e2 in prop::array::uniform3(-100i32..100),
+        size in prop::array::uniform2(-230i32..230),
+        quat1 in prop::array::uniform4(-1f64..1.0),
+        quat2 in prop::array::uniform4(-1f64..1.0),
+        r in prop::array::uniform3(-1f64..1.0),
+        r_exponent in -600i32..600,
+    ) {
+        prop_assume!(quat1.iter().any(|x| x.abs() > 1e-3) && quat2.iter().any(|x| x.abs() > 1e-3));
+        // Aspect ratios up to 2^20 within an ellipsoid (beyond, the rounded Q may not be
+        // positive definite), any size ratio.
+        let axes = |e: [i32; 3], s: i32| e.map(|k| times_power_of_two(1.0, k / 10 + s));
+        let q1 = from_axes_quaternion(&axes(e1, size[0]), &quat1).unwrap();
+        let q2 = from_axes_quaternion(&axes(e2, size[1]), &quat2).unwrap();
+        let rs = r.map(|x| times_power_of_two(x, r_exponent));
+        let c = contact_function(&rs, &q1, &q2);
+        prop_assert!(c.is_ok(), "{:?}", c);
+        let c = c.unwrap();
+        prop_assert!(c.mu2 >= 0.0 && !c.mu2.is_nan());
+        let v = overlap(&rs, &q1, &q2).unwrap();
+        if (c.mu2 - 1.0).abs() > 1e-9 {
+            prop_assert_eq!(v, c.mu2 < 1.0);
+        }
+    }
+}
