@@ -176,6 +176,17 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             outcome.restarts, scene.solver.restart_after
         );
     }
+    let limit = options
+        .time_limit
+        .unwrap_or(scene.solver.time_limit)
+        .as_secs_f64();
+    if outcome.start_kept && outcome.seconds_to_best >= limit {
+        println!(
+            "the time limit ({limit:.3e} s) is shorter than building and certifying the start \
+             took ({:.3} s): give at least that for any local minimisation",
+            outcome.seconds_to_best
+        );
+    }
     if outcome.start_kept {
         println!(
             "no local minimisation found a denser certified packing than the start{}: wrote \

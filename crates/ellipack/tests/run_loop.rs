@@ -127,6 +127,24 @@ fn a_time_limit_inside_the_first_local_minimisation_still_writes_a_certified_pac
         // The lattice start alone has density 0.857: a run never writes less.
         assert!(density(&out) > 0.85, "{limit}: density {}", density(&out));
     }
+    // A limit shorter than building and certifying the start: the start is written, and the
+    // printout says how long it needed.
+    let out = dir.join("out-tiny");
+    let o = pack(&[
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--time-limit",
+        "1e-6",
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    assert!(
+        stdout.contains("is shorter than building and certifying the start took"),
+        "{stdout}"
+    );
+    assert!(verify(&out).0);
+    assert!(density(&out) > 0.85);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
