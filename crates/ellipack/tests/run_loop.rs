@@ -236,7 +236,7 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
     let (scene, out) = finished_run(&dir);
     let start = density(&out);
     let mut kept = false;
-    for limit in ["0.02", "0.05", "0.1", "0.2", "0.4"] {
+    for limit in ["1e-6", "0.02", "0.05", "0.1", "0.2", "0.4"] {
         let before = density(&out);
         let o = pack(&[
             scene.to_str().unwrap(),
@@ -258,6 +258,7 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
         assert!(certified, "{limit}: {report}");
     }
     assert!(density(&out) >= start);
+    // At least the run stopped before its first local minimisation keeps its start.
     assert!(kept, "a short resumed run keeps its start and says so");
     std::fs::remove_dir_all(&dir).unwrap();
 }
