@@ -1,6 +1,8 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
-use ellipack::pack::{RunOptions, run, verify as check};
+use ellipack::pack::{
+    RunOptions, probe_output_folder, resume_start, run, time_limit_of, verify as check,
+};
 use ellipack::packing::{read_packing_dir, read_packing_files, write_files};
 use ellipack::render::{RenderOptions, write_pictures};
 use ellipack::scene::Scene;
@@ -47,21 +49,14 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         .clone()
         .or_else(|| scene.output.directory.clone())
         .unwrap_or_else(|| PathBuf::from("out"));
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let time_limit = match args.time_limit {
-        Some(t) if !(t.is_finite() && t > 0.0) => {
-            return Err(
-                format!("--time-limit must be a positive number of seconds, got {t}").into(),
-            );
-        }
-        Some(t) => Some(Duration::from_secs_f64(t)),
-        None => None,
-    };
+    let time_limit = args.time_limit.map(time_limit_of).transpose()?;
     let resume_from = if args.resume {
-        Some(read_packing_dir(&out)?.0)
+        Some(resume_start(&scene, &out)?)
     } else {
         None
     };
+    // Before the run: a folder found unwritable afterwards would lose the packing.
+    probe_output_folder(&out)?;
     let options = RunOptions {
         time_limit,
         seed: args.seed,
@@ -72,7 +67,10 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let interrupted = Arc::new(AtomicBool::new(false));
     {
         let flag = Arc::clone(&interrupted);
-        // Without a handler (another one already installed) Ctrl-C simply ends the process.
+        // Ctrl-C, SIGTERM and SIGHUP (the `termination` feature of ctrlc: what `timeout`,
+        // Slurm, systemd and a closed terminal send) all stop the run, which then writes its
+        // best certified packing. Without a handler (another one already installed) a signal
+        // simply ends the process.
         let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     }
     // indicatif draws nothing when stderr is not a terminal.
@@ -176,6 +174,28 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         println!(
             "{} new chains from fresh lattice starts (after {} starts without improvement)",
             outcome.restarts, scene.solver.restart_after
+        );
+    }
+    let limit = options
+        .time_limit
+        .unwrap_or(scene.solver.time_limit)
+        .as_secs_f64();
+    if outcome.start_kept && outcome.seconds_to_best >= limit {
+        println!(
+            "the time limit ({limit:.3e} s) is shorter than building and certifying the start \
+             took ({:.3} s): give at least that for any local minimisation",
+            outcome.seconds_to_best
+        );
+    }
+    if outcome.start_kept {
+        println!(
+            "no local minimisation found a denser certified packing than the start{}: wrote \
+             the start",
+            if args.resume {
+                " (the resumed packing)"
+            } else {
+                ""
+            }
         );
     }
     if outcome.failed_starts > 0 {

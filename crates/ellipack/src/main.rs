@@ -24,8 +24,14 @@ enum Command {
     /// (2, 1) in a minimum-area ellipse, 45 s).
     ///
     /// Writes packing.csv, summary.json, packing.xyz, packing.svg and packing.png in the
-    /// output folder. Ctrl-C stops and writes the best certified packing found so far; with
-    /// --resume, a run starts from the packing already in the folder.
+    /// output folder, which is checked for writing before the run begins. Every run ends with
+    /// a certified packing: the start is one, and the best so far is kept. Ctrl-C, SIGTERM and
+    /// SIGHUP stop the run and write the best certified packing found so far; with --resume, a
+    /// run starts from the (certified) packing already in the folder and never writes a worse
+    /// one.
+    ///
+    /// Exit status: 0 a certified packing was written (the run finished, reached its time
+    /// limit or was stopped by a signal); 1 an error, nothing written; 2 bad arguments.
     Pack {
         /// The scene (TOML): dimension, container, shape groups, solver settings, seed.
         scene: Option<PathBuf>,
@@ -35,7 +41,7 @@ enum Command {
         /// Output folder (created if needed). Default: the scene's, else `out`.
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Wall-clock limit in seconds (overrides the scene's).
+        /// Wall-clock limit in seconds (overrides the scene's; positive, at most 1.8e19).
         #[arg(long)]
         time_limit: Option<f64>,
         /// Seed of the multi-start perturbations (overrides the scene's).

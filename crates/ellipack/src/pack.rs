@@ -11,11 +11,14 @@ use crate::packing::{
     PackingError, Summary,
 };
 use crate::scene::Scene;
-use implicit_packing::containment::ContainerKind as ModelContainer;
+use implicit_packing::containment::{
+    Container as ContainerShape, ContainerKind as ModelContainer, containment_residual,
+};
 use implicit_packing::model::Problem;
 use implicit_packing::multistart::{MultiStartProgress, MultiStartSettings, multistart};
 use implicit_packing::pack::{LocalSettings, contact_mu2, lattice_start};
 use implicit_packing::shape::{Body, angles_from_rotation, rotation_from_quaternion};
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Why a run or a check failed.
@@ -30,6 +33,154 @@ pub enum PackError {
     /// A packing given to resume from does not match the scene.
     #[error("cannot resume: {0}")]
     Mismatch(String),
+    /// The folder to resume from holds a packing in another kind of container than the scene's.
+    #[error(
+        "cannot resume from {summary}: its container is {found}, but the scene ({scene}) has \
+         {expected}"
+    )]
+    ContainerMismatch {
+        /// The folder's `summary.json`.
+        summary: PathBuf,
+        /// The container kind of the folder.
+        found: ContainerKind,
+        /// The container kind of the scene.
+        expected: ContainerKind,
+        /// The scene's title.
+        scene: String,
+    },
+    /// The packing to resume from is not a certified packing.
+    #[error("cannot resume: the packing to resume from is not certified: {0}")]
+    StartNotCertified(StartDefects),
+    /// The output folder cannot be created or written to.
+    #[error("the output folder {path} is not writable: {source}")]
+    OutputFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the file system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A time limit that is not a positive number of seconds a clock can count to.
+    #[error(
+        "the time limit must be a positive number of seconds, at most {max:.3e} (about 585 \
+         billion years), not {seconds:e}",
+        max = Duration::MAX.as_secs_f64()
+    )]
+    TimeLimit {
+        /// The seconds given.
+        seconds: f64,
+    },
+}
+
+/// What makes a packing to resume from uncertified: the items that overlap and those that
+/// stick out (ids are the rows' ids in `packing.csv`, counted from 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartDefects {
+    /// Overlapping pairs `(i, j, μ²)` (μ² < 1; `None` where PW85 gave no value).
+    pub overlapping: Vec<(usize, usize, Option<f64>)>,
+    /// Items outside the container, each with the factor by which the container would have
+    /// to grow about its centre to hold it (`None` where no finite factor was found).
+    pub outside: Vec<(usize, Option<f64>)>,
+}
+
+/// How many overlapping pairs and items outside a message lists before it says "and n more".
+const LISTED: usize = 8;
+
+impl std::fmt::Display for StartDefects {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut parts = Vec::new();
+        if !self.overlapping.is_empty() {
+            let mut list: Vec<String> = self
+                .overlapping
+                .iter()
+                .take(LISTED)
+                .map(|&(i, j, mu2)| match mu2 {
+                    Some(m) => format!("{i} and {j} (μ² = {m:.6})"),
+                    None => format!("{i} and {j}"),
+                })
+                .collect();
+            if self.overlapping.len() > LISTED {
+                list.push(format!("and {} more", self.overlapping.len() - LISTED));
+            }
+            parts.push(format!(
+                "{} overlapping pairs: items {}",
+                self.overlapping.len(),
+                list.join(", ")
+            ));
+        }
+        if !self.outside.is_empty() {
+            let mut list: Vec<String> = self
+                .outside
+                .iter()
+                .take(LISTED)
+                .map(|&(i, factor)| match factor {
+                    Some(s) => format!("{i} (the container would have to grow by {:.3e})", s - 1.0),
+                    None => format!("{i}"),
+                })
+                .collect();
+            if self.outside.len() > LISTED {
+                list.push(format!("and {} more", self.outside.len() - LISTED));
+            }
+            parts.push(format!(
+                "{} items outside the container: {}",
+                self.outside.len(),
+                list.join(", ")
+            ));
+        }
+        write!(f, "{}", parts.join("; "))
+    }
+}
+
+/// Converts a time limit in seconds, refusing what is not positive or beyond a [`Duration`]
+/// (which would otherwise panic).
+///
+/// # Errors
+/// [`PackError::TimeLimit`] for zero, negative, NaN, infinite or too large values.
+pub fn time_limit_of(seconds: f64) -> Result<Duration, PackError> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(PackError::TimeLimit { seconds });
+    }
+    Duration::try_from_secs_f64(seconds).map_err(|_| PackError::TimeLimit { seconds })
+}
+
+/// Makes sure the output folder can be written before a run spends its time: creates it,
+/// then creates and removes a probe file in it.
+///
+/// # Errors
+/// [`PackError::OutputFolder`] naming the folder.
+pub fn probe_output_folder(path: &Path) -> Result<(), PackError> {
+    let error = |source| PackError::OutputFolder {
+        path: path.to_path_buf(),
+        source,
+    };
+    std::fs::create_dir_all(path).map_err(error)?;
+    let probe = path.join(format!(".ellipack-probe-{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(error)?;
+    std::fs::remove_file(&probe).map_err(error)
+}
+
+/// Reads the packing to resume from in `folder` (`packing.csv` and `summary.json`) and checks
+/// that its container is of the scene's kind; [`run`] checks the items and the certificate.
+///
+/// # Errors
+/// Errors of reading the files ([`PackError::Packing`]), and
+/// [`PackError::ContainerMismatch`].
+pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, PackError> {
+    let (packing, _) = crate::packing::read_packing_dir(folder)?;
+    let found = packing.container.kind();
+    if found != scene.container {
+        return Err(PackError::ContainerMismatch {
+            summary: folder.join(crate::packing::SUMMARY_FILE),
+            found,
+            expected: scene.container,
+            scene: scene.title(),
+        });
+    }
+    Ok(packing)
 }
 
 /// Command-line overrides of the scene's settings.
@@ -64,6 +215,10 @@ pub struct RunOutcome {
     pub failed_starts: usize,
     /// New chains begun from fresh lattice starts (`solver.restart_after`).
     pub restarts: usize,
+    /// Density of the start (the lattice start, or the packing resumed from).
+    pub start_density: Option<f64>,
+    /// Whether the packing is the start itself: no local minimisation found a denser one.
+    pub start_kept: bool,
 }
 
 /// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
@@ -96,9 +251,30 @@ fn run_n<const N: usize>(
     let kind = model_container(scene.container);
     let problem = Problem::<N>::new(axes.to_vec(), kind)?;
     let x0 = match &options.resume_from {
-        Some(packing) => variables_of::<N>(packing, axes, kind)?,
+        Some(packing) => {
+            if packing.container.kind() != scene.container {
+                return Err(PackError::Mismatch(format!(
+                    "the packing's container is {}, the scene's {}",
+                    packing.container.kind(),
+                    scene.container
+                )));
+            }
+            variables_of::<N>(packing, axes, kind)?
+        }
         None => lattice_start(&problem),
     };
+    // A resumed run keeps its start as the packing to beat, so the start must be certified.
+    let mut problem = problem;
+    if options.resume_from.is_some() {
+        let certificate = problem.certify(&x0)?;
+        if !certificate.is_feasible() {
+            return Err(PackError::StartNotCertified(start_defects::<N>(
+                &mut problem,
+                &x0,
+                &certificate,
+            )?));
+        }
+    }
     let threads = match options.threads.unwrap_or(scene.solver.threads) {
         0 => std::thread::available_parallelism().map_or(1, usize::from),
         n => n,
@@ -134,7 +310,6 @@ fn run_n<const N: usize>(
         time_limit: Some(options.time_limit.unwrap_or(scene.solver.time_limit)),
     };
     let result = multistart(axes, kind, &x0, &settings, progress, observe, interrupt)?;
-    let mut problem = problem;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(
         &packing,
@@ -162,6 +337,61 @@ fn run_n<const N: usize>(
         interrupted: result.interrupted,
         failed_starts: result.failed_starts,
         restarts: result.restarts,
+        start_density: result.start_density,
+        start_kept: result.start_kept,
+    })
+}
+
+/// The overlapping pairs (with μ²) and the items outside (with the container growth that
+/// would hold each) of an uncertified point.
+fn start_defects<const N: usize>(
+    problem: &mut Problem<N>,
+    x: &[f64],
+    certificate: &implicit_packing::model::Certificate,
+) -> Result<StartDefects, PackError> {
+    let bodies = problem.bodies_at(x)?.to_vec();
+    let overlapping = certificate
+        .overlapping_pairs
+        .iter()
+        .map(|&(i, j)| (i, j, contact_mu2(&bodies[i], &bodies[j])))
+        .collect();
+    let dims = &x[problem.len() * Problem::<N>::vars_per_body()..];
+    let kind = problem.container_kind();
+    let inside_at = |i: usize, s: f64| -> Option<bool> {
+        let scaled: Vec<f64> = dims.iter().map(|d| d * s).collect();
+        let container = ContainerShape::<N>::from_dimensions(kind, &scaled).ok()?;
+        Some(containment_residual(&bodies[i], &container) == 0.0)
+    };
+    // The least growth factor by bisection: containment only improves as the container grows
+    // about its centre, so the factor is well defined; past 2^40 the item is given up on.
+    let growth = |i: usize| -> Option<f64> {
+        let mut hi = 2.0;
+        while !inside_at(i, hi)? {
+            hi *= 2.0;
+            if hi > 2f64.powi(40) {
+                return None;
+            }
+        }
+        let mut lo = 1.0;
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if inside_at(i, mid)? {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(hi)
+    };
+    let outside = certificate
+        .outside
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| (i, if k < LISTED { growth(i) } else { None }))
+        .collect();
+    Ok(StartDefects {
+        overlapping,
+        outside,
     })
 }
 
@@ -334,7 +564,10 @@ fn variables_of<const N: usize>(
         Items::Ellipses(v) if N == 2 => {
             for (i, e) in v.iter().enumerate() {
                 if !same(&e.semi_axes, &axes[i]) {
-                    return Err(PackError::Mismatch(format!("item {i} has other semi-axes")));
+                    return Err(PackError::Mismatch(format!(
+                        "item {i} has semi-axes {:?} in the packing, {:?} in the scene",
+                        e.semi_axes, axes[i]
+                    )));
                 }
                 x.extend([e.center[0] - centre[0], e.center[1] - centre[1], e.theta]);
             }
@@ -342,7 +575,10 @@ fn variables_of<const N: usize>(
         Items::Ellipsoids(v) if N == 3 => {
             for (i, e) in v.iter().enumerate() {
                 if !same(&e.semi_axes, &axes[i]) {
-                    return Err(PackError::Mismatch(format!("item {i} has other semi-axes")));
+                    return Err(PackError::Mismatch(format!(
+                        "item {i} has semi-axes {:?} in the packing, {:?} in the scene",
+                        e.semi_axes, axes[i]
+                    )));
                 }
                 let r = rotation_from_quaternion(e.quaternion)?;
                 let angles = angles_from_rotation(&r);

@@ -31,7 +31,7 @@ use crate::containment::ContainerKind;
 use crate::error::Error;
 use crate::lattice::{LatticeStart, lattice_start_of};
 use crate::model::Problem;
-use crate::pack::{LocalResult, LocalSettings, lattice_start, local_minimisation};
+use crate::pack::{LocalResult, LocalSettings, certified_start, lattice_start, local_minimisation};
 use std::time::{Duration, Instant};
 
 /// Settings of a multi-start run.
@@ -107,7 +107,8 @@ pub struct MultiStartResult {
     /// The best certified packing.
     pub best: LocalResult,
     /// Local minimisations completed (a start cut off by the time limit or an interrupt is
-    /// not counted, except the first, whose packing is returned if nothing better exists).
+    /// not counted, except the first; 0 when the run stopped before the first began or the
+    /// first ended at a point that could not be certified).
     pub local_minimisations: usize,
     /// Starts abandoned because their local minimisation ended at a point that could not be
     /// certified (an item's centre outside the container, which no dilation repairs).
@@ -120,10 +121,17 @@ pub struct MultiStartResult {
     pub wall_time: Duration,
     /// Whether the run stopped because `interrupt` asked it to.
     pub interrupted: bool,
+    /// Density of the start, when it is a certified packing as it is.
+    pub start_density: Option<f64>,
+    /// Whether the best packing is the start itself: no local minimisation found a denser
+    /// certified packing.
+    pub start_kept: bool,
 }
 
 /// Runs the multi-start from `x0` (for example [`lattice_start`], or a packing read back to
-/// resume a run). `progress` sees every finished local minimisation, in start order;
+/// resume a run). When `x0` is itself a certified packing it is the first best packing
+/// ([`certified_start`]): the result is never less dense than the start, and a run stopped
+/// at any moment has a certified packing to return. `progress` sees every finished local minimisation, in start order;
 /// `observe` sees the solver's progress inside every local minimisation, from whichever thread
 /// runs it; `interrupt` is polled often and stops the run, keeping the best packing found.
 ///
@@ -143,20 +151,73 @@ pub fn multistart<const N: usize>(
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     let stop = || interrupt() || out_of_time();
     let mut problem = Problem::<N>::new(semi_axes.to_vec(), kind)?;
-    let first = local_minimisation(&mut problem, x0, &settings.local, &mut |p| {
-        observe(p);
-        stop()
-    })?;
-    let mut done = 1;
-    let mut time_to_best = start.elapsed();
-    progress(&MultiStartProgress {
-        local_minimisations: done,
-        best_density: first.density,
-        last_density: first.density,
-        elapsed: time_to_best,
-    });
-    let mut current = first.x.clone();
+    // A certified start is the first best packing: whatever happens to the first local
+    // minimisation (cut off by the time limit at a point no dilation repairs, or ending worse
+    // than a packing it resumes from), the run has a certified packing at every moment.
+    let start_result = certified_start(&mut problem, x0)?.ok();
+    let start_density = start_result.as_ref().map(|r| r.density);
+    let start_ready = start.elapsed();
     let mut failed_starts = 0;
+    let mut done = 0;
+    let first = if stop() {
+        None
+    } else {
+        let result = local_minimisation(&mut problem, x0, &settings.local, &mut |p| {
+            observe(p);
+            stop()
+        });
+        match result {
+            Ok(r) => Some(r),
+            Err(e) if start_result.is_none() => return Err(e),
+            Err(_) => {
+                failed_starts += 1;
+                None
+            }
+        }
+    };
+    let mut time_to_best = start.elapsed();
+    let first = match (first, start_result) {
+        (Some(first), Some(given)) => {
+            done = 1;
+            let best_density = first.density.max(given.density);
+            progress(&MultiStartProgress {
+                local_minimisations: done,
+                best_density,
+                last_density: first.density,
+                elapsed: time_to_best,
+            });
+            if first.density > given.density {
+                first
+            } else {
+                time_to_best = start_ready;
+                given
+            }
+        }
+        (Some(first), None) => {
+            done = 1;
+            progress(&MultiStartProgress {
+                local_minimisations: done,
+                best_density: first.density,
+                last_density: first.density,
+                elapsed: time_to_best,
+            });
+            first
+        }
+        (None, Some(given)) => {
+            time_to_best = start_ready;
+            given
+        }
+        (None, None) => {
+            // Only reachable when the start is not certified and the run was stopped before
+            // its first local minimisation: nothing certified exists to return.
+            return Err(Error::Solver(
+                "stopped before the first local minimisation, and the start is not a \
+                 certified packing"
+                    .into(),
+            ));
+        }
+    };
+    let mut current = first.x.clone();
     // Starts cut off by the time limit or an interrupt; they still advance the start index.
     let mut cut_off = 0;
     let mut chain = Chain::new(&first);
@@ -164,7 +225,7 @@ pub fn multistart<const N: usize>(
     let threads = settings.threads.max(1);
     while done < settings.max_local_minimisations && !stop() {
         let round = threads.min(settings.max_local_minimisations - done);
-        let started = done + failed_starts + cut_off;
+        let started = (done + failed_starts + cut_off).max(1);
         let restart = settings.from_best
             && settings.restart_after > 0
             && chain.stale >= settings.restart_after;
@@ -254,8 +315,11 @@ pub fn multistart<const N: usize>(
             current = r.x;
         }
     }
+    let start_kept = start_density.is_some() && best.x == x0;
     Ok(MultiStartResult {
         best,
+        start_density,
+        start_kept,
         local_minimisations: done,
         failed_starts,
         restarts: chain.restarts,
@@ -581,7 +645,7 @@ mod tests {
     }
 
     #[test]
-    fn interrupt_keeps_the_first_packing() {
+    fn an_interrupt_before_the_first_local_minimisation_keeps_the_start() {
         let axes = vec![[2.0, 1.0]; 8];
         let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
         let r = multistart(
@@ -594,7 +658,33 @@ mod tests {
             &|| true,
         )
         .unwrap();
-        assert!(r.interrupted && r.local_minimisations == 1);
+        assert!(r.interrupted && r.local_minimisations == 0);
+        assert!(r.start_kept && r.best.x == x0);
+        assert!(r.best.certificate.is_feasible());
+    }
+
+    #[test]
+    fn a_first_local_minimisation_cut_off_early_keeps_a_denser_start() {
+        let axes = vec![[2.0, 1.0]; 8];
+        let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        // Stopped at its first iteration, the first local minimisation returns a repaired
+        // point near the start; whichever is denser is the best, and it is certified.
+        let r = multistart(
+            &axes,
+            ContainerKind::Ball,
+            &x0,
+            &MultiStartSettings::paper(2, 1),
+            &mut |_| {},
+            &|_| {
+                calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            },
+            &|| calls.load(std::sync::atomic::Ordering::SeqCst) > 0,
+        )
+        .unwrap();
+        let start = r.start_density.unwrap();
+        assert!(r.best.density >= start, "{} < {start}", r.best.density);
+        assert_eq!(r.start_kept, r.best.x == x0);
         assert!(r.best.certificate.is_feasible());
     }
 }

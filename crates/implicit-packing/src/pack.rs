@@ -244,6 +244,61 @@ pub fn local_minimisation<const N: usize>(
     Ok(best.result)
 }
 
+/// The start `x` as a result of its own, without minimising, when it is certified as it is
+/// (no overlap, every item inside): a lattice start is, and so is a packing read back from a
+/// finished run. `Ok(Err(certificate))` says what is wrong with a start that is not.
+///
+/// A run keeps this as its first best packing, so that it ends with a certified packing even
+/// when its first local minimisation is cut off before it converges, and a resumed run never
+/// writes a packing worse than the one it started from.
+///
+/// # Errors
+/// [`Error::LengthMismatch`] when `x` does not fit the problem; errors of the model on
+/// non-finite variables.
+pub fn certified_start<const N: usize>(
+    problem: &mut Problem<N>,
+    x: &[f64],
+) -> Result<Result<LocalResult, Certificate>, Error> {
+    if x.len() != problem.var_count() {
+        return Err(Error::LengthMismatch {
+            what: "initial point",
+            expected: problem.var_count(),
+            found: x.len(),
+        });
+    }
+    let certificate = problem.certify(x)?;
+    if !certificate.is_feasible() {
+        return Ok(Err(certificate));
+    }
+    let objective = problem.evaluate(x, None)?.objective;
+    let density = item_measure(problem) / objective;
+    Ok(Ok(LocalResult {
+        x: x.to_vec(),
+        density,
+        density_before_repair: density,
+        repair_factor: 1.0,
+        objective,
+        certificate,
+        // No solver ran: no iterations, no evaluations beyond the certificate's.
+        report: Report {
+            stop_reason: auglag::StopReason::Interrupted,
+            outer_iterations: 0,
+            inner_iterations: 0,
+            function_evaluations: 0,
+            gradient_evaluations: 0,
+            constraint_evaluations: 0,
+            infeasibility: 0.0,
+            complementarity: 0.0,
+            projected_gradient_norm: 0.0,
+            penalty: 0.0,
+            objective,
+            best_feasible_objective: Some(objective),
+            returned_best_feasible: false,
+            wall_time: std::time::Duration::ZERO,
+        },
+    }))
+}
+
 /// Ten times the extent of the start (its farthest centre plus its largest container
 /// dimension): the box the centres are kept in during a local minimisation.
 fn centre_bound<const N: usize>(x0: &[f64]) -> f64 {

@@ -1,0 +1,375 @@
+//! The packing run loop end to end: signals, the anytime property, the output folder checked
+//! before the run, `--resume` and time limits.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn ellipack() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ellipack"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ellipack-run-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A 2D scene of `count` ellipses (2, 1) in a circle, one thread, no pictures.
+fn scene(dir: &Path, count: usize, time_limit: f64, extra: &str) -> PathBuf {
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "dimension = 2\nseed = 1\n[container]\nkind = \"circle\"\n[[shapes]]\n\
+             count = {count}\nsemi_axes = [2.0, 1.0]\n[solver]\ntime_limit = {time_limit:?}\n\
+             threads = 1\n{extra}[output]\npictures = false\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// `ellipack verify` on a folder: its output, and whether it certified the packing.
+fn verify(out: &Path) -> (bool, String) {
+    let o = ellipack().arg("verify").arg(out).output().unwrap();
+    (o.status.success(), text(&o.stdout) + &text(&o.stderr))
+}
+
+fn density(out: &Path) -> f64 {
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let value: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    value["density"].as_f64().unwrap()
+}
+
+fn pack(args: &[&str]) -> Output {
+    ellipack().arg("pack").args(args).output().unwrap()
+}
+
+/// Starts a run that would last a minute, sends `signal` once it is under way, and checks
+/// that the run stops soon, exits with status 0 and leaves a packing `verify` certifies.
+fn stops_on(signal: &str) {
+    let dir = temp_dir(&format!("signal-{signal}"));
+    let scene = scene(&dir, 40, 60.0, "");
+    let out = dir.join("out");
+    let child = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let sent = Instant::now();
+    let kill = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let output = child.wait_with_output().unwrap();
+    let stdout = text(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{signal}: {stdout}{}",
+        text(&output.stderr)
+    );
+    assert!(
+        sent.elapsed() < Duration::from_secs(15),
+        "{signal}: the run did not stop"
+    );
+    assert!(stdout.contains("(interrupted)"), "{signal}: {stdout}");
+    let (certified, report) = verify(&out);
+    assert!(certified, "{signal}: {report}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sigterm_stops_the_run_and_writes_the_best_certified_packing() {
+    stops_on("TERM");
+}
+
+#[test]
+fn sighup_stops_the_run_and_writes_the_best_certified_packing() {
+    stops_on("HUP");
+}
+
+#[test]
+fn a_time_limit_inside_the_first_local_minimisation_still_writes_a_certified_packing() {
+    let dir = temp_dir("anytime");
+    let scene = scene(&dir, 2000, 60.0, "");
+    // 1 s cuts the first local minimisation of 2000 ellipses off at a point no dilation
+    // repairs; 0.3 s at one whose repair halves the density.
+    for limit in ["0.3", "1"] {
+        let out = dir.join(format!("out-{limit}"));
+        let o = pack(&[
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--time-limit",
+            limit,
+        ]);
+        assert!(
+            o.status.success(),
+            "{limit}: {}{}",
+            text(&o.stdout),
+            text(&o.stderr)
+        );
+        let (certified, report) = verify(&out);
+        assert!(certified, "{limit}: {report}");
+        // The lattice start alone has density 0.857: a run never writes less.
+        assert!(density(&out) > 0.85, "{limit}: density {}", density(&out));
+    }
+    // A limit shorter than building and certifying the start: the start is written, and the
+    // printout says how long it needed.
+    let out = dir.join("out-tiny");
+    let o = pack(&[
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--time-limit",
+        "1e-6",
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    assert!(
+        stdout.contains("is shorter than building and certifying the start took"),
+        "{stdout}"
+    );
+    assert!(verify(&out).0);
+    assert!(density(&out) > 0.85);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_unwritable_output_folder_is_refused_before_the_run() {
+    let dir = temp_dir("unwritable");
+    // A minute of packing would be lost if the folder were found unwritable only at the end.
+    let scene = scene(&dir, 12, 60.0, "");
+    // /proc exists as a folder but takes no new files, even for root.
+    let started = Instant::now();
+    let o = pack(&[scene.to_str().unwrap(), "--out", "/proc"]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(started.elapsed() < Duration::from_secs(20), "ran first");
+    assert!(
+        stderr.contains("output folder /proc is not writable"),
+        "{stderr}"
+    );
+    // A folder under a regular file cannot be created.
+    let file = dir.join("file.txt");
+    std::fs::write(&file, "x").unwrap();
+    let under = file.join("out");
+    let o = pack(&[scene.to_str().unwrap(), "--out", under.to_str().unwrap()]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "output folder {} is not writable",
+            under.display()
+        )),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_time_limit_beyond_any_clock_is_an_error_not_a_panic() {
+    let dir = temp_dir("huge-limit");
+    let scene = scene(&dir, 12, 60.0, "");
+    for limit in ["1e20", "1.9e19", "1e300", "inf", "NaN", "0", "-1"] {
+        let out = dir.join("out");
+        let o = pack(&[
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            &format!("--time-limit={limit}"),
+        ]);
+        let stderr = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{limit}: {stderr}");
+        assert!(
+            stderr.contains("the time limit must be a positive number of seconds"),
+            "{limit}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{limit}: {stderr}");
+        assert!(!out.join("packing.csv").exists());
+    }
+    // The scene's own key: an error naming the key, no panic.
+    for limit in ["1e20", "1e300"] {
+        let path = dir.join("long.toml");
+        let text_of_scene = std::fs::read_to_string(scene.clone())
+            .unwrap()
+            .replace("time_limit = 60.0", &format!("time_limit = {limit}"));
+        std::fs::write(&path, text_of_scene).unwrap();
+        let o = pack(&[
+            path.to_str().unwrap(),
+            "--out",
+            dir.join("o").to_str().unwrap(),
+        ]);
+        let stderr = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{limit}: {stderr}");
+        assert!(stderr.contains("solver.time_limit"), "{limit}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{limit}: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A certified packing of 30 ellipses in `dir/out` after a few local minimisations.
+fn finished_run(dir: &Path) -> (PathBuf, PathBuf) {
+    let scene = scene(dir, 30, 60.0, "local_minimisations = 4\n");
+    let out = dir.join("out");
+    let o = pack(&[scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    (scene, out)
+}
+
+#[test]
+fn resume_never_writes_a_worse_packing_than_its_start() {
+    let dir = temp_dir("resume-no-worse");
+    let (scene, out) = finished_run(&dir);
+    let start = density(&out);
+    let mut kept = false;
+    for limit in ["1e-6", "0.02", "0.05", "0.1", "0.2", "0.4"] {
+        let before = density(&out);
+        let o = pack(&[
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--resume",
+            "--time-limit",
+            limit,
+        ]);
+        let stdout = text(&o.stdout);
+        assert!(o.status.success(), "{limit}: {stdout}{}", text(&o.stderr));
+        let after = density(&out);
+        assert!(after >= before, "{limit}: {before} → {after}");
+        if after == before {
+            assert!(stdout.contains("wrote the start"), "{limit}: {stdout}");
+            kept = true;
+        }
+        let (certified, report) = verify(&out);
+        assert!(certified, "{limit}: {report}");
+    }
+    assert!(density(&out) >= start);
+    // At least the run stopped before its first local minimisation keeps its start.
+    assert!(kept, "a short resumed run keeps its start and says so");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Rewrites row `row` of `packing.csv` with the centre `(x, y)`.
+fn move_item(out: &Path, row: usize, x: f64, y: f64) {
+    let path = out.join("packing.csv");
+    let csv = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<String> = csv
+        .lines()
+        .enumerate()
+        .map(|(k, line)| {
+            if k == row + 1 {
+                let mut fields: Vec<String> = line.split(',').map(String::from).collect();
+                fields[1] = format!("{x:e}");
+                fields[2] = format!("{y:e}");
+                fields.join(",")
+            } else {
+                line.to_string()
+            }
+        })
+        .collect();
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+}
+
+fn centre(out: &Path, row: usize) -> (f64, f64) {
+    let csv = std::fs::read_to_string(out.join("packing.csv")).unwrap();
+    let line = csv.lines().nth(row + 1).unwrap();
+    let f: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+    (f[1], f[2])
+}
+
+#[test]
+fn resume_refuses_a_start_with_overlapping_items_or_items_outside() {
+    let dir = temp_dir("resume-bad-start");
+    let (scene, out) = finished_run(&dir);
+    let (x, y) = centre(&out, 3);
+    move_item(&out, 7, x, y);
+    let o = pack(&[
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+        "--time-limit",
+        "1",
+    ]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("not certified"), "{stderr}");
+    assert!(stderr.contains("items 3 and 7 (μ² = 0.000000)"), "{stderr}");
+
+    // Item 7 far outside the container instead.
+    move_item(&out, 7, 1e3, 0.0);
+    let o = pack(&[
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+        "--time-limit",
+        "1",
+    ]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("1 items outside the container: 7 (the container would have to grow by"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn resume_refuses_a_folder_of_another_container_or_other_items() {
+    let dir = temp_dir("resume-mismatch");
+    let (_, out) = finished_run(&dir);
+    let packing_before = std::fs::read_to_string(out.join("packing.csv")).unwrap();
+    // The same items in a rectangle: the folder's circle does not fit the scene.
+    let other = dir.join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    let rectangle = scene(&other, 30, 60.0, "").to_str().unwrap().to_string();
+    let text_of_scene = std::fs::read_to_string(&rectangle)
+        .unwrap()
+        .replace("kind = \"circle\"", "kind = \"rectangle\"");
+    std::fs::write(&rectangle, text_of_scene).unwrap();
+    let o = pack(&[&rectangle, "--out", out.to_str().unwrap(), "--resume"]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "cannot resume from {}: its container is circle, but the scene",
+            out.join("summary.json").display()
+        )),
+        "{stderr}"
+    );
+    assert!(stderr.contains("has rectangle"), "{stderr}");
+    // Other semi-axes.
+    let bigger = scene(&other, 30, 60.0, "").to_str().unwrap().to_string();
+    let text_of_scene = std::fs::read_to_string(&bigger)
+        .unwrap()
+        .replace("[2.0, 1.0]", "[3.0, 1.0]");
+    std::fs::write(&bigger, text_of_scene).unwrap();
+    let o = pack(&[&bigger, "--out", out.to_str().unwrap(), "--resume"]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("item 0 has semi-axes [2.0, 1.0] in the packing, [3.0, 1.0] in the scene"),
+        "{stderr}"
+    );
+    // The folder is left as it was.
+    assert_eq!(
+        std::fs::read_to_string(out.join("packing.csv")).unwrap(),
+        packing_before
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
