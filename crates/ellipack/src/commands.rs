@@ -1,5 +1,6 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
+use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{RunOptions, run, verify_detailed as check};
 use ellipack::packing::{
     CSV_FILE, Container, ContainerKind, SUMMARY_FILE, read_packing_dir, read_stated_summary,
@@ -134,14 +135,25 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     )?;
     bar.finish_and_clear();
 
-    write_files(&out, &outcome.packing, &outcome.summary, scene.output.xyz)?;
-    ellipack::output::write_atomically(&out.join("history.csv"), history.as_bytes())?;
+    // The whole set is written into a staging folder and swapped in, so that the folder never
+    // holds a mix of this run's files and the previous run's; an error (or a kill) before the
+    // commit leaves the previous set.
+    let staging = Staging::begin(&out)?;
+    let staged = staging.path();
+    write_files(staged, &outcome.packing, &outcome.summary, scene.output.xyz)?;
+    ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     if scene.output.pictures {
         let options = RenderOptions {
             width: scene.output.image_width,
             label: scene.name.clone(),
         };
-        write_pictures(&out, &outcome.packing, &options)?;
+        write_pictures(staged, &outcome.packing, &options)?;
+    }
+    if staging.commit()? == Published::InPlace {
+        eprintln!(
+            "note: no staging folder could be made beside {}; its files were replaced one by one",
+            out.display()
+        );
     }
     let s = &outcome.summary;
     println!("{}", scene.title());

@@ -1,0 +1,498 @@
+//! An output folder holds the files of one run, or those of the run before it, never a mix.
+//!
+//! A run writes its complete set of files into a staging folder beside the output folder
+//! (`<out>.ellipack-staging-<pid>`, on the same file system), carries over everything in the
+//! output folder that ellipack did not write (a scene file, notes, sub-folders: hard links, so
+//! nothing is copied and nothing is moved out of the folder before the swap), and then swaps the
+//! two folders in one step: `renameat2(RENAME_EXCHANGE)` on Linux. Where the file system cannot
+//! exchange, two renames do it (`<out>` → `<out>.ellipack-retired-<pid>`, staging → `<out>`):
+//! a crash between them leaves the old set under the retired name, which the next run puts back.
+//! The old set is then removed. Files of an earlier run that the new run does not write (its
+//! pictures, its XYZ file) are thereby gone: they were never carried over.
+//!
+//! A killed run leaves at most a staging or retired folder and temporary files; the next run
+//! removes them before it stages (those of processes that are still running on Linux are left
+//! alone), and nothing reads them as a packing.
+//!
+//! When no sibling folder can be made (the parent is not writable, or the output folder is a
+//! mount point), the staging folder goes inside the output folder and its files are renamed
+//! into place one by one: each file is whole, but the set is not swapped in one step;
+//! [`Published::InPlace`] says so.
+//!
+//! The swap replaces the folder's directory entry: a shell whose working directory is the
+//! output folder still sees the old, removed folder until it changes into it again.
+
+use crate::packing::{CSV_FILE, SUMMARY_FILE, XYZ_FILE};
+use crate::render::{PNG_FILE, SVG_FILE};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+
+/// The file name of the per-run history table.
+pub const HISTORY_FILE: &str = "history.csv";
+
+/// Every file `ellipack pack` writes into an output folder. Anything else there belongs to the
+/// user and is kept.
+pub const RUN_FILES: [&str; 6] = [
+    CSV_FILE,
+    SUMMARY_FILE,
+    XYZ_FILE,
+    HISTORY_FILE,
+    SVG_FILE,
+    PNG_FILE,
+];
+
+const STAGING: &str = ".ellipack-staging-";
+const RETIRED: &str = ".ellipack-retired-";
+
+/// Why an output folder could not be staged or swapped.
+#[derive(Debug, thiserror::Error)]
+pub enum FolderError {
+    /// A file-system operation failed.
+    #[error("{path}: cannot {action}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// What was being done.
+        action: &'static str,
+        /// What the system said.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> FolderError {
+    let path = path.to_path_buf();
+    move |source| FolderError::Io {
+        path,
+        action,
+        source,
+    }
+}
+
+/// How a staged set of files reached the output folder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Published {
+    /// In one step: the folder held the old set, then the new one.
+    Swapped,
+    /// File by file, because no staging folder could be made beside the output folder.
+    InPlace,
+}
+
+/// A staging folder for the next set of files of an output folder. Dropping it without
+/// [`Staging::commit`] removes it and leaves the output folder as it was.
+#[derive(Debug)]
+pub struct Staging {
+    out: PathBuf,
+    dir: PathBuf,
+    in_place: bool,
+    committed: bool,
+}
+
+impl Staging {
+    /// Removes what killed runs left behind in and beside `out` (which must exist) and makes an
+    /// empty staging folder for it.
+    ///
+    /// # Errors
+    /// [`FolderError::Io`] when `out` cannot be resolved or no staging folder can be made.
+    pub fn begin(out: &Path) -> Result<Staging, FolderError> {
+        // Symbolic links to the folder stay links: the real folder is the one swapped.
+        let out = std::fs::canonicalize(out).map_err(io(out, "resolve the output folder"))?;
+        clean_up(&out);
+        let pid = std::process::id();
+        if let Some(sibling) = sibling(&out, STAGING, pid) {
+            let _ = std::fs::remove_dir_all(&sibling);
+            if std::fs::create_dir(&sibling).is_ok() {
+                if same_device(&out, &sibling) {
+                    copy_mode(&out, &sibling);
+                    return Ok(Staging {
+                        out,
+                        dir: sibling,
+                        in_place: false,
+                        committed: false,
+                    });
+                }
+                let _ = std::fs::remove_dir(&sibling);
+            }
+        }
+        let inside = out.join(format!("{STAGING}{pid}"));
+        let _ = std::fs::remove_dir_all(&inside);
+        std::fs::create_dir(&inside).map_err(io(&inside, "create the staging folder"))?;
+        Ok(Staging {
+            out,
+            dir: inside,
+            in_place: true,
+            committed: false,
+        })
+    }
+
+    /// The folder to write the new set of files into.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Makes the staged files the content of the output folder, with the files ellipack did
+    /// not write kept, and removes the previous set.
+    ///
+    /// # Errors
+    /// [`FolderError::Io`] when the user's files cannot be carried over or the swap fails;
+    /// the output folder then still holds the previous set.
+    pub fn commit(mut self) -> Result<Published, FolderError> {
+        self.committed = true;
+        if self.in_place {
+            let result = self.move_in_place();
+            let _ = std::fs::remove_dir_all(&self.dir);
+            return result.map(|()| Published::InPlace);
+        }
+        let result = carry(&self.out, &self.dir, true).and_then(|()| swap(&self.dir, &self.out));
+        if result.is_err() {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
+        result.map(|()| Published::Swapped)
+    }
+
+    fn move_in_place(&self) -> Result<(), FolderError> {
+        let staged: Vec<_> = std::fs::read_dir(&self.dir)
+            .map_err(io(&self.dir, "read the staging folder"))?
+            .filter_map(Result::ok)
+            .map(|e| e.file_name())
+            .collect();
+        for name in &staged {
+            let target = self.out.join(name);
+            std::fs::rename(self.dir.join(name), &target).map_err(io(&target, "replace"))?;
+        }
+        for name in RUN_FILES {
+            if !staged.iter().any(|s| s == name) {
+                let _ = std::fs::remove_file(self.out.join(name));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
+    }
+}
+
+/// `<parent>/<name><mark><pid>`, or `None` for a folder without a parent (the root).
+fn sibling(out: &Path, mark: &str, pid: u32) -> Option<PathBuf> {
+    let name = out.file_name()?.to_string_lossy().into_owned();
+    Some(out.with_file_name(format!("{name}{mark}{pid}")))
+}
+
+/// The process id in a name `<prefix><pid>`, when the name has that form.
+fn pid_after(name: &OsStr, prefix: &str) -> Option<u32> {
+    name.to_str()?.strip_prefix(prefix)?.parse().ok()
+}
+
+/// Whether a leftover of process `pid` may be removed: ours (a staging folder of this process is
+/// made afresh), or of a process that no longer runs.
+fn is_stale(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    if cfg!(target_os = "linux") && Path::new("/proc/self").exists() {
+        !Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        // No portable liveness test: two runs into one folder at once are not supported.
+        true
+    }
+}
+
+/// Whether a top-level entry of an output folder was written by ellipack: a run file, the
+/// temporary file of one (`.<file>.tmp-<pid>`, see [`crate::output`]), or an in-place staging
+/// folder.
+fn is_ours(name: &OsStr) -> bool {
+    let Some(name) = name.to_str() else {
+        return false;
+    };
+    RUN_FILES.contains(&name) || temporary_of(name).is_some() || name.starts_with(STAGING)
+}
+
+/// The process id of a temporary file of a run file.
+fn temporary_of(name: &str) -> Option<u32> {
+    RUN_FILES.iter().find_map(|file| {
+        name.strip_prefix('.')?
+            .strip_prefix(file)?
+            .strip_prefix(".tmp-")?
+            .parse()
+            .ok()
+    })
+}
+
+/// Removes the leftovers of killed runs: temporary files and staging folders in `out`, staging
+/// folders beside it, and puts back a retired previous set when the swap by two renames was cut
+/// between them (the output folder then is missing or empty). Best effort: what cannot be
+/// removed is left, and is never read as a packing.
+fn clean_up(out: &Path) {
+    if let Ok(entries) = std::fs::read_dir(out) {
+        for entry in entries.filter_map(Result::ok) {
+            let name = entry.file_name();
+            let Some(text) = name.to_str() else { continue };
+            if temporary_of(text).is_some_and(is_stale) {
+                let _ = std::fs::remove_file(entry.path());
+            } else if pid_after(&name, STAGING).is_some_and(is_stale) {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+        }
+    }
+    let (Some(parent), Some(base)) = (out.parent(), out.file_name()) else {
+        return;
+    };
+    let base = base.to_string_lossy().into_owned();
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for entry in entries.filter_map(Result::ok) {
+        let name = entry.file_name();
+        let path = entry.path();
+        if pid_after(&name, &format!("{base}{STAGING}")).is_some_and(is_stale) {
+            let _ = std::fs::remove_dir_all(&path);
+        } else if pid_after(&name, &format!("{base}{RETIRED}")).is_some_and(is_stale) {
+            let empty = std::fs::read_dir(out).map_or(true, |mut d| d.next().is_none());
+            if empty {
+                let _ = std::fs::remove_dir(out);
+                if std::fs::rename(&path, out).is_ok() {
+                    continue;
+                }
+            }
+            let _ = std::fs::remove_dir_all(&path);
+        }
+    }
+}
+
+/// Mirrors `from` into `to` without copying data: hard links for files, new folders for
+/// folders, new links for symbolic links (a copy only where hard links are refused). At the top
+/// level, ellipack's own files are skipped.
+fn carry(from: &Path, to: &Path, top: bool) -> Result<(), FolderError> {
+    let entries = std::fs::read_dir(from).map_err(io(from, "read the folder"))?;
+    for entry in entries {
+        let entry = entry.map_err(io(from, "read the folder"))?;
+        let name = entry.file_name();
+        if top && is_ours(&name) {
+            continue;
+        }
+        let (src, dst) = (entry.path(), to.join(&name));
+        let kind = entry.file_type().map_err(io(&src, "inspect"))?;
+        if kind.is_dir() {
+            std::fs::create_dir(&dst).map_err(io(&dst, "create"))?;
+            copy_mode(&src, &dst);
+            carry(&src, &dst, false)?;
+        } else if kind.is_symlink() {
+            link_like(&src, &dst)?;
+        } else if std::fs::hard_link(&src, &dst).is_err() {
+            std::fs::copy(&src, &dst).map_err(io(&src, "keep (copy)"))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(unix)]
+fn link_like(src: &Path, dst: &Path) -> Result<(), FolderError> {
+    let target = std::fs::read_link(src).map_err(io(src, "read the link"))?;
+    std::os::unix::fs::symlink(target, dst).map_err(io(dst, "create the link"))
+}
+
+#[cfg(not(unix))]
+fn link_like(src: &Path, dst: &Path) -> Result<(), FolderError> {
+    std::fs::copy(src, dst)
+        .map(|_| ())
+        .map_err(io(src, "keep (copy)"))
+}
+
+fn copy_mode(from: &Path, to: &Path) {
+    if let Ok(meta) = std::fs::metadata(from) {
+        let _ = std::fs::set_permissions(to, meta.permissions());
+    }
+}
+
+#[cfg(unix)]
+fn same_device(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_device(_: &Path, _: &Path) -> bool {
+    true
+}
+
+/// Puts the staging folder in the place of `out` and removes the previous set.
+fn swap(staging: &Path, out: &Path) -> Result<(), FolderError> {
+    match exchange(staging, out) {
+        Ok(()) => {
+            // `staging` now names the previous set. Left behind if this fails: the next run
+            // removes it.
+            let _ = std::fs::remove_dir_all(staging);
+            return Ok(());
+        }
+        Err(e) if !exchange_unsupported(&e) => return Err(io(out, "swap in the new files")(e)),
+        Err(_) => {}
+    }
+    swap_by_renames(staging, out)
+}
+
+/// The swap where the file system cannot exchange: `out` is set aside under the retired name
+/// (which the next run puts back if this one dies before the second rename), then the staging
+/// folder takes its place.
+fn swap_by_renames(staging: &Path, out: &Path) -> Result<(), FolderError> {
+    let retired = sibling(out, RETIRED, std::process::id())
+        .unwrap_or_else(|| staging.with_extension("retired"));
+    std::fs::rename(out, &retired).map_err(io(out, "set the previous files aside"))?;
+    if let Err(e) = std::fs::rename(staging, out) {
+        let _ = std::fs::rename(&retired, out);
+        return Err(io(out, "move the new files in")(e));
+    }
+    let _ = std::fs::remove_dir_all(&retired);
+    Ok(())
+}
+
+#[cfg(all(target_os = "linux", any(target_env = "gnu", target_env = "musl")))]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let a = std::ffi::CString::new(a.as_os_str().as_bytes())?;
+    let b = std::ffi::CString::new(b.as_os_str().as_bytes())?;
+    // SAFETY: both pointers are to NUL-terminated strings that live across the call;
+    // renameat2 only reads them.
+    let rc = unsafe {
+        libc::renameat2(
+            libc::AT_FDCWD,
+            a.as_ptr(),
+            libc::AT_FDCWD,
+            b.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+#[cfg(not(all(target_os = "linux", any(target_env = "gnu", target_env = "musl"))))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
+    Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
+}
+
+/// Whether the exchange failed because the system or file system cannot do it (so that two
+/// renames must), rather than for a reason two renames would meet too.
+fn exchange_unsupported(e: &std::io::Error) -> bool {
+    #[cfg(all(target_os = "linux", any(target_env = "gnu", target_env = "musl")))]
+    if let Some(code) = e.raw_os_error() {
+        return [libc::EINVAL, libc::ENOSYS, libc::ENOTSUP, libc::EOPNOTSUPP].contains(&code);
+    }
+    e.kind() == std::io::ErrorKind::Unsupported
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("ellipack-folder-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("out")).unwrap();
+        dir
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_commit_replaces_our_files_and_keeps_the_users() {
+        let dir = temp("commit");
+        let out = dir.join("out");
+        std::fs::write(out.join(CSV_FILE), "old").unwrap();
+        std::fs::write(out.join(PNG_FILE), "old picture").unwrap();
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        std::fs::create_dir(out.join("sub")).unwrap();
+        std::fs::write(out.join("sub").join(CSV_FILE), "mine too").unwrap();
+        let staging = Staging::begin(&out).unwrap();
+        std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
+        assert_eq!(staging.commit().unwrap(), Published::Swapped);
+        assert_eq!(names(&out), ["notes.txt", CSV_FILE, "sub"]);
+        assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
+        assert_eq!(
+            std::fs::read_to_string(out.join("sub").join(CSV_FILE)).unwrap(),
+            "mine too"
+        );
+        assert_eq!(names(&dir), ["out"], "no staging or retired folder left");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_failure_before_the_commit_leaves_the_folder_as_it_was() {
+        let dir = temp("failure");
+        let out = dir.join("out");
+        std::fs::write(out.join(CSV_FILE), "old").unwrap();
+        std::fs::write(out.join(SUMMARY_FILE), "old summary").unwrap();
+        let write_set = |into: &Path| -> Result<(), String> {
+            std::fs::write(into.join(CSV_FILE), "new").map_err(|e| e.to_string())?;
+            Err("injected failure after the first file".into())
+        };
+        {
+            let staging = Staging::begin(&out).unwrap();
+            assert!(write_set(staging.path()).is_err());
+        }
+        assert_eq!(names(&out), [CSV_FILE, SUMMARY_FILE]);
+        assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "old");
+        assert_eq!(names(&dir), ["out"], "the staging folder is removed");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn leftovers_of_killed_runs_are_removed_and_a_retired_set_is_put_back() {
+        let dir = temp("leftovers");
+        let out = dir.join("out");
+        // A process id above Linux's limit (2²²) never runs.
+        let dead = 999_999_999u32;
+        std::fs::write(out.join(format!(".{CSV_FILE}.tmp-{dead}")), "half").unwrap();
+        std::fs::write(out.join(".notes.tmp-1"), "mine").unwrap();
+        std::fs::create_dir(out.join(format!("{STAGING}{dead}"))).unwrap();
+        std::fs::create_dir(dir.join(format!("out{STAGING}{dead}"))).unwrap();
+        let staging = Staging::begin(&out).unwrap();
+        assert_eq!(names(&out), [".notes.tmp-1"]);
+        drop(staging);
+        assert_eq!(names(&dir), ["out"]);
+
+        // A swap by two renames cut between them: the output folder is gone.
+        let retired = dir.join(format!("out{RETIRED}{dead}"));
+        std::fs::rename(&out, &retired).unwrap();
+        std::fs::create_dir(&out).unwrap();
+        let staging = Staging::begin(&out).unwrap();
+        assert_eq!(names(&out), [".notes.tmp-1"], "the previous set is back");
+        drop(staging);
+        assert_eq!(names(&dir), ["out"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_two_rename_swap_works_where_exchange_does_not() {
+        let dir = temp("renames");
+        let (out, staging) = (dir.join("out"), dir.join("staged"));
+        std::fs::write(out.join(CSV_FILE), "old").unwrap();
+        std::fs::create_dir(&staging).unwrap();
+        std::fs::write(staging.join(CSV_FILE), "new").unwrap();
+        swap_by_renames(&staging, &out).unwrap();
+        assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
+        assert_eq!(names(&dir), ["out"]);
+        assert!(exchange_unsupported(&std::io::Error::from(
+            std::io::ErrorKind::Unsupported
+        )));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
