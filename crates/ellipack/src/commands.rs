@@ -149,10 +149,14 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         };
         write_pictures(staged, &outcome.packing, &options)?;
     }
-    if staging.commit()? == Published::InPlace {
+    if let Published::InPlace(why) = staging.commit()? {
         eprintln!(
-            "note: no staging folder could be made beside {}; its files were replaced one by one",
-            out.display()
+            "note: the files in {} were replaced one by one, not swapped in as a set ({})",
+            out.display(),
+            why.map_or_else(
+                || "no staging folder could be made beside it".to_string(),
+                |e| e.to_string()
+            )
         );
     }
     let s = &outcome.summary;

@@ -15,8 +15,8 @@
 //! alone), and nothing reads them as a packing.
 //!
 //! When no sibling folder can be made (the parent is not writable, or the output folder is a
-//! mount point), the staging folder goes inside the output folder and its files are renamed
-//! into place one by one: each file is whole, but the set is not swapped in one step;
+//! mount point), or the swap fails, the run's files are renamed into place one by one: each
+//! file is whole and stale run files are removed, but the set is not swapped in one step;
 //! [`Published::InPlace`] says so.
 //!
 //! The swap replaces the folder's directory entry: a shell whose working directory is the
@@ -70,12 +70,13 @@ fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> Folde
 }
 
 /// How a staged set of files reached the output folder.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Debug)]
 pub enum Published {
     /// In one step: the folder held the old set, then the new one.
     Swapped,
-    /// File by file, because no staging folder could be made beside the output folder.
-    InPlace,
+    /// File by file: no staging folder could be made beside the output folder (`None`), or
+    /// the swap failed for the reason given.
+    InPlace(Option<FolderError>),
 }
 
 /// A staging folder for the next set of files of an output folder. Dropping it without
@@ -114,15 +115,7 @@ impl Staging {
                 let _ = std::fs::remove_dir(&sibling);
             }
         }
-        let inside = out.join(format!("{STAGING}{pid}"));
-        let _ = std::fs::remove_dir_all(&inside);
-        std::fs::create_dir(&inside).map_err(io(&inside, "create the staging folder"))?;
-        Ok(Staging {
-            out,
-            dir: inside,
-            in_place: true,
-            committed: false,
-        })
+        Staging::inside(out)
     }
 
     /// The folder to write the new set of files into.
@@ -131,41 +124,53 @@ impl Staging {
     }
 
     /// Makes the staged files the content of the output folder, with the files ellipack did
-    /// not write kept, and removes the previous set.
+    /// not write kept, and removes the previous set. When the swap cannot be made (a user's
+    /// file that can be neither linked nor copied, a file system that refuses), the run's files
+    /// are renamed into place one by one rather than lost: [`Published::InPlace`] says why.
     ///
     /// # Errors
-    /// [`FolderError::Io`] when the user's files cannot be carried over or the swap fails;
-    /// the output folder then still holds the previous set.
+    /// [`FolderError::Io`] when even that fails.
     pub fn commit(mut self) -> Result<Published, FolderError> {
         self.committed = true;
-        if self.in_place {
-            let result = self.move_in_place();
-            let _ = std::fs::remove_dir_all(&self.dir);
-            return result.map(|()| Published::InPlace);
+        let mut why = None;
+        if !self.in_place {
+            match carry(&self.out, &self.dir, true).and_then(|()| swap(&self.dir, &self.out)) {
+                Ok(()) => return Ok(Published::Swapped),
+                Err(e) => why = Some(e),
+            }
         }
-        let result = carry(&self.out, &self.dir, true).and_then(|()| swap(&self.dir, &self.out));
-        if result.is_err() {
-            let _ = std::fs::remove_dir_all(&self.dir);
-        }
-        result.map(|()| Published::Swapped)
+        let result = self.move_in_place();
+        let _ = std::fs::remove_dir_all(&self.dir);
+        result.map(|()| Published::InPlace(why))
     }
 
     fn move_in_place(&self) -> Result<(), FolderError> {
-        let staged: Vec<_> = std::fs::read_dir(&self.dir)
-            .map_err(io(&self.dir, "read the staging folder"))?
-            .filter_map(Result::ok)
-            .map(|e| e.file_name())
+        let staged: Vec<&str> = RUN_FILES
+            .into_iter()
+            .filter(|name| self.dir.join(name).is_file())
             .collect();
         for name in &staged {
             let target = self.out.join(name);
             std::fs::rename(self.dir.join(name), &target).map_err(io(&target, "replace"))?;
         }
         for name in RUN_FILES {
-            if !staged.iter().any(|s| s == name) {
+            if !staged.contains(&name) {
                 let _ = std::fs::remove_file(self.out.join(name));
             }
         }
         Ok(())
+    }
+
+    fn inside(out: PathBuf) -> Result<Staging, FolderError> {
+        let inside = out.join(format!("{STAGING}{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&inside);
+        std::fs::create_dir(&inside).map_err(io(&inside, "create the staging folder"))?;
+        Ok(Staging {
+            out,
+            dir: inside,
+            in_place: true,
+            committed: false,
+        })
     }
 }
 
@@ -423,7 +428,7 @@ mod tests {
         std::fs::write(out.join("sub").join(CSV_FILE), "mine too").unwrap();
         let staging = Staging::begin(&out).unwrap();
         std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
-        assert_eq!(staging.commit().unwrap(), Published::Swapped);
+        assert!(matches!(staging.commit().unwrap(), Published::Swapped));
         assert_eq!(names(&out), ["notes.txt", CSV_FILE, "sub"]);
         assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
         assert_eq!(
@@ -476,6 +481,50 @@ mod tests {
         let staging = Staging::begin(&out).unwrap();
         assert_eq!(names(&out), [".notes.tmp-1"], "the previous set is back");
         drop(staging);
+        assert_eq!(names(&dir), ["out"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn in_place_the_run_files_are_replaced_and_stale_ones_removed() {
+        let dir = temp("inplace");
+        let out = dir.join("out").canonicalize().unwrap();
+        std::fs::write(out.join(CSV_FILE), "old").unwrap();
+        std::fs::write(out.join(XYZ_FILE), "old xyz").unwrap();
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        let staging = Staging::inside(out.clone()).unwrap();
+        std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
+        std::fs::write(staging.path().join(SUMMARY_FILE), "new summary").unwrap();
+        assert!(matches!(
+            staging.commit().unwrap(),
+            Published::InPlace(None)
+        ));
+        assert_eq!(names(&out), ["notes.txt", CSV_FILE, SUMMARY_FILE]);
+        assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_failed_swap_still_delivers_the_run_files() {
+        let dir = temp("fallback");
+        let out = dir.join("out");
+        std::fs::write(out.join(PNG_FILE), "old picture").unwrap();
+        // A user's folder that cannot be carried over: a file of the same name is in its way
+        // in the staging folder.
+        std::fs::create_dir(out.join("notes")).unwrap();
+        std::fs::write(out.join("notes").join("a.txt"), "mine").unwrap();
+        let staging = Staging::begin(&out).unwrap();
+        std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
+        std::fs::write(staging.path().join("notes"), "in the way").unwrap();
+        let published = staging.commit().unwrap();
+        assert!(
+            matches!(&published, Published::InPlace(Some(e)) if e.to_string().contains("notes")),
+            "{published:?}"
+        );
+        assert_eq!(names(&out), ["notes", CSV_FILE]);
+        let kept = std::fs::read_to_string(out.join("notes").join("a.txt")).unwrap();
+        assert_eq!(kept, "mine");
+        assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
         assert_eq!(names(&dir), ["out"]);
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -224,3 +224,38 @@ fn a_symbolic_link_to_the_output_folder_stays_a_link() {
     assert_whole_run(&link);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_run_killed_at_any_moment_leaves_one_whole_run() {
+    let dir = temp_dir("kill");
+    let out = dir.join("out");
+    std::fs::create_dir(&out).unwrap();
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, scene(true, true)).unwrap();
+    let started = std::time::Instant::now();
+    pack(&scene_path, &out);
+    let full = started.elapsed();
+    let run_set = names(&out);
+    // Kills spread over the whole run, the file writing at its end included.
+    for k in 0..12u32 {
+        let mut child = ellipack()
+            .arg("pack")
+            .arg(&scene_path)
+            .arg("--out")
+            .arg(&out)
+            .arg("--seed")
+            .arg((k + 10).to_string())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(full * (k + 1) / 12);
+        let _ = child.kill();
+        let _ = child.wait();
+        assert_eq!(names(&out), run_set, "after a kill at {k}/12 of a run");
+        assert_whole_run(&out);
+    }
+    pack(&scene_path, &out);
+    assert_eq!(names(&dir), ["out", "scene.toml"], "leftovers removed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
