@@ -3,8 +3,8 @@
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{RunOptions, run, verify_detailed as check};
 use ellipack::packing::{
-    CSV_FILE, Container, ContainerKind, SUMMARY_FILE, read_packing_dir, read_stated_summary,
-    read_table_into, write_files,
+    CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_packing_dir,
+    read_stated_summary, read_table_into, write_files,
 };
 use ellipack::render::{RenderOptions, write_pictures};
 use ellipack::scene::Scene;
@@ -236,8 +236,12 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
                 .center
                 .clone()
                 .unwrap_or_else(|| vec![0.0; kind.dimension()]);
-            let container = Container::from_parts(kind, &center, size)
-                .map_err(|e| format!("--container {kind} --size: {e}"))?;
+            let container = Container::from_parts(kind, &center, size).map_err(|e| match e {
+                PackingError::Inconsistent { message, .. } => {
+                    format!("--container {kind}: {message}")
+                }
+                other => other.to_string(),
+            })?;
             let (packing, table) = read_table_into(&csv_path, container, None, "--container")?;
             (packing, table, None)
         }

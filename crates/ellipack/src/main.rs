@@ -70,7 +70,12 @@ enum Command {
         container: Option<ContainerKind>,
         /// The container's size: the radius, or the semi-axes or half sides separated by commas
         /// (`--size 1,2,3`).
-        #[arg(long, requires = "container", value_delimiter = ',')]
+        #[arg(
+            long,
+            requires = "container",
+            value_delimiter = ',',
+            allow_hyphen_values = true
+        )]
         size: Option<Vec<f64>>,
         /// The container's centre, coordinates separated by commas (default: the origin).
         #[arg(

@@ -187,6 +187,27 @@ fn verify_without_a_container_says_how_to_give_one() {
         !ok && err.contains("rectangle") && err.contains("2"),
         "{err}"
     );
+    let (ok, _, err) = verify(
+        &[
+            "packing.csv",
+            "--container",
+            "circle",
+            "--size",
+            "5",
+            "--center",
+            "1,2,3",
+        ],
+        &dir,
+    );
+    assert!(
+        !ok && err.contains("--container circle: a circle needs 2 centre values, not 3"),
+        "{err}"
+    );
+    let (ok, _, err) = verify(
+        &["packing.csv", "--container", "circle", "--size", "-5"],
+        &dir,
+    );
+    assert!(!ok && err.contains("radius must be positive"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
