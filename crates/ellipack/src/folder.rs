@@ -6,8 +6,8 @@
 //! nothing is copied and nothing is moved out of the folder before the swap), and then swaps the
 //! two folders in one step: `renameat2(RENAME_EXCHANGE)` on Linux. Where the file system cannot
 //! exchange, two renames do it (`<out>` → `<out>.ellipack-retired-<pid>`, staging → `<out>`):
-//! a crash between them leaves the old set under the retired name, which the next run puts back.
-//! The old set is then removed. Files of an earlier run that the new run does not write (its
+//! a crash between them leaves the old set under the retired name, which the next run puts back
+//! when the output folder is missing or empty. The old set is then removed. Files of an earlier run that the new run does not write (its
 //! pictures, its XYZ file) are thereby gone: they were never carried over.
 //!
 //! A killed run leaves at most a staging or retired folder and temporary files; the next run
@@ -15,9 +15,10 @@
 //! alone), and nothing reads them as a packing.
 //!
 //! When no sibling folder can be made (the parent is not writable, or the output folder is a
-//! mount point), or the swap fails, the run's files are renamed into place one by one: each
-//! file is whole and stale run files are removed, but the set is not swapped in one step;
-//! [`Published::InPlace`] says so.
+//! mount point), when the user's files are too many to carry over (more than 10 000 entries,
+//! a mount point inside, more than 64 MiB to copy where hard links are refused), or the swap
+//! fails, the run's files are renamed into place one by one: each file is whole and stale run
+//! files are removed, but the set is not swapped in one step; [`Published::InPlace`] says so.
 //!
 //! The swap replaces the folder's directory entry: a shell whose working directory is the
 //! output folder still sees the old, removed folder until it changes into it again.
@@ -57,6 +58,15 @@ pub enum FolderError {
         /// What the system said.
         #[source]
         source: std::io::Error,
+    },
+    /// The user's files in the output folder are not carried into the staging folder: too
+    /// many, on another file system, or too large to copy.
+    #[error("{path}: the user's files are not carried over: {reason}")]
+    Carry {
+        /// The folder or file.
+        path: PathBuf,
+        /// Why.
+        reason: &'static str,
     },
 }
 
@@ -269,10 +279,35 @@ fn clean_up(out: &Path) {
     }
 }
 
+/// At most this many of the user's entries are carried over; a folder that holds more (a home
+/// folder given as `--out`) gets the run's files one by one instead.
+const MAX_CARRIED_ENTRIES: usize = 10_000;
+
+/// At most this many bytes are copied where hard links are refused.
+const MAX_COPIED_BYTES: u64 = 64 << 20;
+
+/// What carrying over may still cost.
+struct Budget {
+    entries: usize,
+    bytes: u64,
+    device: Option<u64>,
+}
+
 /// Mirrors `from` into `to` without copying data: hard links for files, new folders for
 /// folders, new links for symbolic links (a copy only where hard links are refused). At the top
-/// level, ellipack's own files are skipped.
+/// level, ellipack's own files are skipped. Refuses (so that the caller falls back to replacing
+/// files one by one) rather than mirror a large tree, cross into another file system or copy
+/// much data.
 fn carry(from: &Path, to: &Path, top: bool) -> Result<(), FolderError> {
+    let mut budget = Budget {
+        entries: MAX_CARRIED_ENTRIES,
+        bytes: MAX_COPIED_BYTES,
+        device: device_of(from),
+    };
+    carry_within(from, to, top, &mut budget)
+}
+
+fn carry_within(from: &Path, to: &Path, top: bool, budget: &mut Budget) -> Result<(), FolderError> {
     let entries = std::fs::read_dir(from).map_err(io(from, "read the folder"))?;
     for entry in entries {
         let entry = entry.map_err(io(from, "read the folder"))?;
@@ -281,18 +316,50 @@ fn carry(from: &Path, to: &Path, top: bool) -> Result<(), FolderError> {
             continue;
         }
         let (src, dst) = (entry.path(), to.join(&name));
+        budget.entries = budget
+            .entries
+            .checked_sub(1)
+            .ok_or_else(|| FolderError::Carry {
+                path: from.to_path_buf(),
+                reason: "more than 10 000 of the user's files and folders",
+            })?;
         let kind = entry.file_type().map_err(io(&src, "inspect"))?;
         if kind.is_dir() {
+            if device_of(&src) != budget.device {
+                return Err(FolderError::Carry {
+                    path: src,
+                    reason: "another file system is mounted there",
+                });
+            }
             std::fs::create_dir(&dst).map_err(io(&dst, "create"))?;
             copy_mode(&src, &dst);
-            carry(&src, &dst, false)?;
+            carry_within(&src, &dst, false, budget)?;
         } else if kind.is_symlink() {
             link_like(&src, &dst)?;
         } else if std::fs::hard_link(&src, &dst).is_err() {
+            let len = entry.metadata().map_err(io(&src, "inspect"))?.len();
+            budget.bytes = budget
+                .bytes
+                .checked_sub(len)
+                .ok_or_else(|| FolderError::Carry {
+                    path: src.clone(),
+                    reason: "cannot be hard-linked and is too large to copy",
+                })?;
             std::fs::copy(&src, &dst).map_err(io(&src, "keep (copy)"))?;
         }
     }
     Ok(())
+}
+
+#[cfg(unix)]
+fn device_of(path: &Path) -> Option<u64> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::symlink_metadata(path).ok().map(|m| m.dev())
+}
+
+#[cfg(not(unix))]
+fn device_of(_: &Path) -> Option<u64> {
+    None
 }
 
 #[cfg(unix)]
@@ -314,18 +381,8 @@ fn copy_mode(from: &Path, to: &Path) {
     }
 }
 
-#[cfg(unix)]
 fn same_device(a: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        (Ok(a), Ok(b)) => a.dev() == b.dev(),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_device(_: &Path, _: &Path) -> bool {
-    true
+    device_of(a) == device_of(b)
 }
 
 /// Puts the staging folder in the place of `out` and removes the previous set.
@@ -525,6 +582,34 @@ mod tests {
         let kept = std::fs::read_to_string(out.join("notes").join("a.txt")).unwrap();
         assert_eq!(kept, "mine");
         assert_eq!(std::fs::read_to_string(out.join(CSV_FILE)).unwrap(), "new");
+        assert_eq!(names(&dir), ["out"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_large_folder_of_the_users_gets_the_run_files_in_place() {
+        let dir = temp("large");
+        let out = dir.join("out");
+        std::fs::create_dir(out.join("data")).unwrap();
+        for k in 0..=MAX_CARRIED_ENTRIES {
+            std::fs::write(out.join("data").join(k.to_string()), "").unwrap();
+        }
+        std::fs::write(out.join(XYZ_FILE), "old").unwrap();
+        let staging = Staging::begin(&out).unwrap();
+        std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
+        let published = staging.commit().unwrap();
+        assert!(
+            matches!(
+                &published,
+                Published::InPlace(Some(FolderError::Carry { .. }))
+            ),
+            "{published:?}"
+        );
+        assert_eq!(names(&out), ["data", CSV_FILE]);
+        assert_eq!(
+            std::fs::read_dir(out.join("data")).unwrap().count(),
+            MAX_CARRIED_ENTRIES + 1
+        );
         assert_eq!(names(&dir), ["out"]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
