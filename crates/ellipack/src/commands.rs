@@ -1,9 +1,13 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
+use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
-    RunOptions, probe_output_folder, resume_start, run, time_limit_of, verify as check,
+    RunOptions, probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
 };
-use ellipack::packing::{read_packing_dir, read_packing_files, write_files};
+use ellipack::packing::{
+    CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
+    read_table_into, write_files,
+};
 use ellipack::render::{RenderOptions, write_pictures};
 use ellipack::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -129,14 +133,29 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     )?;
     bar.finish_and_clear();
 
-    write_files(&out, &outcome.packing, &outcome.summary, scene.output.xyz)?;
-    ellipack::output::write_atomically(&out.join("history.csv"), history.as_bytes())?;
+    // The whole set is written into a staging folder and swapped in, so that the folder never
+    // holds a mix of this run's files and the previous run's; an error (or a kill) before the
+    // commit leaves the previous set.
+    let staging = Staging::begin(&out)?;
+    let staged = staging.path();
+    write_files(staged, &outcome.packing, &outcome.summary, scene.output.xyz)?;
+    ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     if scene.output.pictures {
         let options = RenderOptions {
             width: scene.output.image_width,
             label: scene.name.clone(),
         };
-        write_pictures(&out, &outcome.packing, &options)?;
+        write_pictures(staged, &outcome.packing, &options)?;
+    }
+    if let Published::InPlace(why) = staging.commit()? {
+        eprintln!(
+            "note: the files in {} were replaced one by one, not swapped in as a set ({})",
+            out.display(),
+            why.map_or_else(
+                || "no staging folder could be made beside it".to_string(),
+                |e| e.to_string()
+            )
+        );
     }
     let s = &outcome.summary;
     println!("{}", scene.title());
@@ -213,16 +232,70 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     })
 }
 
-pub fn verify(packing: &Path, summary: Option<&Path>) -> Result<ExitCode, Box<dyn Error>> {
-    let (packing, stated) = match summary {
-        Some(summary) => read_packing_files(packing, summary)?,
-        None if packing.is_dir() => read_packing_dir(packing)?,
-        None => {
-            let dir = packing.parent().unwrap_or(Path::new("."));
-            read_packing_files(packing, &dir.join("summary.json"))?
+/// The arguments of `ellipack verify`.
+pub struct VerifyArgs {
+    pub packing: PathBuf,
+    pub summary: Option<PathBuf>,
+    pub container: Option<ContainerKind>,
+    pub size: Option<Vec<f64>>,
+    pub center: Option<Vec<f64>>,
+}
+
+/// How many offenders of each kind are printed (all are counted).
+const OFFENDERS_SHOWN: usize = 20;
+
+pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
+    let csv_path = if args.packing.is_dir() {
+        args.packing.join(CSV_FILE)
+    } else {
+        args.packing.clone()
+    };
+    let (packing, table, stated) = match (args.container, &args.size) {
+        (Some(kind), Some(size)) => {
+            let center = args
+                .center
+                .clone()
+                .unwrap_or_else(|| vec![0.0; kind.dimension()]);
+            let container = Container::from_parts(kind, &center, size).map_err(|e| match e {
+                PackingError::Inconsistent { message, .. } => {
+                    format!("--container {kind}: {message}")
+                }
+                other => other.to_string(),
+            })?;
+            let (packing, table) = read_table_into(&csv_path, container, None, "--container")?;
+            (packing, table, None)
+        }
+        _ => {
+            let summary_path = match &args.summary {
+                Some(path) => path.clone(),
+                None => csv_path
+                    .parent()
+                    .unwrap_or(Path::new("."))
+                    .join(SUMMARY_FILE),
+            };
+            if args.summary.is_none() && !summary_path.exists() {
+                return Err(format!(
+                    "{}: not found; for a packing without a summary give the container, e.g. \
+                     `--container ball --size 5` or `--container cuboid --size 1,2,3`",
+                    summary_path.display()
+                )
+                .into());
+            }
+            let summary_name = summary_path.display().to_string();
+            let text = std::fs::read_to_string(&summary_path)
+                .map_err(|e| format!("{summary_name}: {e}"))?;
+            let stated = read_stated_summary(&text, &summary_name)?;
+            let (packing, table) = read_table_into(
+                &csv_path,
+                stated.container.clone(),
+                stated.items,
+                &summary_name,
+            )?;
+            (packing, table, stated.certificate)
         }
     };
-    let certificate = check(&packing)?;
+    let verification = check(&packing)?;
+    let certificate = verification.certificate;
     println!(
         "{} {}, container: {}, density {:.5}",
         packing.items.len(),
@@ -238,10 +311,53 @@ pub fn verify(packing: &Path, summary: Option<&Path>) -> Result<ExitCode, Box<dy
             .min_mu2
             .map_or("—".into(), |m| format!("{m:.12}"))
     );
-    if stated.certificate != certificate {
+    // Messages name items by the `id` column of packing.csv, which a person edited or sorted.
+    let id = |row: usize| table.ids.get(row).copied().unwrap_or(row as u64);
+    let pairs = &verification.overlapping_pairs;
+    if !pairs.is_empty() {
+        println!("overlapping pairs (ids, μ² < 1), deepest first:");
+        for p in pairs.iter().take(OFFENDERS_SHOWN) {
+            println!(
+                "  {} and {}: μ² = {}",
+                id(p.items.0),
+                id(p.items.1),
+                p.mu2
+                    .map_or("— (PW85 could not evaluate it)".into(), |m| format!(
+                        "{m:.12}"
+                    ))
+            );
+        }
+        if pairs.len() > OFFENDERS_SHOWN {
+            println!("  … and {} more", pairs.len() - OFFENDERS_SHOWN);
+        }
+    }
+    let outside = &verification.outside;
+    if !outside.is_empty() {
+        println!(
+            "outside the container (id, t: the item fits only in the container scaled by t \
+             about its centre), worst first:"
+        );
+        for o in outside.iter().take(OFFENDERS_SHOWN) {
+            let percent = 100.0 * (o.scale - 1.0);
+            let percent = if percent >= 0.01 {
+                format!("{percent:.2}")
+            } else {
+                format!("{percent:.1e}")
+            };
+            println!(
+                "  {}: t = {:.9} (the container would have to be {percent} % larger)",
+                id(o.item),
+                o.scale,
+            );
+        }
+        if outside.len() > OFFENDERS_SHOWN {
+            println!("  … and {} more", outside.len() - OFFENDERS_SHOWN);
+        }
+    }
+    if let Some(stated) = stated.filter(|s| *s != certificate) {
         println!(
             "note: summary.json states {} overlapping pairs, {} containment violations",
-            stated.certificate.overlapping_pairs, stated.certificate.containment_violations
+            stated.overlapping_pairs, stated.containment_violations
         );
     }
     Ok(if certificate.is_certified() {

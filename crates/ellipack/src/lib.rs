@@ -4,6 +4,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 pub mod error;
+pub mod folder;
 pub mod instances;
 pub mod measure;
 pub mod output;

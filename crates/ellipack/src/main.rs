@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use ellipack::Error;
+use ellipack::packing::ContainerKind;
 use ellipack::pairs::{Criterion, evaluate, read_pairs};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -57,11 +58,39 @@ enum Command {
     /// Re-check a packing independently (PW85 verdicts on every close pair, exact
     /// containment) and print its certificate. Exits with failure if any pair overlaps or any
     /// item sticks out.
+    ///
+    /// Overlapping pairs are listed by the `id` column of packing.csv with their μ², items
+    /// outside with the factor t by which the container would have to grow about its centre to
+    /// hold them (first 20 of each; all are counted). A hand-made packing needs only
+    /// packing.csv and the container: a summary.json as short as
+    /// `{"container": {"kind": "ball", "radius": 5}}`, or --container and --size.
     Verify {
         /// A folder with packing.csv and summary.json, or the path of packing.csv.
         packing: PathBuf,
-        /// summary.json, when the first argument is packing.csv.
+        /// summary.json, when the first argument is packing.csv (default: the one beside it).
+        #[arg(conflicts_with = "container")]
         summary: Option<PathBuf>,
+        /// The container instead of a summary: circle, ellipse, rectangle (2D), ball,
+        /// ellipsoid, cuboid (3D).
+        #[arg(long, requires = "size", value_parser = parse_container_kind)]
+        container: Option<ContainerKind>,
+        /// The container's size: the radius, or the semi-axes or half sides separated by commas
+        /// (`--size 1,2,3`).
+        #[arg(
+            long,
+            requires = "container",
+            value_delimiter = ',',
+            allow_hyphen_values = true
+        )]
+        size: Option<Vec<f64>>,
+        /// The container's centre, coordinates separated by commas (default: the origin).
+        #[arg(
+            long,
+            requires = "container",
+            value_delimiter = ',',
+            allow_hyphen_values = true
+        )]
+        center: Option<Vec<f64>>,
     },
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
@@ -103,6 +132,16 @@ enum Command {
     },
 }
 
+fn parse_container_kind(name: &str) -> Result<ContainerKind, String> {
+    ContainerKind::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = ContainerKind::ALL.iter().map(|k| k.name()).collect();
+        format!(
+            "`{name}` is not a container; the kinds are {}",
+            names.join(", ")
+        )
+    })
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum CriterionArg {
     Contact,
@@ -138,7 +177,19 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             threads,
             resume,
         })?,
-        Command::Verify { packing, summary } => commands::verify(&packing, summary.as_deref())?,
+        Command::Verify {
+            packing,
+            summary,
+            container,
+            size,
+            center,
+        } => commands::verify(commands::VerifyArgs {
+            packing,
+            summary,
+            container,
+            size,
+            center,
+        })?,
         Command::Instances => {
             print!("{}", ellipack::instances::listing());
             ExitCode::SUCCESS

@@ -13,6 +13,7 @@ use crate::packing::{
 use crate::scene::Scene;
 use implicit_packing::containment::{
     Container as ContainerShape, ContainerKind as ModelContainer, containment_residual,
+    farthest_point,
 };
 use implicit_packing::model::Problem;
 use implicit_packing::multistart::{MultiStartProgress, MultiStartSettings, multistart};
@@ -402,6 +403,49 @@ fn start_defects<const N: usize>(
 /// # Errors
 /// [`PackError`] when the items do not form a valid model (a zero semi-axis, NaN).
 pub fn verify(packing: &Packing) -> Result<Certificate, PackError> {
+    verify_detailed(packing).map(|v| v.certificate)
+}
+
+/// Two items whose interiors overlap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OverlappingPair {
+    /// The 0-based positions of the two items in the packing (rows of `packing.csv`), the
+    /// smaller first.
+    pub items: (usize, usize),
+    /// Their PW85 μ² (< 1 for an overlap); `None` when PW85 could not evaluate the pair.
+    pub mu2: Option<f64>,
+}
+
+/// An item that is not inside the container.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ItemOutside {
+    /// The 0-based position of the item in the packing (its row of `packing.csv`).
+    pub item: usize,
+    /// By how much it sticks out, as a scale factor t > 1: the item lies inside the
+    /// container scaled by t about the container's centre, and in no smaller scaling. For a
+    /// ball of radius r, t·r is the largest distance of a point of the item from the centre;
+    /// for a box, the worst of (|cₖ| + sₖ) / Lₖ over the axes (cₖ the item's centre relative to
+    /// the container's, sₖ its half extent along axis k, Lₖ the half side).
+    pub scale: f64,
+}
+
+/// [`verify`]'s certificate with the offenders it counts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Verification {
+    /// The certificate (counts and smallest μ²), as [`verify`] returns it.
+    pub certificate: Certificate,
+    /// Every overlapping pair, the smallest μ² (the deepest overlap) first.
+    pub overlapping_pairs: Vec<OverlappingPair>,
+    /// Every item outside the container, the largest scale first.
+    pub outside: Vec<ItemOutside>,
+}
+
+/// [`verify`], naming the overlapping pairs with their μ² and the items outside with by how
+/// much they stick out.
+///
+/// # Errors
+/// As [`verify`].
+pub fn verify_detailed(packing: &Packing) -> Result<Verification, PackError> {
     match &packing.items {
         Items::Ellipses(v) => {
             let axes: Vec<[f64; 2]> = v.iter().map(|e| e.semi_axes).collect();
@@ -417,12 +461,68 @@ pub fn verify(packing: &Packing) -> Result<Certificate, PackError> {
 fn verify_n<const N: usize>(
     packing: &Packing,
     axes: &[[f64; N]],
-) -> Result<Certificate, PackError> {
+) -> Result<Verification, PackError> {
     let kind = model_container(packing.container.kind());
     let mut problem = Problem::<N>::new(axes.to_vec(), kind)?;
     let x = variables_of::<N>(packing, axes, kind)?;
     let model = problem.certify(&x)?;
-    certificate_of(packing, &model, &mut problem, &x)
+    let certificate = certificate_of(packing, &model, &mut problem, &x)?;
+    let bodies = problem.bodies_at(&x)?.to_vec();
+    let mut overlapping_pairs: Vec<OverlappingPair> = model
+        .overlapping_pairs
+        .iter()
+        .map(|&(i, j)| OverlappingPair {
+            items: (i, j),
+            mu2: contact_mu2(&bodies[i], &bodies[j]),
+        })
+        .collect();
+    // Deepest first; a pair PW85 could not evaluate goes last. `total_cmp` keeps the order
+    // total, and the stable sort keeps the model's (i, j) order among equals.
+    overlapping_pairs.sort_by(|a, b| match (a.mu2, b.mu2) {
+        (Some(p), Some(q)) => p.total_cmp(&q),
+        (Some(_), None) => std::cmp::Ordering::Less,
+        (None, Some(_)) => std::cmp::Ordering::Greater,
+        (None, None) => std::cmp::Ordering::Equal,
+    });
+    let size = packing.container.half_extents();
+    let mut outside: Vec<ItemOutside> = model
+        .outside
+        .iter()
+        .map(|&item| ItemOutside {
+            item,
+            scale: containment_scale(&bodies[item], packing.container.kind(), &size),
+        })
+        .collect();
+    outside.sort_by(|a, b| b.scale.total_cmp(&a.scale));
+    Ok(Verification {
+        certificate,
+        overlapping_pairs,
+        outside,
+    })
+}
+
+/// The scale factor of [`ItemOutside::scale`] for a body whose centre is relative to the
+/// container's centre; `half_extents` are the container's (the radius repeated for a ball).
+fn containment_scale<const N: usize>(
+    body: &Body<N>,
+    kind: ContainerKind,
+    half_extents: &[f64],
+) -> f64 {
+    let mut a = [0.0; N];
+    for (k, slot) in a.iter_mut().enumerate() {
+        *slot = half_extents.get(k).copied().unwrap_or(f64::NAN);
+    }
+    match model_container(kind) {
+        ModelContainer::Box => {
+            let (c, m) = (body.centre(), body.shape_matrix());
+            // The support of the item along ±e_k is ±c_k + sqrt(M_kk).
+            (0..N)
+                .map(|k| (c[k].abs() + m[k][k].sqrt()) / a[k])
+                .fold(0.0, f64::max)
+        }
+        // The container's own map C⁻¹ makes it the unit ball: h = max |C⁻¹ p|² over the item.
+        ModelContainer::Ball | ModelContainer::Ellipsoid => farthest_point(body, &a).0.sqrt(),
+    }
 }
 
 /// The summary's certificate: the model's verdicts and the smallest μ² over the pairs whose
@@ -669,5 +769,69 @@ mod tests {
             "the second item reaches 2.5 > 2.4"
         );
         assert!(c.min_mu2.is_some_and(|m| m < 1.0));
+        let v = verify_detailed(&packing).unwrap();
+        assert_eq!(v.certificate, c);
+        assert_eq!(v.overlapping_pairs.len(), 1);
+        assert_eq!(v.overlapping_pairs[0].items, (0, 1));
+        let mu2 = v.overlapping_pairs[0].mu2.unwrap();
+        assert!((mu2 - 0.5625).abs() <= 1e-13, "{mu2}");
+        assert_eq!(v.outside.len(), 1);
+        assert_eq!(v.outside[0].item, 1);
+        assert!((v.outside[0].scale - 2.5 / 2.4).abs() <= 1e-13);
+    }
+
+    #[test]
+    fn the_scale_of_an_item_outside_is_where_it_would_just_fit() {
+        // An ellipse (2, 1) turned by 90° at (0, 3); the containers are centred at (1, 1), so
+        // relative to their centre the item's boundary is (−1 − sin s, 2 + 2 cos s). The scale
+        // is the largest value of the container's gauge on that boundary (sampled densely).
+        let item = EllipseItem {
+            center: [0.0, 3.0],
+            semi_axes: [2.0, 1.0],
+            theta: std::f64::consts::FRAC_PI_2,
+        };
+        let gauge_max = |gauge: &dyn Fn(f64, f64) -> f64| {
+            (0..400_000)
+                .map(|k| {
+                    let s = k as f64 / 400_000.0 * std::f64::consts::TAU;
+                    gauge(-1.0 - s.sin(), 2.0 + 2.0 * s.cos())
+                })
+                .fold(0.0, f64::max)
+        };
+        let cases: [(Container, f64); 3] = [
+            (
+                Container::Ellipse {
+                    center: [1.0, 1.0],
+                    semi_axes: [4.0, 2.0],
+                },
+                gauge_max(&|x, y| (x / 4.0).hypot(y / 2.0)),
+            ),
+            (
+                Container::Rectangle {
+                    center: [1.0, 1.0],
+                    half_sides: [4.0, 2.0],
+                },
+                // max(2 / 4, 4 / 2): the top of the item, 4 above the centre.
+                2.0,
+            ),
+            (
+                Container::Circle {
+                    center: [1.0, 1.0],
+                    radius: 2.0,
+                },
+                gauge_max(&|x, y| x.hypot(y) / 2.0),
+            ),
+        ];
+        for (container, expected) in cases {
+            let packing = Packing::new(container, Items::Ellipses(vec![item])).unwrap();
+            let v = verify_detailed(&packing).unwrap();
+            assert_eq!(v.outside.len(), 1, "{packing:?}");
+            let scale = v.outside[0].scale;
+            assert!(
+                (scale - expected).abs() <= 1e-9 * expected,
+                "{:?}: {scale} vs {expected}",
+                packing.container.kind()
+            );
+        }
     }
 }

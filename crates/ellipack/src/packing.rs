@@ -78,6 +78,19 @@ pub enum PackingError {
         /// What is wrong.
         message: String,
     },
+    /// Two rows of the items table carry the same `id`, so a message about that id could
+    /// not say which item it means.
+    #[error("{source_name}: line {line}: id {id} is already the id of line {first_line}")]
+    DuplicateId {
+        /// The file.
+        source_name: String,
+        /// The repeated id.
+        id: u64,
+        /// 1-based line of its first row.
+        first_line: u64,
+        /// 1-based line of the repetition.
+        line: u64,
+    },
     /// The CSV header lacks a column.
     #[error("{source_name}: line 1: missing column `{column}` (the header must be {expected})")]
     MissingColumn {
@@ -179,13 +192,14 @@ impl fmt::Display for ContainerKind {
 
 /// An axis-aligned container with its size. In JSON: `{"kind": "ball", "center": [..],
 /// "radius": r}`, with `half_sides` for a rectangle or cuboid and `semi_axes` for an ellipse or
-/// ellipsoid.
+/// ellipsoid; a missing `center` is the origin.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Container {
     /// The disc |x − center| ≤ radius.
     Circle {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 2],
         /// Its radius.
         radius: f64,
@@ -193,6 +207,7 @@ pub enum Container {
     /// The ellipse Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
     Ellipse {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 2],
         /// Its semi-axes along x and y.
         semi_axes: [f64; 2],
@@ -200,6 +215,7 @@ pub enum Container {
     /// The rectangle |xₖ − centerₖ| ≤ half_sidesₖ.
     Rectangle {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 2],
         /// Half its width and half its height.
         half_sides: [f64; 2],
@@ -207,6 +223,7 @@ pub enum Container {
     /// The ball |x − center| ≤ radius.
     Ball {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 3],
         /// Its radius.
         radius: f64,
@@ -214,6 +231,7 @@ pub enum Container {
     /// The ellipsoid Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
     Ellipsoid {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 3],
         /// Its semi-axes along x, y and z.
         semi_axes: [f64; 3],
@@ -221,6 +239,7 @@ pub enum Container {
     /// The cuboid |xₖ − centerₖ| ≤ half_sidesₖ.
     Cuboid {
         /// Its centre.
+        #[serde(default)]
         center: [f64; 3],
         /// Its half sides along x, y and z.
         half_sides: [f64; 3],
@@ -744,8 +763,29 @@ pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
 /// # Errors
 /// [`PackingError::Malformed`] for broken CSV, [`PackingError::MissingColumn`], and
 /// [`PackingError::BadValue`] (line, column, name) for a cell that is not a finite number, a
-/// semi-axis that is not positive, a zero quaternion or an `id` that is not an integer.
+/// semi-axis that is not positive, a zero quaternion or an `id` that is not an integer;
+/// [`PackingError::DuplicateId`] naming both lines when two rows share an `id`.
 pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
+    read_table(text, source_name).map(|table| table.items)
+}
+
+/// The rows of [`CSV_FILE`] as read: the items, and for each its `id` and its line, so that
+/// messages can name an item the way the file does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// The items, in the order of the rows.
+    pub items: Items,
+    /// The `id` of each row.
+    pub ids: Vec<u64>,
+    /// The 1-based line of each row.
+    pub lines: Vec<u64>,
+}
+
+/// Reads [`CSV_FILE`] text as [`read_csv`] does, keeping each row's `id` and line.
+///
+/// # Errors
+/// Those of [`read_csv`].
+pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
@@ -778,6 +818,9 @@ pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
     }
     let mut ellipses = Vec::new();
     let mut ellipsoids = Vec::new();
+    let mut ids = Vec::new();
+    let mut lines = Vec::new();
+    let mut first_line_of = std::collections::HashMap::new();
     for record in reader.records() {
         let record = record.map_err(malformed)?;
         let line = record.position().map_or(0, csv::Position::line);
@@ -790,10 +833,21 @@ pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
         };
         // Every column of the record exists: the csv reader rejects rows of another length.
         let cell = |k: usize| record.get(index[k]).unwrap_or("");
-        let id = cell(0);
-        if id.parse::<u64>().is_err() {
-            return Err(bad(0, format!("`{id}` is not a non-negative integer")));
+        let id_text = cell(0);
+        let Ok(id) = id_text.parse::<u64>() else {
+            return Err(bad(0, format!("`{id_text}` is not a non-negative integer")));
+        };
+        if let Some(&first_line) = first_line_of.get(&id) {
+            return Err(PackingError::DuplicateId {
+                source_name: source_name.to_string(),
+                id,
+                first_line,
+                line,
+            });
         }
+        first_line_of.insert(id, line);
+        ids.push(id);
+        lines.push(line);
         let mut values = [0.0; 10];
         for (k, slot) in values.iter_mut().enumerate().take(expected.len() - 1) {
             let text = cell(k + 1);
@@ -830,11 +884,12 @@ pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
             });
         }
     }
-    Ok(if three_d {
+    let items = if three_d {
         Items::Ellipsoids(ellipsoids)
     } else {
         Items::Ellipses(ellipses)
-    })
+    };
+    Ok(Table { items, ids, lines })
 }
 
 /// The text of [`SUMMARY_FILE`] (pretty-printed JSON).
@@ -961,6 +1016,84 @@ pub fn read_packing_files(
 /// As [`read_packing_files`].
 pub fn read_packing_dir(dir: &Path) -> Result<(Packing, Summary), PackingError> {
     read_packing_files(&dir.join(CSV_FILE), &dir.join(SUMMARY_FILE))
+}
+
+/// What `ellipack verify` needs of a summary: the container, and when present the item count
+/// and the certificate a run stated. A hand-made packing's summary can be as short as
+/// `{"container": {"kind": "ball", "radius": 5}}`; other keys are ignored.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct StatedSummary {
+    /// The container.
+    pub container: Container,
+    /// The number of items, when stated.
+    #[serde(default)]
+    pub items: Option<usize>,
+    /// The certificate a run stated, when present.
+    #[serde(default)]
+    pub certificate: Option<Certificate>,
+}
+
+/// Reads a [`StatedSummary`] from summary text.
+///
+/// # Errors
+/// As [`read_summary`].
+pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, PackingError> {
+    let summary: StatedSummary =
+        serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: e.line() as u64,
+            message: format!("column {}: {e}", e.column()),
+        })?;
+    if let Some((field, message)) = summary.container.problem() {
+        return Err(PackingError::Inconsistent {
+            source_name: source_name.to_string(),
+            message: format!("container.{field}: {message}"),
+        });
+    }
+    Ok(summary)
+}
+
+/// Reads `packing.csv` as a [`Table`] and puts its items into `container`, checking that they
+/// agree (dimension; the item count when `items` is given). `container_source` names where the
+/// container came from in messages.
+///
+/// # Errors
+/// [`PackingError::Read`] naming the file, those of [`read_table`], and
+/// [`PackingError::Inconsistent`] when the table and the container disagree.
+pub fn read_table_into(
+    csv_path: &Path,
+    container: Container,
+    items: Option<usize>,
+    container_source: &str,
+) -> Result<(Packing, Table), PackingError> {
+    let csv_name = csv_path.display().to_string();
+    let text = std::fs::read_to_string(csv_path).map_err(|source| PackingError::Read {
+        path: csv_path.to_path_buf(),
+        source,
+    })?;
+    let table = read_table(&text, &csv_name)?;
+    let inconsistent = |message: String| PackingError::Inconsistent {
+        source_name: csv_name.clone(),
+        message,
+    };
+    if container.dimension() != table.items.dimension() {
+        return Err(inconsistent(format!(
+            "{}D items (by the header) but {container_source} gives a {} container",
+            table.items.dimension(),
+            container.kind()
+        )));
+    }
+    if let Some(n) = items.filter(|n| *n != table.items.len()) {
+        return Err(inconsistent(format!(
+            "{} items, but {container_source} says `items`: {n}",
+            table.items.len()
+        )));
+    }
+    let packing = Packing::new(container, table.items.clone()).map_err(|e| match e {
+        PackingError::Inconsistent { message, .. } => inconsistent(message),
+        other => other,
+    })?;
+    Ok((packing, table))
 }
 
 /// Writes `packing.csv`, `summary.json` and (when `xyz`) `packing.xyz` into `dir`, each
