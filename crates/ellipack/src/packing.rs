@@ -763,17 +763,29 @@ pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
     } else {
         &CSV_COLUMNS_2D
     };
+    if header.len() <= 1 && header.iter().all(str::is_empty) {
+        return Err(PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: 1,
+            message: format!(
+                "the file is empty: a packing starts with the header {} and has one line per item",
+                expected.join(",")
+            ),
+        });
+    }
     let mut index = Vec::with_capacity(expected.len());
     for &column in expected {
-        let i =
-            header
-                .iter()
-                .position(|h| h == column)
-                .ok_or_else(|| PackingError::MissingColumn {
-                    source_name: source_name.to_string(),
-                    column,
-                    expected: expected.join(","),
-                })?;
+        let i = crate::table::column_position(&header, column)
+            .map_err(|e| PackingError::Malformed {
+                source_name: source_name.to_string(),
+                line: 1,
+                message: e.to_string(),
+            })?
+            .ok_or_else(|| PackingError::MissingColumn {
+                source_name: source_name.to_string(),
+                column,
+                expected: expected.join(","),
+            })?;
         index.push(i);
     }
     let mut ellipses = Vec::new();
