@@ -63,19 +63,28 @@ enum Command {
     },
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
-    /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids (μ² < 1:
-    /// they overlap).
+    /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids or
+    /// ellipses (μ² < 1: they overlap).
     ///
-    /// Input columns: r12_x, r12_y, r12_z (c2 − c1), q1_0..q1_5 and q2_0..q2_5 (the upper
+    /// Input columns, 3D: r12_x, r12_y, r12_z (c2 − c1), q1_0..q1_5 and q2_0..q2_5 (the upper
     /// triangle of each Q, row-major: Q11, Q12, Q13, Q22, Q23, Q33, for the ellipsoid
-    /// (x − c)ᵀ Q⁻¹ (x − c) ≤ 1); optional case_id; other columns are ignored. Output columns:
-    /// case_id, mu2, lambda, overlap, error. A row that fails has its message in `error`; the
-    /// other rows still run.
+    /// (x − c)ᵀ Q⁻¹ (x − c) ≤ 1); 2D: r12_x, r12_y, q1_0..q1_2 and q2_0..q2_2 (Q11, Q12, Q22),
+    /// detected from the header; optional case_id; other columns are ignored, a column named
+    /// twice is an error. Output columns: case_id, mu2, lambda, overlap, error. A row that
+    /// fails has its message in `error`; the other rows still run. Rows are streamed: a file
+    /// of any length runs in constant memory.
+    ///
+    /// Exit status: 0 every row evaluated; 1 the command failed (unreadable or malformed file,
+    /// output not writable: nothing is written); 3 some rows failed (see their `error`
+    /// column), the others were written. A reader that closes the pipe early (`| head`) is
+    /// not a failure: 0.
     Contact {
         /// The pairs (CSV). Without it, the bundled example pairs are evaluated.
         #[arg(long)]
         input: Option<PathBuf>,
-        /// Where to write the results (CSV, written atomically). Default: standard output.
+        /// Where to write the results (CSV; a file is replaced atomically, keeping its mode and
+        /// any symbolic link to it; a FIFO or a device is written into). Not the input file.
+        /// Default: standard output.
         #[arg(long)]
         output: Option<PathBuf>,
         /// `contact` computes μ², λ and the verdict; `overlap` only the verdict, which is
@@ -91,11 +100,16 @@ enum Command {
     /// rotation); 2D `cix, ciy, ai, bi, theta_i, cjx, cjy, aj, bj, theta_j` (detected from the
     /// header). Output columns: case_id, U, d2, eps, f, overlap, X_1, X_2[, X_3], error; X is
     /// blank where the projection is not unique.
+    ///
+    /// Exit status: 0 every row evaluated; 1 the command failed (nothing is written); 3 some
+    /// rows failed (see their `error` column), the others were written.
     Measure {
         /// The pairs (CSV).
         #[arg(long)]
         input: PathBuf,
-        /// Where to write the results (CSV, written atomically). Default: standard output.
+        /// Where to write the results (CSV; a file is replaced atomically, keeping its mode and
+        /// any symbolic link to it; a FIFO or a device is written into). Not the input file.
+        /// Default: standard output.
         #[arg(long)]
         output: Option<PathBuf>,
     },
