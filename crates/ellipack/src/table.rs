@@ -211,14 +211,23 @@ pub fn read_numeric_rows(
     Ok(all)
 }
 
-/// A cell as quoted in a message: cut to its first 40 characters, so that a huge cell does not
-/// flood the terminal.
+/// A cell as quoted in a message: on one line (control characters escaped, as `\n`) and cut
+/// to its first 40 characters, so that a huge cell does not flood the terminal.
 pub fn short_text(cell: &str) -> String {
     const MAX: usize = 40;
-    match cell.char_indices().nth(MAX) {
-        Some((cut, _)) => format!("{}…", &cell[..cut]),
-        None => cell.to_string(),
+    let mut out = String::new();
+    for (i, c) in cell.chars().enumerate() {
+        if i == MAX {
+            out.push('…');
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
     }
+    out
 }
 
 /// A number as written in a message: short (`1e-300`, `-2.5e0`), with up to 6 significant
