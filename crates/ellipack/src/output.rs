@@ -236,6 +236,43 @@ mod tests {
     }
 
     #[test]
+    fn an_output_dropped_before_commit_leaves_nothing_behind() {
+        let dir = std::env::temp_dir().join(format!("ellipack-guard-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.csv");
+        std::fs::write(&path, b"old").unwrap();
+        {
+            let mut file = OutputFile::create(&path).unwrap();
+            file.write_all(&[b'x'; 100_000]).unwrap();
+            assert_eq!(
+                std::fs::read_dir(&dir).unwrap().count(),
+                2,
+                "temporary file"
+            );
+        }
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            1,
+            "temporary file removed"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_directory_is_not_replaced() {
+        let dir = std::env::temp_dir().join(format!("ellipack-outdir-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let err = write_atomically(&dir.join("sub"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("is a directory"), "{err}");
+        assert!(dir.join("sub").is_dir());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn unwritable_directory_is_an_error_naming_the_file() {
         let path = Path::new("/nonexistent-dir-for-ellipack/x.csv");
         let err = write_atomically(path, b"x").unwrap_err().to_string();

@@ -268,3 +268,42 @@ pub fn quote(field: &str) -> String {
 pub fn exact(x: f64) -> String {
     format!("{x:.16e}")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        assert_eq!(short(1e-300), "1e-300");
+        assert_eq!(short(-1e300), "-1e300");
+        assert_eq!(short(f64::MAX), "1.79769e308");
+        assert_eq!(short(5e-324), "4.94066e-324");
+        assert_eq!(short(-2.5), "-2.5");
+        assert_eq!(short(3.0), "3");
+        assert_eq!(short(0.0), "0");
+        assert_eq!(short(123456.7), "123456.7");
+        assert_eq!(short(f64::NAN), "NaN");
+        assert_eq!(short(f64::NEG_INFINITY), "-inf");
+        for x in [1e-300, 7.3e201, -1.0 / 3.0, 1e-5, 999_999.9] {
+            assert!(short(x).len() <= 12, "{x}: {}", short(x));
+        }
+    }
+
+    #[test]
+    fn cells_in_messages_are_short_and_on_one_line() {
+        assert_eq!(short_text("abc"), "abc");
+        assert_eq!(short_text("a\nb\u{0}"), "a\\nb\\u{0}");
+        let long = "é".repeat(100);
+        assert_eq!(short_text(&long), format!("{}…", "é".repeat(40)));
+    }
+
+    #[test]
+    fn a_column_named_twice_is_found_with_both_positions() {
+        let header = csv::StringRecord::from(vec!["a", "b", "a"]);
+        assert_eq!(column_position(&header, "b"), Ok(Some(1)));
+        assert_eq!(column_position(&header, "c"), Ok(None));
+        let err = column_position(&header, "a").unwrap_err();
+        assert_eq!((err.first, err.second), (1, 3));
+    }
+}
