@@ -742,9 +742,10 @@ pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
 /// other columns are ignored. `source_name` names the file in messages.
 ///
 /// # Errors
-/// [`PackingError::Malformed`] for broken CSV, [`PackingError::MissingColumn`], and
-/// [`PackingError::BadValue`] (line, column, name) for a cell that is not a finite number, a
-/// semi-axis that is not positive, a zero quaternion or an `id` that is not an integer.
+/// [`PackingError::Malformed`] for broken CSV, an empty file, a column named twice or no item
+/// line, [`PackingError::MissingColumn`], and [`PackingError::BadValue`] (line, column, name)
+/// for a cell that is not a finite number, a semi-axis that is not positive, a zero quaternion
+/// or an `id` that is not an integer.
 pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -841,6 +842,16 @@ pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
                 theta,
             });
         }
+    }
+    if ellipses.is_empty() && ellipsoids.is_empty() {
+        return Err(PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: 2,
+            message: format!(
+                "no items: after the header {}, a packing has one line per item",
+                expected.join(",")
+            ),
+        });
     }
     Ok(if three_d {
         Items::Ellipsoids(ellipsoids)

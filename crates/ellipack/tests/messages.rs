@@ -111,6 +111,17 @@ fn an_empty_packing_file_says_so() {
 }
 
 #[test]
+fn a_packing_without_items_says_so() {
+    let err = ellipack::packing::read_csv("id,x,y,a,b,theta\n", "packing.csv")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("packing.csv: line 2: no items") && !err.contains("ellipsoid"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_duplicated_packing_column_is_an_error_naming_it() {
     let text = "id,x,x,y,a,b,theta\n0,0,9,0,1,1,0\n";
     let err = ellipack::packing::read_csv(text, "packing.csv")
