@@ -42,6 +42,17 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         threads: usize,
     },
+    /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
+    /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
+    /// than the normal test run, in release mode. Exits non-zero if any input panics.
+    Fuzz {
+        /// Cases per parser (the normal test run uses 256).
+        #[arg(long, default_value_t = 100_000)]
+        cases: u32,
+        /// Build in the dev profile instead of release (quicker to build, slower to run).
+        #[arg(long)]
+        dev: bool,
+    },
 }
 
 #[derive(Subcommand, Clone, Copy)]
@@ -60,6 +71,7 @@ enum PartArg {
 
 fn main() -> ExitCode {
     match Cli::parse().command {
+        Command::Fuzz { cases, dev } => fuzz(cases, dev),
         Command::PaperTables {
             minutes,
             instances,
@@ -114,6 +126,35 @@ fn main() -> ExitCode {
                 return ExitCode::FAILURE;
             }
             summarise(&run)
+        }
+    }
+}
+
+/// The fuzz suite is an ordinary test target, so that the normal run and this long run share
+/// every strategy; only the case count (`PROPTEST_CASES`) and the profile differ.
+fn fuzz(cases: u32, dev: bool) -> ExitCode {
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let mut command = std::process::Command::new(cargo);
+    command
+        .current_dir(workspace_root())
+        .args(["test", "-p", "ellipack", "--test", "fuzz"])
+        .env("PROPTEST_CASES", cases.to_string());
+    if !dev {
+        command.arg("--release");
+    }
+    eprintln!("fuzz: {cases} cases per parser");
+    match command.status() {
+        Ok(status) if status.success() => {
+            eprintln!("fuzz: no panic in {cases} cases per parser");
+            ExitCode::SUCCESS
+        }
+        Ok(status) => {
+            eprintln!("fuzz: failed ({status}); the failing input is printed above");
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("error: cannot run cargo: {e}");
+            ExitCode::FAILURE
         }
     }
 }

@@ -14,6 +14,7 @@ pub mod pairs;
 pub mod render;
 pub mod scene;
 pub mod table;
+pub mod terminal;
 
 pub use error::Error;
 

@@ -2,9 +2,13 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use ellipack::Error;
+use ellipack::output::{OutputFile, refuse_overwriting_input};
 use ellipack::packing::ContainerKind;
-use ellipack::pairs::{Criterion, evaluate, read_pairs};
-use std::path::PathBuf;
+use ellipack::pairs::{Criterion, Summary, contact_stream};
+use ellipack::terminal::reader_gone;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod commands;
@@ -94,19 +98,28 @@ enum Command {
     },
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
-    /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids (μ² < 1:
-    /// they overlap).
+    /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids or
+    /// ellipses (μ² < 1: they overlap).
     ///
-    /// Input columns: r12_x, r12_y, r12_z (c2 − c1), q1_0..q1_5 and q2_0..q2_5 (the upper
+    /// Input columns, 3D: r12_x, r12_y, r12_z (c2 − c1), q1_0..q1_5 and q2_0..q2_5 (the upper
     /// triangle of each Q, row-major: Q11, Q12, Q13, Q22, Q23, Q33, for the ellipsoid
-    /// (x − c)ᵀ Q⁻¹ (x − c) ≤ 1); optional case_id; other columns are ignored. Output columns:
-    /// case_id, mu2, lambda, overlap, error. A row that fails has its message in `error`; the
-    /// other rows still run.
+    /// (x − c)ᵀ Q⁻¹ (x − c) ≤ 1); 2D: r12_x, r12_y, q1_0..q1_2 and q2_0..q2_2 (Q11, Q12, Q22),
+    /// detected from the header; optional case_id; other columns are ignored, a column named
+    /// twice is an error. Output columns: case_id, mu2, lambda, overlap, error. A row that
+    /// fails has its message in `error`; the other rows still run. Rows are streamed: a file
+    /// of any length runs in constant memory.
+    ///
+    /// Exit status: 0 every row evaluated; 1 the command failed (unreadable or malformed file,
+    /// output not writable: nothing is written); 3 some rows failed (see their `error`
+    /// column), the others were written. A reader that closes the pipe early (`| head`) is
+    /// not a failure: 0.
     Contact {
         /// The pairs (CSV). Without it, the bundled example pairs are evaluated.
         #[arg(long)]
         input: Option<PathBuf>,
-        /// Where to write the results (CSV, written atomically). Default: standard output.
+        /// Where to write the results (CSV; a file is replaced atomically, keeping its mode and
+        /// any symbolic link to it; a FIFO or a device is written into). Not the input file.
+        /// Default: standard output.
         #[arg(long)]
         output: Option<PathBuf>,
         /// `contact` computes μ², λ and the verdict; `overlap` only the verdict, which is
@@ -122,11 +135,16 @@ enum Command {
     /// rotation); 2D `cix, ciy, ai, bi, theta_i, cjx, cjy, aj, bj, theta_j` (detected from the
     /// header). Output columns: case_id, U, d2, eps, f, overlap, X_1, X_2[, X_3], error; X is
     /// blank where the projection is not unique.
+    ///
+    /// Exit status: 0 every row evaluated; 1 the command failed (nothing is written); 3 some
+    /// rows failed (see their `error` column), the others were written.
     Measure {
         /// The pairs (CSV).
         #[arg(long)]
         input: PathBuf,
-        /// Where to write the results (CSV, written atomically). Default: standard output.
+        /// Where to write the results (CSV; a file is replaced atomically, keeping its mode and
+        /// any symbolic link to it; a FIFO or a device is written into). Not the input file.
+        /// Default: standard output.
         #[arg(long)]
         output: Option<PathBuf>,
     },
@@ -194,14 +212,14 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             print!("{}", ellipack::instances::listing());
             ExitCode::SUCCESS
         }
-        other => {
-            run_table(other)?;
-            ExitCode::SUCCESS
-        }
+        other => run_table(other)?,
     })
 }
 
-fn run_table(command: Command) -> Result<(), Error> {
+/// Exit status of `contact` and `measure` when some rows failed and the others were written.
+const ROWS_FAILED: u8 = 3;
+
+fn run_table(command: Command) -> Result<ExitCode, Error> {
     match command {
         Command::Contact {
             input,
@@ -209,72 +227,102 @@ fn run_table(command: Command) -> Result<(), Error> {
             criterion,
         } => contact(input, output, criterion),
         Command::Measure { input, output } => measure(input, output),
-        Command::Pack { .. } | Command::Verify { .. } | Command::Instances => Ok(()),
+        Command::Pack { .. } | Command::Verify { .. } | Command::Instances => Ok(ExitCode::SUCCESS),
     }
 }
 
-fn read_input(path: &PathBuf) -> Result<String, Error> {
-    std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.clone(),
-        source,
+fn open_input(path: &Path) -> Result<BufReader<File>, Error> {
+    File::open(path)
+        .map(BufReader::new)
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+}
+
+/// Runs `stream` into `output` (atomically) or standard output, says what happened, and
+/// turns it into the exit status: 0, or [`ROWS_FAILED`] when some rows failed.
+fn deliver(
+    output: Option<&Path>,
+    stream: impl FnOnce(&mut dyn Write, &str) -> Result<Summary, Error>,
+) -> Result<ExitCode, Error> {
+    let result = match output {
+        Some(path) => OutputFile::create(path).and_then(|mut file| {
+            let summary = stream(&mut file, &path.display().to_string())?;
+            file.commit()?;
+            Ok(summary)
+        }),
+        None => stream(
+            &mut BufWriter::new(std::io::stdout().lock()),
+            "<standard output>",
+        ),
+    };
+    let summary = match result {
+        Ok(summary) => summary,
+        // The reader has seen enough (`ellipack contact | head`): not a failure.
+        Err(Error::Write { source, .. } | Error::Io { source, .. }) if reader_gone(&source) => {
+            return Ok(ExitCode::SUCCESS);
+        }
+        Err(e) => return Err(e),
+    };
+    if summary.failed > 0 {
+        eprintln!(
+            "{} of {} rows failed: see their `error` column",
+            summary.failed, summary.rows
+        );
+    }
+    if let Some(path) = output {
+        eprintln!("wrote {} rows to {}", summary.rows, path.display());
+    }
+    Ok(if summary.failed > 0 {
+        ExitCode::from(ROWS_FAILED)
+    } else {
+        ExitCode::SUCCESS
     })
 }
 
-/// Writes a result table to `output` (atomically) or standard output, and says what happened.
-fn deliver(table: &str, rows: usize, failed: usize, output: Option<&PathBuf>) -> Result<(), Error> {
-    match output {
-        Some(path) => ellipack::output::write_atomically(path, table.as_bytes())?,
-        None => print!("{table}"),
+fn measure(input: PathBuf, output: Option<PathBuf>) -> Result<ExitCode, Error> {
+    if let Some(output) = &output {
+        refuse_overwriting_input(&input, output)?;
     }
-    if failed > 0 {
-        eprintln!("{failed} of {rows} rows failed: see their `error` column");
-    }
-    if let Some(path) = output {
-        eprintln!("wrote {rows} rows to {}", path.display());
-    }
-    Ok(())
-}
-
-fn measure(input: PathBuf, output: Option<PathBuf>) -> Result<(), Error> {
-    let text = read_input(&input)?;
-    let (table, failed) = ellipack::measure::measure(&text, &input.display().to_string())?;
-    let rows = table.lines().count() - 1;
-    deliver(&table, rows, failed, output.as_ref())
+    let reader = open_input(&input)?;
+    let name = input.display().to_string();
+    deliver(output.as_deref(), |out, destination| {
+        ellipack::measure::measure_stream(reader, &name, out, destination)
+    })
 }
 
 fn contact(
     input: Option<PathBuf>,
     output: Option<PathBuf>,
     criterion: CriterionArg,
-) -> Result<(), Error> {
-    let (text, name) = match &input {
-        Some(path) => (read_input(path)?, path.display().to_string()),
-        None => {
-            eprintln!("no --input given: evaluating the bundled example pairs");
-            (
-                ellipack::EXAMPLE_PAIRS.to_string(),
-                "<built-in example>".to_string(),
-            )
-        }
-    };
-    let rows = read_pairs(&text, &name)?;
+) -> Result<ExitCode, Error> {
+    if let (Some(input), Some(output)) = (&input, &output) {
+        refuse_overwriting_input(input, output)?;
+    }
     let criterion = match criterion {
         CriterionArg::Contact => Criterion::Contact,
         CriterionArg::Overlap => Criterion::Overlap,
     };
-    let (table, failed) = evaluate(&rows, criterion);
-    match &output {
-        Some(path) => ellipack::output::write_atomically(path, table.as_bytes())?,
-        None => print!("{table}"),
+    match &input {
+        Some(path) => {
+            let reader = open_input(path)?;
+            let name = path.display().to_string();
+            deliver(output.as_deref(), |out, destination| {
+                contact_stream(reader, &name, criterion, out, destination)
+            })
+        }
+        None => {
+            eprintln!("no --input given: evaluating the bundled example pairs");
+            deliver(output.as_deref(), |out, destination| {
+                contact_stream(
+                    ellipack::EXAMPLE_PAIRS.as_bytes(),
+                    "<built-in example>",
+                    criterion,
+                    out,
+                    destination,
+                )
+            })
+        }
     }
-    if failed > 0 {
-        eprintln!(
-            "{failed} of {} rows failed: see their `error` column",
-            rows.len()
-        );
-    }
-    if let Some(path) = &output {
-        eprintln!("wrote {} rows to {}", rows.len(), path.display());
-    }
-    Ok(())
 }

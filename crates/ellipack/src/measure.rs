@@ -11,8 +11,10 @@
 //! `X` is left blank where the projection is not unique (the hard case).
 
 use crate::Error;
-use crate::table::{exact, has_columns, quote, read_numeric_rows};
+use crate::pairs::Summary;
+use crate::table::{NumericReader, csv_reader, exact, quote, read_header, short};
 use implicit_packing::{Body, PairTerm, pair_term};
+use std::io::{Read, Write};
 
 /// Input columns of the 3D layout, in the order the pair is built from.
 pub const COLUMNS_3D: [&str; 20] = [
@@ -29,34 +31,133 @@ pub const COLUMNS_2D: [&str; 10] = [
 /// of rows that failed.
 ///
 /// # Errors
-/// As [`crate::table::read_numeric_rows`]: broken CSV structure, a missing column, no rows.
+/// As [`measure_stream`].
 pub fn measure(text: &str, source_name: &str) -> Result<(String, usize), Error> {
-    if has_columns(text, &["ciz"]) {
-        let rows = read_numeric_rows(text, source_name, &COLUMNS_3D)?;
-        Ok(table(rows, "U,d2,eps,f,overlap,X_1,X_2,X_3", |v| {
-            let i = Body::from_quaternion(
-                [v[0], v[1], v[2]],
-                [v[3], v[4], v[5]],
-                [v[6], v[7], v[8], v[9]],
-            )
-            .map_err(|e| format!("ellipsoid i: {e}"))?;
-            let j = Body::from_quaternion(
-                [v[10], v[11], v[12]],
-                [v[13], v[14], v[15]],
-                [v[16], v[17], v[18], v[19]],
-            )
-            .map_err(|e| format!("ellipsoid j: {e}"))?;
-            Ok(fields(&pair_term(&i, &j)))
-        }))
+    let mut out = Vec::new();
+    let summary = measure_stream(text.as_bytes(), source_name, &mut out, "<memory>")?;
+    // Every field written is UTF-8: the case_id comes from a `str`, the rest is ours.
+    Ok((String::from_utf8_lossy(&out).into_owned(), summary.failed))
+}
+
+/// Reads pairs from `input` row by row and writes each result line to `output` at once, so
+/// that memory does not depend on the number of rows. The layout is detected from the header
+/// (`ciz` present: 3D).
+///
+/// # Errors
+/// [`Error::MalformedCsv`] for broken CSV structure, [`Error::MissingColumn`] or
+/// [`Error::DuplicateColumn`] for the header, [`Error::Empty`] without rows (nothing is
+/// written then), [`Error::Write`] when `output` refuses the data.
+pub fn measure_stream<R: Read, W: Write + ?Sized>(
+    input: R,
+    source_name: &str,
+    output: &mut W,
+    destination: &str,
+) -> Result<Summary, Error> {
+    let mut reader = csv_reader(input);
+    let header = read_header(&mut reader, source_name)?;
+    let three_d = header.iter().any(|h| h == "ciz");
+    let columns: &[&str] = if three_d { &COLUMNS_3D } else { &COLUMNS_2D };
+    let mut rows = NumericReader::new(reader, &header, source_name, columns)?;
+    let output_columns = if three_d {
+        "U,d2,eps,f,overlap,X_1,X_2,X_3"
     } else {
-        let rows = read_numeric_rows(text, source_name, &COLUMNS_2D)?;
-        Ok(table(rows, "U,d2,eps,f,overlap,X_1,X_2", |v| {
-            let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4])
-                .map_err(|e| format!("ellipse i: {e}"))?;
-            let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9])
-                .map_err(|e| format!("ellipse j: {e}"))?;
-            Ok(fields(&pair_term(&i, &j)))
-        }))
+        "U,d2,eps,f,overlap,X_1,X_2"
+    };
+    let blanks = ",".repeat(output_columns.matches(',').count());
+    let write_error = |source| Error::Write {
+        destination: destination.to_string(),
+        source,
+    };
+    let mut summary = Summary::default();
+    while let Some(row) = rows.next_row()? {
+        if summary.rows == 0 {
+            writeln!(output, "case_id,{output_columns},error").map_err(write_error)?;
+        }
+        summary.rows += 1;
+        let id = quote(&row.case_id);
+        let result = row.values.and_then(|v| {
+            if three_d {
+                evaluate_3d(&v)
+            } else {
+                evaluate_2d(&v)
+            }
+            .map_err(|e| format!("line {}: {e}", row.line))
+        });
+        match result {
+            Ok(fields) => writeln!(output, "{id},{fields},"),
+            Err(message) => {
+                summary.failed += 1;
+                writeln!(output, "{id},{blanks},{}", quote(&message))
+            }
+        }
+        .map_err(write_error)?;
+    }
+    if summary.rows == 0 {
+        return Err(Error::Empty {
+            source_name: source_name.to_string(),
+        });
+    }
+    output.flush().map_err(write_error)?;
+    Ok(summary)
+}
+
+fn evaluate_3d(v: &[f64]) -> Result<String, String> {
+    let i = Body::from_quaternion(
+        [v[0], v[1], v[2]],
+        [v[3], v[4], v[5]],
+        [v[6], v[7], v[8], v[9]],
+    )
+    .map_err(|e| format!("ellipsoid i: {}", body_message(&e)))?;
+    let j = Body::from_quaternion(
+        [v[10], v[11], v[12]],
+        [v[13], v[14], v[15]],
+        [v[16], v[17], v[18], v[19]],
+    )
+    .map_err(|e| format!("ellipsoid j: {}", body_message(&e)))?;
+    Ok(fields(&pair_term(&i, &j)))
+}
+
+fn evaluate_2d(v: &[f64]) -> Result<String, String> {
+    let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4])
+        .map_err(|e| format!("ellipse i: {}", body_message(&e)))?;
+    let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9])
+        .map_err(|e| format!("ellipse j: {}", body_message(&e)))?;
+    Ok(fields(&pair_term(&i, &j)))
+}
+
+/// Why a body was refused, with its numbers written short: implicit-packing's own messages
+/// print a value such as -1e300 with all its 301 digits.
+fn body_message(e: &implicit_packing::Error) -> String {
+    use implicit_packing::Error as E;
+    match *e {
+        E::NonFiniteCentre { axis, value, .. } => format!(
+            "centre coordinate {axis} is {}; coordinates must be finite, |x| <= 1e30",
+            short(value)
+        ),
+        E::InvalidSemiAxis { axis, value, .. } => format!(
+            "semi-axis {axis} is {}; semi-axes must lie in [1e-30, 1e30]",
+            short(value)
+        ),
+        E::NonFiniteAngle { angle, value, .. } => {
+            format!(
+                "rotation angle {angle} is {}, not a finite number",
+                short(value)
+            )
+        }
+        E::InvalidQuaternion {
+            quaternion: [w, x, y, z],
+            norm2,
+            ..
+        } => format!(
+            "quaternion (w, x, y, z) = ({}, {}, {}, {}) has squared norm {}; a rotation needs \
+             a finite unit quaternion (|q|² within 1e-6 of 1)",
+            short(w),
+            short(x),
+            short(y),
+            short(z),
+            short(norm2)
+        ),
+        _ => e.to_string(),
     }
 }
 
@@ -75,30 +176,6 @@ fn fields<const N: usize>(p: &PairTerm<N>) -> String {
         exact(p.f),
         p.f > 0.0
     )
-}
-
-fn table(
-    rows: Vec<crate::table::NumericRow>,
-    columns: &str,
-    evaluate: impl Fn(&[f64]) -> Result<String, String>,
-) -> (String, usize) {
-    let blanks = ",".repeat(columns.matches(',').count());
-    let mut out = format!("case_id,{columns},error\n");
-    let mut failed = 0;
-    for row in rows {
-        let id = quote(&row.case_id);
-        match row
-            .values
-            .and_then(|v| evaluate(&v).map_err(|e| format!("line {}: {e}", row.line)))
-        {
-            Ok(fields) => out.push_str(&format!("{id},{fields},\n")),
-            Err(message) => {
-                failed += 1;
-                out.push_str(&format!("{id},{blanks},{}\n", quote(&message)));
-            }
-        }
-    }
-    (out, failed)
 }
 
 #[cfg(test)]

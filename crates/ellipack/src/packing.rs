@@ -761,10 +761,11 @@ pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
 /// other columns are ignored. `source_name` names the file in messages.
 ///
 /// # Errors
-/// [`PackingError::Malformed`] for broken CSV, [`PackingError::MissingColumn`], and
-/// [`PackingError::BadValue`] (line, column, name) for a cell that is not a finite number, a
-/// semi-axis that is not positive, a zero quaternion or an `id` that is not an integer;
-/// [`PackingError::DuplicateId`] naming both lines when two rows share an `id`.
+/// [`PackingError::Malformed`] for broken CSV, an empty file, a column named twice or no item
+/// line, [`PackingError::MissingColumn`], and [`PackingError::BadValue`] (line, column, name)
+/// for a cell that is not a finite number, a semi-axis that is not positive, a zero quaternion
+/// or an `id` that is not an integer; [`PackingError::DuplicateId`] naming both lines when two
+/// rows share an `id`.
 pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
     read_table(text, source_name).map(|table| table.items)
 }
@@ -803,17 +804,29 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
     } else {
         &CSV_COLUMNS_2D
     };
+    if header.len() <= 1 && header.iter().all(str::is_empty) {
+        return Err(PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: 1,
+            message: format!(
+                "the file is empty: a packing starts with the header {} and has one line per item",
+                expected.join(",")
+            ),
+        });
+    }
     let mut index = Vec::with_capacity(expected.len());
     for &column in expected {
-        let i =
-            header
-                .iter()
-                .position(|h| h == column)
-                .ok_or_else(|| PackingError::MissingColumn {
-                    source_name: source_name.to_string(),
-                    column,
-                    expected: expected.join(","),
-                })?;
+        let i = crate::table::column_position(&header, column)
+            .map_err(|e| PackingError::Malformed {
+                source_name: source_name.to_string(),
+                line: 1,
+                message: e.to_string(),
+            })?
+            .ok_or_else(|| PackingError::MissingColumn {
+                source_name: source_name.to_string(),
+                column,
+                expected: expected.join(","),
+            })?;
         index.push(i);
     }
     let mut ellipses = Vec::new();
@@ -883,6 +896,16 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
                 theta,
             });
         }
+    }
+    if ellipses.is_empty() && ellipsoids.is_empty() {
+        return Err(PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: 2,
+            message: format!(
+                "no items: after the header {}, a packing has one line per item",
+                expected.join(",")
+            ),
+        });
     }
     let items = if three_d {
         Items::Ellipsoids(ellipsoids)

@@ -4,7 +4,8 @@
 //! ```toml
 //! name = "30 ellipses in an ellipse"  # optional: used in picture titles
 //! dimension = 2                       # 2: ellipses, 3: ellipsoids
-//! seed = 1                            # optional (default 0): the multi-start's random seed
+//! seed = 1                            # optional (default 0): the multi-start's random seed,
+//!                                     # 0 to 18446744073709551615 (a string "…" works too)
 //!
 //! [container]
 //! kind = "ellipse"                    # 2D: circle | ellipse | rectangle
@@ -12,7 +13,7 @@
 //!
 //! [[shapes]]                          # one table per group of identical items
 //! count = 20
-//! semi_axes = [2.0, 1.0]              # dimension values, each > 0
+//! semi_axes = [2.0, 1.0]              # dimension values, each in [1e-30, 1e30]
 //!
 //! [[shapes]]                          # several groups: mixed shapes
 //! count = 10
@@ -70,6 +71,7 @@
 //! the line, the column and the key, as `shapes[1].count` (groups counted from 0).
 
 use crate::packing::ContainerKind;
+use crate::table::short;
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -97,6 +99,14 @@ time_limit = 45.0
 /// The largest number of items a scene may ask for: far beyond what the solver handles in a
 /// day, low enough that a typo (an extra zero or six) is caught before memory runs out.
 pub const MAX_ITEMS: usize = 10_000_000;
+
+/// The semi-axis lengths a scene accepts: those the packing model accepts
+/// ([`implicit_packing::shape::MAX_MAGNITUDE`] and its reciprocal), checked here so that the
+/// message names the scene's line and key.
+pub const SEMI_AXIS_RANGE: (f64, f64) = (
+    1.0 / implicit_packing::shape::MAX_MAGNITUDE,
+    implicit_packing::shape::MAX_MAGNITUDE,
+);
 
 /// Why a scene could not be read: the file, the position and the key of the first problem.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -285,11 +295,47 @@ pub struct Scene {
 struct RawScene {
     name: Option<String>,
     dimension: Spanned<i64>,
-    seed: Option<Spanned<i64>>,
+    seed: Option<Spanned<RawSeed>>,
     container: RawContainer,
     shapes: Option<Spanned<Vec<RawShapes>>>,
     solver: Option<RawSolver>,
     output: Option<RawOutput>,
+}
+
+/// A seed as written: an integer of any size (TOML's are 64-bit signed, the parser passes
+/// larger ones on) or a string of digits, so that every u64 of `--seed` fits in a scene.
+enum RawSeed {
+    Integer(i128),
+    Text(String),
+}
+
+impl<'de> Deserialize<'de> for RawSeed {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = RawSeed;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a whole number from 0 to 18446744073709551615, or it as a string")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<RawSeed, E> {
+                Ok(RawSeed::Integer(v.into()))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<RawSeed, E> {
+                Ok(RawSeed::Integer(v.into()))
+            }
+            fn visit_i128<E>(self, v: i128) -> Result<RawSeed, E> {
+                Ok(RawSeed::Integer(v))
+            }
+            fn visit_u128<E>(self, v: u128) -> Result<RawSeed, E> {
+                // Anything beyond i128 is beyond u64 too: the range check reports it.
+                Ok(RawSeed::Integer(i128::try_from(v).unwrap_or(i128::MAX)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<RawSeed, E> {
+                Ok(RawSeed::Text(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -437,7 +483,12 @@ impl Scene {
             line(&mut out, "name", toml_string(name));
         }
         line(&mut out, "dimension", self.dimension.get().to_string());
-        line(&mut out, "seed", self.seed.to_string());
+        // TOML integers stop at i64::MAX; the reader takes larger seeds as strings.
+        if i64::try_from(self.seed).is_ok() {
+            line(&mut out, "seed", self.seed.to_string());
+        } else {
+            line(&mut out, "seed", toml_string(&self.seed.to_string()));
+        }
         out.push_str("\n[container]\n");
         line(&mut out, "kind", toml_string(self.container.name()));
         for g in &self.shapes {
@@ -538,7 +589,7 @@ impl Validator<'_> {
             Some(v) => Err(self.error(
                 v.span(),
                 key,
-                format!("must be positive and finite, not {}", v.get_ref()),
+                format!("must be positive and finite, not {}", short(*v.get_ref())),
             )),
         }
     }
@@ -573,13 +624,24 @@ impl Validator<'_> {
         }
         let seed = match &raw.seed {
             None => 0,
-            Some(s) => u64::try_from(*s.get_ref()).map_err(|_| {
-                self.error(
-                    s.span(),
-                    "seed",
-                    format!("must be a non-negative integer, not {}", s.get_ref()),
-                )
-            })?,
+            Some(s) => {
+                let (value, written) = match s.get_ref() {
+                    RawSeed::Integer(n) => (u64::try_from(*n).ok(), n.to_string()),
+                    RawSeed::Text(t) => (t.trim().parse::<u64>().ok(), format!("{t:?}")),
+                };
+                value.ok_or_else(|| {
+                    self.error(
+                        s.span(),
+                        "seed",
+                        format!(
+                            "must be a non-negative whole number, at most 18446744073709551615 \
+                             (a seed beyond 9223372036854775807 may be written as a string, \
+                             seed = \"18446744073709551615\"), not {}",
+                            crate::table::short_text(&written)
+                        ),
+                    )
+                })?
+            }
         };
         let shapes = self.shapes(raw.shapes, dimension)?;
         let solver = self.solver(raw.solver, dimension)?;
@@ -644,11 +706,21 @@ impl Validator<'_> {
                     ),
                 ));
             }
-            if let Some(l) = axes.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
+            if let Some((k, l)) = axes
+                .iter()
+                .enumerate()
+                .find(|(_, l)| !(SEMI_AXIS_RANGE.0..=SEMI_AXIS_RANGE.1).contains(*l))
+            {
                 return Err(self.error(
                     g.semi_axes.span(),
                     &key,
-                    format!("every semi-axis must be positive and finite, not {l}"),
+                    format!(
+                        "semi-axis {} is {}; every semi-axis must be positive, in [{}, {}]",
+                        k + 1,
+                        short(*l),
+                        short(SEMI_AXIS_RANGE.0),
+                        short(SEMI_AXIS_RANGE.1)
+                    ),
                 ));
             }
             groups.push(ShapeGroup {
@@ -680,7 +752,7 @@ impl Validator<'_> {
                 self.error(
                     span,
                     "solver.time_limit",
-                    format!("{v} seconds is too long"),
+                    format!("{} seconds is too long", short(v)),
                 )
             })?;
         }
@@ -708,7 +780,10 @@ impl Validator<'_> {
                 return Err(self.error(
                     p.span(),
                     "solver.perturbation",
-                    format!("must be in [0, 1) (a fraction, 0.025 is 2.5 %), not {v}"),
+                    format!(
+                        "must be in [0, 1) (a fraction, 0.025 is 2.5 %), not {}",
+                        short(v)
+                    ),
                 ));
             }
             s.perturbation = v;
@@ -815,6 +890,7 @@ fn toml_error(text: &str, source_name: &str, e: &toml::de::Error) -> SceneError 
     } else {
         "<document>".to_string()
     };
+    let message = table_not_string(&key, &message).unwrap_or(message);
     SceneError {
         source_name: source_name.to_string(),
         line,
@@ -825,11 +901,58 @@ fn toml_error(text: &str, source_name: &str, e: &toml::de::Error) -> SceneError 
 }
 
 /// Serde's type names are Rust's: say "an integer" and "a number" to a person.
+/// Our private `Raw…` structs are tables to a person, and an integer beyond 64 bits is out of
+/// range rather than of an "invalid type".
 fn plain_types(message: &str) -> String {
-    message
+    let mut message = message
         .replace("expected i64", "expected an integer")
         .replace("expected u64", "expected a non-negative integer")
         .replace("expected f64", "expected a number")
+        .replace("expected a sequence", "expected an array");
+    while let Some(start) = message.find("expected struct Raw") {
+        let rest = &message[start + "expected struct ".len()..];
+        let end = rest
+            .find(|c: char| !c.is_alphanumeric())
+            .unwrap_or(rest.len());
+        message.replace_range(
+            start..start + "expected struct ".len() + end,
+            "expected a table",
+        );
+    }
+    if let Some(number) = message
+        .strip_prefix("invalid type: integer `")
+        .and_then(|rest| rest.strip_suffix("` as i128, expected an integer"))
+    {
+        return format!(
+            "{} is out of range: a whole number here is at most 9223372036854775807",
+            crate::table::short_text(number)
+        );
+    }
+    if let Some(number) = message
+        .strip_prefix("invalid value: integer `")
+        .and_then(|rest| rest.strip_suffix("`, expected an integer"))
+    {
+        return format!(
+            "{} is out of range: a whole number here is at most 9223372036854775807",
+            crate::table::short_text(number)
+        );
+    }
+    message
+}
+
+/// A string where a table belongs (`container = "circle"`): show the two ways to write it.
+fn table_not_string(key: &str, message: &str) -> Option<String> {
+    let value = message
+        .strip_prefix("invalid type: string ")?
+        .strip_suffix(", expected a table")?;
+    let inner = crate::table::short_text(value.trim_matches('"'));
+    Some(if key == "container" {
+        format!(
+            "a container is a table, not the string {value}: write `container = {{ kind = \"{inner}\" }}`, or a [container] table with kind = \"{inner}\""
+        )
+    } else {
+        format!("`{key}` is a table, not the string {value}")
+    })
 }
 
 fn join_key(table: &str, key: &str) -> String {
