@@ -576,7 +576,8 @@ mod portable_tests {
             contact_x4_2d_portable::<false>(&chunk_2d, &mut out_2d);
             for k in 0..LANES {
                 let p = &chunk[k];
-                let s = crate::contact::contact_function_portable::<false>(&p.r12, &p.q1, &p.q2);
+                let s =
+                    crate::contact::contact_function_portable::<false>(&p.r12, &p.q1, &p.q2, true);
                 assert_eq!(format!("{s:?}"), format!("{:?}", out[k]));
                 let p = &chunk_2d[k];
                 let s = crate::contact::contact_function_2d_portable::<false>(&p.r12, &p.q1, &p.q2);

@@ -112,27 +112,37 @@ pub struct ContactDetails {
     pub grad_q2: [f64; 6],
 }
 
+/// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
+///
+/// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
+/// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
+/// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
+///
+/// # Errors
+/// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
+/// Q2 is not positive definite.
+///
+/// # Example
+/// ```
+/// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
+/// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
+/// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
+/// assert!((c.mu2 - 2.25).abs() < 1e-15);
+/// assert!((c.lambda - 0.5).abs() < 1e-15);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+#[inline]
+pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
+    contact_function_dispatched(r12, q1, q2, true)
+}
+
 multiversion! {
-    /// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
-    ///
-    /// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
-    /// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
-    /// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
-    ///
-    /// # Errors
-    /// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
-    /// Q2 is not positive definite.
-    ///
-    /// # Example
-    /// ```
-    /// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
-    /// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
-    /// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
-    /// assert!((c.mu2 - 2.25).abs() < 1e-15);
-    /// assert!((c.lambda - 0.5).abs() < 1e-15);
-    /// # Ok::<(), pw85::Error>(())
-    /// ```
-    pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error>
+    /// [`contact_function`], with (`rescue`) or without the rescue of pairs outside the fast
+    /// path's window: [`crate::extreme`] runs the kernel without it on the rescaled pair. One
+    /// dispatched function for both, so that a rescaled pair gives the same bits, and so that
+    /// the kernel is compiled once (a second copy changed the optimiser's inlining decisions
+    /// in the first).
+    pub(crate) fn contact_function_dispatched(r12: &[f64; 3], q1: &Sym3, q2: &Sym3, rescue: bool) -> Result<Contact, Error>
         => fused contact_function_portable;
 }
 
@@ -141,35 +151,33 @@ pub(crate) fn contact_function_portable<const FMA: bool>(
     r12: &[f64; 3],
     q1: &Sym3,
     q2: &Sym3,
+    rescue: bool,
 ) -> Result<Contact, Error> {
-    if !check_inputs_finite::<FMA>(r12, q1, q2)? {
+    if !check_inputs_finite::<FMA>(r12, q1, q2)? && rescue {
         return crate::extreme::contact_function(r12, q1, q2);
     }
     match Prepared::new::<FMA>(r12, q1, q2) {
         Ok(prepared) => prepared.contact::<FMA>(
             || exact_coefficients(r12, q1, q2),
-            || crate::extreme::rescue(r12, q1, q2),
+            || {
+                rescue
+                    .then(|| crate::extreme::rescue(r12, q1, q2))
+                    .flatten()
+            },
         ),
-        Err(e) => crate::extreme::after_error(e, r12, q1, q2),
+        Err(e) if rescue => crate::extreme::after_error(e, r12, q1, q2),
+        Err(e) => Err(e),
     }
 }
 
-multiversion! {
-    /// [`contact_function`] without the rescue of pairs outside the fast path's window: the
-    /// kernel that [`crate::extreme`] runs on the rescaled pair (dispatched like
-    /// [`contact_function`], so that a rescaled pair gives the same bits).
-    pub(crate) fn contact_function_unrescued(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error>
-        => fused contact_function_unrescued_portable;
-}
-
-#[inline(always)]
-fn contact_function_unrescued_portable<const FMA: bool>(
+/// [`contact_function`] without the rescue of pairs outside the window.
+#[inline]
+pub(crate) fn contact_function_unrescued(
     r12: &[f64; 3],
     q1: &Sym3,
     q2: &Sym3,
 ) -> Result<Contact, Error> {
-    check_inputs_finite::<FMA>(r12, q1, q2)?;
-    Prepared::new::<FMA>(r12, q1, q2)?.contact::<FMA>(|| exact_coefficients(r12, q1, q2), || None)
+    contact_function_dispatched(r12, q1, q2, false)
 }
 
 multiversion! {
