@@ -43,6 +43,10 @@ pub const RUN_FILES: [&str; 6] = [
 ];
 
 const STAGING: &str = ".ellipack-staging-";
+
+/// The prefix of the file by which a run tests, before it starts, that it can write its output
+/// folder (`<prefix><pid>`), where the file system cannot make an unnamed one.
+pub const PROBE: &str = ".ellipack-probe-";
 const RETIRED: &str = ".ellipack-retired-";
 
 /// Why an output folder could not be staged or swapped.
@@ -224,7 +228,10 @@ fn is_ours(name: &OsStr) -> bool {
     let Some(name) = name.to_str() else {
         return false;
     };
-    RUN_FILES.contains(&name) || temporary_of(name).is_some() || name.starts_with(STAGING)
+    RUN_FILES.contains(&name)
+        || temporary_of(name).is_some()
+        || name.starts_with(STAGING)
+        || name.starts_with(PROBE)
 }
 
 /// The process id of a temporary file of a run file.
@@ -248,6 +255,8 @@ fn clean_up(out: &Path) {
             let name = entry.file_name();
             let Some(text) = name.to_str() else { continue };
             if temporary_of(text).is_some_and(is_stale) {
+                let _ = std::fs::remove_file(entry.path());
+            } else if pid_after(&name, PROBE).is_some_and(is_stale) {
                 let _ = std::fs::remove_file(entry.path());
             } else if pid_after(&name, STAGING).is_some_and(is_stale) {
                 let _ = std::fs::remove_dir_all(entry.path());

@@ -155,7 +155,26 @@ pub fn probe_output_folder(path: &Path) -> Result<(), PackError> {
         source,
     };
     std::fs::create_dir_all(path).map_err(error)?;
-    let probe = path.join(format!(".ellipack-probe-{}", std::process::id()));
+    // An unnamed file (O_TMPFILE) is never seen in the folder, even when the run is killed
+    // right here; file systems without it get a named probe, which the next run removes.
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_TMPFILE)
+            .open(path)
+        {
+            Ok(_) => return Ok(()),
+            Err(e)
+                if matches!(
+                    e.raw_os_error(),
+                    Some(libc::EOPNOTSUPP | libc::EISDIR | libc::EINVAL)
+                ) => {}
+            Err(e) => return Err(error(e)),
+        }
+    }
+    let probe = path.join(format!("{}{}", crate::folder::PROBE, std::process::id()));
     std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
