@@ -137,3 +137,98 @@ fn verdict_matches_reference_outside_2e_13_of_tangency() {
         );
     }
 }
+
+/// x · 2^e for any e (two steps where 2^e alone is not a double).
+fn times_power_of_two(x: f64, e: i32) -> f64 {
+    let half = e / 2;
+    x * 2f64.powi(half) * 2f64.powi(e - half)
+}
+
+/// Extreme-scale categories built from every reference case: the same geometry in units 2^k
+/// (r12 · 2^k, Q · 2^2k), r12 alone scaled by 2^k (μ² · 2^2k) and both Q alone by 2^k (μ² · 2^−k),
+/// for k out to the edges of the double range. Power-of-two scalings keep every input bit
+/// (cases whose inputs would round into the subnormal range are left out), so the reference
+/// value scales exactly, and the same 1e-13 applies; a reference μ² scaled beyond the double
+/// range must come back as +∞ (apart) or below the smallest normal double (overlap).
+#[test]
+fn mu2_within_1e_13_at_extreme_scales() {
+    let exact = |xs: &[f64], e: i32| {
+        xs.iter()
+            .all(|&x| times_power_of_two(times_power_of_two(x, e), -e) == x)
+    };
+    let mut checked: BTreeMap<String, (usize, f64)> = BTreeMap::new();
+    // (name, exponent of r12, exponent of both Q); μ² scales by 2^(2 kr − kq).
+    let scalings: Vec<(String, i32, i32)> = [-480, -300, 300, 480]
+        .into_iter()
+        .flat_map(|k: i32| {
+            [
+                (format!("units 2^{k}"), k, 2 * k),
+                (format!("r12 · 2^{k}"), k, 0),
+                (format!("r12 · 2^{}", 2 * k), 2 * k, 0),
+                (format!("Q · 2^{}", 2 * k), 0, 2 * k),
+            ]
+        })
+        .collect();
+    for c in cases() {
+        for (category, kr, kq) in &scalings {
+            let (kr, kq) = (*kr, *kq);
+            if !(exact(&c.r12, kr) && exact(&c.q1, kq) && exact(&c.q2, kq)) {
+                continue;
+            }
+            let r12 = c.r12.map(|x| times_power_of_two(x, kr));
+            let q1 = c.q1.map(|x| times_power_of_two(x, kq));
+            let q2 = c.q2.map(|x| times_power_of_two(x, kq));
+            let shift = 2 * kr - kq;
+            let contact = pw85::contact_function(&r12, &q1, &q2)
+                .unwrap_or_else(|e| panic!("case {} at {category}: {e}", c.id));
+            let verdict = pw85::overlap(&r12, &q1, &q2)
+                .unwrap_or_else(|e| panic!("case {} at {category}: overlap: {e}", c.id));
+            let reference = times_power_of_two(c.mu2, shift);
+            let err = if reference == f64::INFINITY {
+                assert_eq!(contact.mu2, f64::INFINITY, "case {} at {category}", c.id);
+                assert!(
+                    !verdict,
+                    "case {} at {category}: an infinite μ² is apart",
+                    c.id
+                );
+                0.0
+            } else if reference < f64::MIN_POSITIVE {
+                assert!(
+                    contact.mu2 < 2.0 * f64::MIN_POSITIVE,
+                    "case {} at {category}",
+                    c.id
+                );
+                assert!(verdict || c.mu2 == 0.0, "case {} at {category}", c.id);
+                0.0
+            } else {
+                if (reference - 1.0).abs() > 2e-13 {
+                    assert_eq!(verdict, reference < 1.0, "case {} at {category}", c.id);
+                }
+                relative_error(contact.mu2, reference)
+            };
+            let key = category.split(' ').next().unwrap_or("").to_string()
+                + if category.contains('-') {
+                    " (small)"
+                } else {
+                    " (large)"
+                };
+            let entry = checked.entry(key).or_insert((0, 0.0));
+            entry.0 += 1;
+            entry.1 = entry.1.max(err);
+            assert!(
+                err <= 1e-13,
+                "case {} ({}) at {category}: relative error {err:e}",
+                c.id,
+                c.category
+            );
+        }
+    }
+    for (category, (count, worst)) in &checked {
+        println!("{category:<16} {count:>5} cases, max relative error {worst:.3e}");
+        assert!(
+            *count > 500,
+            "{category}: only {count} cases kept their bits"
+        );
+    }
+    assert_eq!(checked.len(), 6);
+}
