@@ -254,9 +254,9 @@ fn clean_up(out: &Path) {
         for entry in entries.filter_map(Result::ok) {
             let name = entry.file_name();
             let Some(text) = name.to_str() else { continue };
-            if temporary_of(text).is_some_and(is_stale) {
-                let _ = std::fs::remove_file(entry.path());
-            } else if pid_after(&name, PROBE).is_some_and(is_stale) {
+            let stale_file = temporary_of(text).is_some_and(is_stale)
+                || pid_after(&name, PROBE).is_some_and(is_stale);
+            if stale_file {
                 let _ = std::fs::remove_file(entry.path());
             } else if pid_after(&name, STAGING).is_some_and(is_stale) {
                 let _ = std::fs::remove_dir_all(entry.path());

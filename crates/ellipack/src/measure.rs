@@ -12,7 +12,7 @@
 
 use crate::Error;
 use crate::pairs::Summary;
-use crate::table::{NumericReader, csv_reader, exact, quote, read_header, short};
+use crate::table::{NumericReader, csv_reader, exact, quote, read_header};
 use implicit_packing::{Body, PairTerm, pair_term};
 use std::io::{Read, Write};
 
@@ -101,7 +101,45 @@ pub fn measure_stream<R: Read, W: Write + ?Sized>(
     Ok(summary)
 }
 
+/// The pair in the units of its larger body, centred on body i.
+///
+/// The measure is invariant under a translation of both bodies and under scaling positions and
+/// semi-axes together: c = P_i^−1/2 Q_iᵀ (c_i − c_j) and S of eqs. (21)–(22) are ratios of
+/// lengths, so X, U, d² and f are too, and ε (Prop. 3.3) is a product of ratios. Centring on
+/// c_i gives the model the difference it forms itself (c_i − c_j = −(c_j − c_i) exactly in
+/// floating point), and a power-of-two scale changes no bit; so every pair of finite bodies whose
+/// sizes and separation lie within the model's range relative to each other is evaluated,
+/// whatever its units, with the same bits as in units near 1. `centres` and `axes` index the
+/// row's centre coordinates (c_i then c_j, `dim` each) and semi-axes (body i's then body j's).
+fn in_own_units(v: &[f64], dim: usize, centres: [usize; 2], axes: [usize; 2]) -> Vec<f64> {
+    let mut out = v.to_vec();
+    let semi_axes = || {
+        (0..dim)
+            .map(move |k| v[axes[0] + k])
+            .chain((0..dim).map(move |k| v[axes[1] + k]))
+    };
+    let largest = semi_axes().fold(0.0_f64, f64::max);
+    let usable = semi_axes().all(|a| a.is_finite() && a > 0.0)
+        && (0..dim).all(|k| v[centres[0] + k].is_finite() && v[centres[1] + k].is_finite());
+    if !usable || !largest.is_normal() {
+        // The model names what is wrong with the row as it was given.
+        return out;
+    }
+    // 2^−e with 2^e ≤ largest < 2^(e+1), applied in two steps so that neither overflows.
+    let e = ((largest.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    let scale = |x: f64| x * 2f64.powi(-e / 2) * 2f64.powi(-e + e / 2);
+    for k in 0..dim {
+        let (ci, cj) = (v[centres[0] + k], v[centres[1] + k]);
+        out[centres[0] + k] = 0.0;
+        out[centres[1] + k] = scale(cj - ci);
+        out[axes[0] + k] = scale(v[axes[0] + k]);
+        out[axes[1] + k] = scale(v[axes[1] + k]);
+    }
+    out
+}
+
 fn evaluate_3d(v: &[f64]) -> Result<String, String> {
+    let v = &in_own_units(v, 3, [0, 10], [3, 13])[..];
     let i = Body::from_quaternion(
         [v[0], v[1], v[2]],
         [v[3], v[4], v[5]],
@@ -118,6 +156,7 @@ fn evaluate_3d(v: &[f64]) -> Result<String, String> {
 }
 
 fn evaluate_2d(v: &[f64]) -> Result<String, String> {
+    let v = &in_own_units(v, 2, [0, 5], [2, 7])[..];
     let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4])
         .map_err(|e| format!("ellipse i: {}", body_message(&e)))?;
     let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9])
@@ -125,40 +164,9 @@ fn evaluate_2d(v: &[f64]) -> Result<String, String> {
     Ok(fields(&pair_term(&i, &j)))
 }
 
-/// Why a body was refused, with its numbers written short: implicit-packing's own messages
-/// print a value such as -1e300 with all its 301 digits.
+/// Why a body was refused (implicit-packing's message, numbers written short).
 fn body_message(e: &implicit_packing::Error) -> String {
-    use implicit_packing::Error as E;
-    match *e {
-        E::NonFiniteCentre { axis, value, .. } => format!(
-            "centre coordinate {axis} is {}; coordinates must be finite, |x| <= 1e30",
-            short(value)
-        ),
-        E::InvalidSemiAxis { axis, value, .. } => format!(
-            "semi-axis {axis} is {}; semi-axes must lie in [1e-30, 1e30]",
-            short(value)
-        ),
-        E::NonFiniteAngle { angle, value, .. } => {
-            format!(
-                "rotation angle {angle} is {}, not a finite number",
-                short(value)
-            )
-        }
-        E::InvalidQuaternion {
-            quaternion: [w, x, y, z],
-            norm2,
-            ..
-        } => format!(
-            "quaternion (w, x, y, z) = ({}, {}, {}, {}) has squared norm {}; a rotation needs \
-             a finite unit quaternion (|q|² within 1e-6 of 1)",
-            short(w),
-            short(x),
-            short(y),
-            short(z),
-            short(norm2)
-        ),
-        _ => e.to_string(),
-    }
+    e.to_string()
 }
 
 /// The output fields of one pair term, without the leading case_id and trailing error.
@@ -203,5 +211,53 @@ mod tests {
         assert_eq!(a[5], "false");
         let b = lines.next().unwrap();
         assert!(b.starts_with("b,,,,,,,,") && b.contains("line 3"), "{b}");
+    }
+
+    /// Every pair of finite bodies is measured in any units: the same pair with positions and
+    /// semi-axes scaled by 2^k, k across the double range, gives the same bits (before, rows
+    /// beyond 1e30 or below 1e-30 were refused).
+    #[test]
+    fn the_measure_does_not_depend_on_units() {
+        let scaled = |row: &[f64], k: i32, lengths: &[usize]| -> String {
+            row.iter()
+                .enumerate()
+                .map(|(n, &x)| {
+                    let x = if lengths.contains(&n) {
+                        x * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
+                    } else {
+                        x
+                    };
+                    format!("{x:e}")
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let three = [
+            0.3, -0.2, 0.1, 1.0, 0.75, 0.5, 0.5, 0.5, 0.5, 0.5, 1.1, 0.4, -0.3, 0.8, 0.6, 0.45,
+            0.6, 0.0, 0.8, 0.0,
+        ];
+        let two = [0.1, 0.2, 2.0, 1.0, 0.3, 2.5, 1.0, 1.5, 0.7, -1.1];
+        let lengths_3d: Vec<usize> = (0..6).chain(10..16).collect();
+        let lengths_2d = [0, 1, 2, 3, 5, 6, 7, 8];
+        let run = |columns: &[&str], row: String| {
+            let header = format!("case_id,{}\n", columns.join(","));
+            let (table, failed) = measure(&format!("{header}p,{row}\n"), "t.csv").unwrap();
+            assert_eq!(failed, 0, "{table}");
+            table.lines().nth(1).unwrap().to_string()
+        };
+        let base_3d = run(&COLUMNS_3D, scaled(&three, 0, &lengths_3d));
+        let base_2d = run(&COLUMNS_2D, scaled(&two, 0, &lengths_2d));
+        for k in [-1000, -900, -500, -120, -60, 60, 120, 500, 900, 1000] {
+            assert_eq!(
+                run(&COLUMNS_3D, scaled(&three, k, &lengths_3d)),
+                base_3d,
+                "2^{k}"
+            );
+            assert_eq!(
+                run(&COLUMNS_2D, scaled(&two, k, &lengths_2d)),
+                base_2d,
+                "2D, 2^{k}"
+            );
+        }
     }
 }

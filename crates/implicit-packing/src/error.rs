@@ -67,7 +67,7 @@ pub enum Error {
         /// Length given.
         found: usize,
     },
-    /// A pair names an ellipsoid that is not there.
+    /// A pair names an item (ellipse or ellipsoid) that is not there.
     PairIndex {
         /// Position of the pair in the list.
         pair: usize,
@@ -76,7 +76,7 @@ pub enum Error {
         /// How many ellipsoids there are.
         len: usize,
     },
-    /// The problem has no ellipsoid.
+    /// The problem has no item.
     Empty,
     /// The neighbour grid rejected the input.
     Grid(String),
@@ -91,10 +91,30 @@ pub enum Error {
     },
 }
 
+/// "item i: " (an ellipse or an ellipsoid: the messages serve both dimensions).
 fn item_prefix(f: &mut fmt::Formatter<'_>, item: Option<usize>) -> fmt::Result {
     match item {
-        Some(i) => write!(f, "ellipsoid {i}: "),
+        Some(i) => write!(f, "item {i}: "),
         None => Ok(()),
+    }
+}
+
+/// A value as a person reads it in a message: `1e300`, not its 301 digits; at most six
+/// significant digits (the value itself is in the error's fields).
+fn short(x: f64) -> String {
+    let trim = |s: String| match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        _ => s,
+    };
+    if !x.is_finite() || x == 0.0 {
+        format!("{x}")
+    } else if x.abs() >= 1e6 || x.abs() < 1e-4 {
+        trim(format!("{x:.5e}"))
+    } else {
+        trim(format!("{x:.6}"))
     }
 }
 
@@ -105,19 +125,25 @@ impl fmt::Display for Error {
                 item_prefix(f, item)?;
                 write!(
                     f,
-                    "centre coordinate {axis} is {value}; coordinates must be finite, |x| <= 1e30"
+                    "centre coordinate {axis} is {}; coordinates must be finite, |x| <= 1e30",
+                    short(value)
                 )
             }
             Error::InvalidSemiAxis { item, axis, value } => {
                 item_prefix(f, item)?;
                 write!(
                     f,
-                    "semi-axis {axis} is {value}; semi-axes must lie in [1e-30, 1e30]"
+                    "semi-axis {axis} is {}; semi-axes must lie in [1e-30, 1e30]",
+                    short(value)
                 )
             }
             Error::NonFiniteAngle { item, angle, value } => {
                 item_prefix(f, item)?;
-                write!(f, "rotation angle {angle} is {value}, not a finite number")
+                write!(
+                    f,
+                    "rotation angle {angle} is {}, not a finite number",
+                    short(value)
+                )
             }
             Error::InvalidQuaternion {
                 item,
@@ -125,22 +151,25 @@ impl fmt::Display for Error {
                 norm2,
             } => {
                 item_prefix(f, item)?;
-                let [w, x, y, z] = quaternion;
+                let [w, x, y, z] = quaternion.map(short);
                 write!(
                     f,
-                    "quaternion (w, x, y, z) = ({w}, {x}, {y}, {z}) has squared norm {norm2}; \
-                     a rotation needs a finite unit quaternion (|q|² within 1e-6 of 1)"
+                    "quaternion (w, x, y, z) = ({w}, {x}, {y}, {z}) has squared norm {}; \
+                     a rotation needs a finite unit quaternion (|q|² within 1e-6 of 1)",
+                    short(norm2)
                 )
             }
             Error::InvalidContainer { dimension, value } => write!(
                 f,
-                "container dimension {dimension} is {value}; it must be finite and positive"
+                "container dimension {dimension} is {}; it must be finite and positive",
+                short(value)
             ),
             Error::NonFiniteVariable { index, value } => {
                 write!(
                     f,
-                    "variable {index} is {value}; variables must be finite \
-                     (centre coordinates within ±1e30)"
+                    "variable {index} is {}; variables must be finite \
+                     (centre coordinates within ±1e30)",
+                    short(value)
                 )
             }
             Error::LengthMismatch {
@@ -156,19 +185,49 @@ impl fmt::Display for Error {
                 len,
             } => write!(
                 f,
-                "pair {pair} is ({i}, {j}), but there are only {len} ellipsoids"
+                "pair {pair} is ({i}, {j}), but there are only {len} items"
             ),
-            Error::Empty => write!(f, "the problem has no ellipsoid"),
+            Error::Empty => write!(f, "the problem has no item"),
             Error::Grid(ref msg) => write!(f, "neighbour grid: {msg}"),
             Error::Solver(ref msg) => write!(f, "solver: {msg}"),
             Error::Certification {
                 pair: (i, j),
                 ref message,
             } => {
-                write!(f, "certification of ellipsoids {i} and {j}: {message}")
+                write!(f, "certification of items {i} and {j}: {message}")
             }
         }
     }
 }
 
 impl std::error::Error for Error {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_name_items_and_write_numbers_short() {
+        let e = Error::NonFiniteCentre {
+            item: Some(3),
+            axis: 1,
+            value: -1e300,
+        };
+        assert_eq!(
+            e.to_string(),
+            "item 3: centre coordinate 1 is -1e300; coordinates must be finite, |x| <= 1e30"
+        );
+        let e = Error::InvalidSemiAxis {
+            item: None,
+            axis: 0,
+            value: 1.234_567_89e-40,
+        };
+        assert!(
+            e.to_string().starts_with("semi-axis 0 is 1.23457e-40;"),
+            "{e}"
+        );
+        assert_eq!(short(0.5), "0.5");
+        assert_eq!(short(f64::NAN), "NaN");
+        assert_eq!(short(2.0), "2");
+    }
+}

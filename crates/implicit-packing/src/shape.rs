@@ -526,6 +526,6 @@ mod tests {
             value: -1.0,
         }
         .to_string();
-        assert!(msg.contains("ellipsoid 7") && msg.contains("semi-axis 2") && msg.contains("-1"));
+        assert!(msg.contains("item 7") && msg.contains("semi-axis 2") && msg.contains("-1"));
     }
 }

@@ -105,7 +105,7 @@ impl fmt::Display for Error {
             ),
             Error::InvalidSemiAxis { index, value } => write!(
                 f,
-                "semi-axis {index} must be a positive finite length, got {value}"
+                "semi-axis {index} must be a positive finite length, got {value:e}"
             ),
             Error::InvalidRotation { reason } => write!(f, "invalid rotation: {reason}"),
         }
