@@ -348,6 +348,7 @@ fn run_n<const N: usize>(
         dilation: result.best.repair_factor,
         density_before: result.best.density_before_repair,
     });
+    summary.start_kept = result.start_kept;
     Ok(RunOutcome {
         packing,
         summary,

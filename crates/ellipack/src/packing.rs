@@ -669,6 +669,10 @@ pub struct Summary {
     /// What the certified repair cost, when the packing came from the solver.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repair: Option<Repair>,
+    /// True when no local minimisation beat the run's start (a `--resume` folder or the
+    /// certified lattice start), which was written as it was.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub start_kept: bool,
 }
 
 /// The repair that made the solver's point certifiable: every centre and the container were
@@ -700,6 +704,7 @@ impl Summary {
             local_minimisations,
             certificate,
             repair: None,
+            start_kept: false,
         }
     }
 }

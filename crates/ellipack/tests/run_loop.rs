@@ -250,9 +250,13 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
         assert!(o.status.success(), "{limit}: {stdout}{}", text(&o.stderr));
         let after = density(&out);
         assert!(after >= before, "{limit}: {before} → {after}");
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
         if after == before {
             assert!(stdout.contains("wrote the start"), "{limit}: {stdout}");
+            assert!(summary.contains("\"start_kept\": true"), "{limit}: {summary}");
             kept = true;
+        } else {
+            assert!(!summary.contains("start_kept"), "{limit}: {summary}");
         }
         let (certified, report) = verify(&out);
         assert!(certified, "{limit}: {report}");
