@@ -253,7 +253,10 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
         let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
         if after == before {
             assert!(stdout.contains("wrote the start"), "{limit}: {stdout}");
-            assert!(summary.contains("\"start_kept\": true"), "{limit}: {summary}");
+            assert!(
+                summary.contains("\"start_kept\": true"),
+                "{limit}: {summary}"
+            );
             kept = true;
         } else {
             assert!(!summary.contains("start_kept"), "{limit}: {summary}");
