@@ -2,7 +2,8 @@
 //! that an interrupted run never leaves a half-written file under the final name.
 //!
 //! What is not a regular file is written into, never replaced: a FIFO, a character device such
-//! as `/dev/null`, `/dev/stdout`. A symbolic link is followed: its target is replaced
+//! as `/dev/null`, and the names of open files (`/dev/stdout`, `/dev/stderr`, `/dev/fd/N`),
+//! even when they lead to a regular file. A symbolic link is followed: its target is replaced
 //! atomically and the link stays. A file that is replaced keeps its permission mode.
 
 use crate::Error;
