@@ -110,8 +110,8 @@ enum Command {
     /// of any length runs in constant memory.
     ///
     /// Exit status: 0 every row evaluated; 1 the command failed (unreadable or malformed file,
-    /// output not writable: nothing is written); 3 some rows failed (see their `error`
-    /// column), the others were written. A reader that closes the pipe early (`| head`) is
+    /// output not writable: an --output file is left as it was); 3 some rows failed (see
+    /// their `error` column), the others were written. A reader that closes the pipe early (`| head`) is
     /// not a failure: 0.
     Contact {
         /// The pairs (CSV). Without it, the bundled example pairs are evaluated.
@@ -136,8 +136,8 @@ enum Command {
     /// header). Output columns: case_id, U, d2, eps, f, overlap, X_1, X_2[, X_3], error; X is
     /// blank where the projection is not unique.
     ///
-    /// Exit status: 0 every row evaluated; 1 the command failed (nothing is written); 3 some
-    /// rows failed (see their `error` column), the others were written.
+    /// Exit status: 0 every row evaluated; 1 the command failed (an --output file is left as
+    /// it was); 3 some rows failed (see their `error` column), the others were written.
     Measure {
         /// The pairs (CSV).
         #[arg(long)]

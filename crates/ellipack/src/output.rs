@@ -2,7 +2,8 @@
 //! that an interrupted run never leaves a half-written file under the final name.
 //!
 //! What is not a regular file is written into, never replaced: a FIFO, a character device such
-//! as `/dev/null`, `/dev/stdout`. A symbolic link is followed: its target is replaced
+//! as `/dev/null`, and the names of open files (`/dev/stdout`, `/dev/stderr`, `/dev/fd/N`),
+//! even when they lead to a regular file. A symbolic link is followed: its target is replaced
 //! atomically and the link stays. A file that is replaced keeps its permission mode.
 
 use crate::Error;
@@ -64,6 +65,7 @@ impl Drop for Temporary {
 
 enum Sink {
     Stdout(io::Stdout),
+    Stderr(io::Stderr),
     Direct(File),
     Atomic {
         file: BufWriter<File>,
@@ -93,11 +95,32 @@ impl OutputFile {
             path: path.to_path_buf(),
             source,
         };
-        if is_standard_output(path) {
-            return Ok(OutputFile {
-                path: path.to_path_buf(),
-                sink: Sink::Stdout(io::stdout()),
-            });
+        match descriptor(path) {
+            Some(Descriptor::Stdout) => {
+                return Ok(OutputFile {
+                    path: path.to_path_buf(),
+                    sink: Sink::Stdout(io::stdout()),
+                });
+            }
+            Some(Descriptor::Stderr) => {
+                return Ok(OutputFile {
+                    path: path.to_path_buf(),
+                    sink: Sink::Stderr(io::stderr()),
+                });
+            }
+            Some(Descriptor::Other) => {
+                // Appending continues where the shell's redirection stands instead of
+                // writing over it from offset 0.
+                let file = std::fs::OpenOptions::new()
+                    .append(true)
+                    .open(path)
+                    .map_err(io)?;
+                return Ok(OutputFile {
+                    path: path.to_path_buf(),
+                    sink: Sink::Direct(file),
+                });
+            }
+            None => {}
         }
         let (target, mode) = match std::fs::metadata(path) {
             Ok(m) if m.is_dir() => {
@@ -150,6 +173,7 @@ impl OutputFile {
         };
         match self.sink {
             Sink::Stdout(mut out) => out.flush().map_err(io),
+            Sink::Stderr(mut out) => out.flush().map_err(io),
             Sink::Direct(mut device) => device.flush().map_err(io),
             Sink::Atomic {
                 file,
@@ -175,6 +199,7 @@ impl Write for OutputFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.sink {
             Sink::Stdout(out) => out.write(buf),
+            Sink::Stderr(out) => out.write(buf),
             Sink::Direct(device) => device.write(buf),
             Sink::Atomic { file, .. } => file.write(buf),
         }
@@ -183,19 +208,34 @@ impl Write for OutputFile {
     fn flush(&mut self) -> io::Result<()> {
         match &mut self.sink {
             Sink::Stdout(out) => out.flush(),
+            Sink::Stderr(out) => out.flush(),
             Sink::Direct(device) => device.flush(),
             Sink::Atomic { file, .. } => file.flush(),
         }
     }
 }
 
-/// Names of this process's standard output: opened anew they would start at offset 0 of a
-/// redirected file, and renamed over they would replace the shell's file, so they are written
-/// through the standard output itself.
-fn is_standard_output(path: &Path) -> bool {
-    ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]
-        .iter()
-        .any(|name| path == Path::new(name))
+/// A name of one of this process's open files.
+enum Descriptor {
+    Stdout,
+    Stderr,
+    Other,
+}
+
+/// Whether `path` names one of this process's open files (`/dev/stdout`, `/dev/fd/N`,
+/// `/proc/self/fd/N`). Renamed over, the shell's redirected file would be replaced; opened
+/// anew, it would be written from offset 0; so these are written through the open file.
+fn descriptor(path: &Path) -> Option<Descriptor> {
+    let is = |names: &[&str]| names.iter().any(|name| path == Path::new(name));
+    if is(&["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]) {
+        Some(Descriptor::Stdout)
+    } else if is(&["/dev/stderr", "/dev/fd/2", "/proc/self/fd/2"]) {
+        Some(Descriptor::Stderr)
+    } else if path.starts_with("/dev/fd") || path.starts_with("/proc/self/fd") {
+        Some(Descriptor::Other)
+    } else {
+        None
+    }
 }
 
 /// Where a path that does not exist (yet) is written: itself, or the target of a dangling

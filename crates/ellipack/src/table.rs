@@ -69,15 +69,25 @@ pub fn csv_reader<R: std::io::Read>(input: R) -> csv::Reader<R> {
 /// The header of a table (its first record), with broken CSV reported as [`Error::MalformedCsv`].
 ///
 /// # Errors
-/// [`Error::MalformedCsv`] when the first line is not valid CSV or not UTF-8.
+/// [`Error::MalformedCsv`] when the first line is not valid CSV or not UTF-8, or the file is
+/// empty.
 pub fn read_header<R: std::io::Read>(
     reader: &mut csv::Reader<R>,
     source_name: &str,
 ) -> Result<csv::StringRecord, Error> {
-    reader
+    let header = reader
         .headers()
         .cloned()
-        .map_err(|e| malformed(source_name, &e))
+        .map_err(|e| malformed(source_name, &e))?;
+    if header.len() <= 1 && header.iter().all(str::is_empty) {
+        return Err(Error::MalformedCsv {
+            source_name: source_name.to_string(),
+            line: 1,
+            message: "the file is empty: it must start with a header line naming its columns"
+                .to_string(),
+        });
+    }
+    Ok(header)
 }
 
 fn malformed(source_name: &str, e: &csv::Error) -> Error {

@@ -176,6 +176,21 @@ fn dev_stdout_is_written_through() {
     assert!(status.success());
     assert_eq!(std::fs::read_to_string(&target).unwrap().lines().count(), 4);
     assert_eq!(names_in(&dir), ["pairs.csv", "redirected.csv"]);
+    // The same for standard error, whose file also receives the messages.
+    let file = std::fs::File::create(&target).unwrap();
+    let status = ellipack()
+        .args(["contact", "--output", "/dev/stderr", "--input"])
+        .arg(&input)
+        .stderr(file)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let text = std::fs::read_to_string(&target).unwrap();
+    assert!(
+        text.starts_with("case_id,") && text.contains("wrote 3 rows to /dev/stderr"),
+        "{text}"
+    );
+    assert_eq!(names_in(&dir), ["pairs.csv", "redirected.csv"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

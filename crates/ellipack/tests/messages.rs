@@ -193,3 +193,20 @@ fn a_cell_that_is_not_a_number_is_quoted_short() {
     let message = table.rows[0].values.clone().unwrap_err();
     assert!(message.len() < 120, "{message}");
 }
+
+#[test]
+fn an_empty_pairs_or_measure_file_says_so() {
+    for text in ["", "\n"] {
+        let err = ellipack::pairs::read_pairs(text, "p.csv")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "p.csv: line 1: the file is empty: it must start with a header line naming its columns"
+        );
+        let err = ellipack::measure::measure(text, "m.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("m.csv: line 1: the file is empty"), "{err}");
+    }
+}
