@@ -102,8 +102,8 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         run.failures.push(format!(
             "FAIL  packing ({}): the best packing is not certified: overlapping {:?}, outside {:?}",
             s.name(),
-            cert.overlapping_pairs,
-            cert.outside
+            cert.overlapping_pairs(),
+            cert.outside_items()
         ));
     }
 
@@ -209,7 +209,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         radius,
         result.time_to_best.as_secs_f64(),
         cert.pairs_checked,
-        cert.overlapping_pairs.len(),
+        cert.overlapping.len(),
         cert.outside.len(),
         if spread < 1e-4 {
             format!(

@@ -97,8 +97,8 @@ pub fn packing_certificate() -> Result<String, Error> {
          outside the container: {:?}\nfeasible: {}\n",
         bodies.len(),
         cert.pairs_checked,
-        cert.overlapping_pairs,
-        cert.outside,
+        cert.overlapping_pairs(),
+        cert.outside_items(),
         cert.is_feasible()
     ))
 }

@@ -11,14 +11,11 @@ use crate::packing::{
     PackingError, Summary,
 };
 use crate::scene::Scene;
-use implicit_packing::containment::{
-    Container as ContainerShape, ContainerKind as ModelContainer, containment_residual,
-    farthest_point,
-};
+use implicit_packing::containment::ContainerKind as ModelContainer;
 use implicit_packing::model::Problem;
 use implicit_packing::multistart::{MultiStartProgress, MultiStartSettings, multistart};
-use implicit_packing::pack::{LocalSettings, contact_mu2, lattice_start};
-use implicit_packing::shape::{Body, angles_from_rotation, rotation_from_quaternion};
+use implicit_packing::pack::{LocalSettings, lattice_start};
+use implicit_packing::shape::{angles_from_rotation, rotation_from_quaternion};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -288,11 +285,7 @@ fn run_n<const N: usize>(
     if options.resume_from.is_some() {
         let certificate = problem.certify(&x0)?;
         if !certificate.is_feasible() {
-            return Err(PackError::StartNotCertified(start_defects::<N>(
-                &mut problem,
-                &x0,
-                &certificate,
-            )?));
+            return Err(PackError::StartNotCertified(start_defects(&certificate)));
         }
     }
     let threads = match options.threads.unwrap_or(scene.solver.threads) {
@@ -331,12 +324,7 @@ fn run_n<const N: usize>(
     };
     let result = multistart(axes, kind, &x0, &settings, progress, observe, interrupt)?;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
-    let certificate = certificate_of(
-        &packing,
-        &result.best.certificate,
-        &mut problem,
-        &result.best.x,
-    )?;
+    let certificate = certificate_of(&result.best.certificate);
     let mut summary = Summary::new(
         &packing,
         result.best.objective,
@@ -364,56 +352,20 @@ fn run_n<const N: usize>(
 }
 
 /// The overlapping pairs (with μ²) and the items outside (with the container growth that
-/// would hold each) of an uncertified point.
-fn start_defects<const N: usize>(
-    problem: &mut Problem<N>,
-    x: &[f64],
-    certificate: &implicit_packing::model::Certificate,
-) -> Result<StartDefects, PackError> {
-    let bodies = problem.bodies_at(x)?.to_vec();
-    let overlapping = certificate
-        .overlapping_pairs
-        .iter()
-        .map(|&(i, j)| (i, j, contact_mu2(&bodies[i], &bodies[j])))
-        .collect();
-    let dims = &x[problem.len() * Problem::<N>::vars_per_body()..];
-    let kind = problem.container_kind();
-    let inside_at = |i: usize, s: f64| -> Option<bool> {
-        let scaled: Vec<f64> = dims.iter().map(|d| d * s).collect();
-        let container = ContainerShape::<N>::from_dimensions(kind, &scaled).ok()?;
-        Some(containment_residual(&bodies[i], &container) == 0.0)
-    };
-    // The least growth factor by bisection: containment only improves as the container grows
-    // about its centre, so the factor is well defined; past 2^40 the item is given up on.
-    let growth = |i: usize| -> Option<f64> {
-        let mut hi = 2.0;
-        while !inside_at(i, hi)? {
-            hi *= 2.0;
-            if hi > 2f64.powi(40) {
-                return None;
-            }
-        }
-        let mut lo = 1.0;
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if inside_at(i, mid)? {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        Some(hi)
-    };
-    let outside = certificate
-        .outside
-        .iter()
-        .enumerate()
-        .map(|(k, &i)| (i, if k < LISTED { growth(i) } else { None }))
-        .collect();
-    Ok(StartDefects {
-        overlapping,
-        outside,
-    })
+/// would hold each) of an uncertified point, from its certificate.
+fn start_defects(certificate: &implicit_packing::model::Certificate) -> StartDefects {
+    StartDefects {
+        overlapping: certificate
+            .overlapping
+            .iter()
+            .map(|o| (o.items.0, o.items.1, Some(o.mu2)))
+            .collect(),
+        outside: certificate
+            .outside
+            .iter()
+            .map(|o| (o.item, Some(o.scale)))
+            .collect(),
+    }
 }
 
 /// Re-checks a packing from its files, independently of how it was made: PW85 verdicts on every
@@ -486,31 +438,28 @@ fn verify_n<const N: usize>(
     let mut problem = Problem::<N>::new(axes.to_vec(), kind)?;
     let x = variables_of::<N>(packing, axes, kind)?;
     let model = problem.certify(&x)?;
-    let certificate = certificate_of(packing, &model, &mut problem, &x)?;
-    let bodies = problem.bodies_at(&x)?.to_vec();
+    let certificate = certificate_of(&model);
     let mut overlapping_pairs: Vec<OverlappingPair> = model
-        .overlapping_pairs
+        .overlapping
         .iter()
-        .map(|&(i, j)| OverlappingPair {
-            items: (i, j),
-            mu2: contact_mu2(&bodies[i], &bodies[j]),
+        .map(|o| OverlappingPair {
+            items: o.items,
+            mu2: Some(o.mu2),
         })
         .collect();
-    // Deepest first; a pair PW85 could not evaluate goes last. `total_cmp` keeps the order
-    // total, and the stable sort keeps the model's (i, j) order among equals.
+    // Deepest first; the stable sort keeps the certificate's (i, j) order among equals.
     overlapping_pairs.sort_by(|a, b| match (a.mu2, b.mu2) {
         (Some(p), Some(q)) => p.total_cmp(&q),
         (Some(_), None) => std::cmp::Ordering::Less,
         (None, Some(_)) => std::cmp::Ordering::Greater,
         (None, None) => std::cmp::Ordering::Equal,
     });
-    let size = packing.container.half_extents();
     let mut outside: Vec<ItemOutside> = model
         .outside
         .iter()
-        .map(|&item| ItemOutside {
-            item,
-            scale: containment_scale(&bodies[item], packing.container.kind(), &size),
+        .map(|o| ItemOutside {
+            item: o.item,
+            scale: o.scale,
         })
         .collect();
     outside.sort_by(|a, b| b.scale.total_cmp(&a.scale));
@@ -521,60 +470,13 @@ fn verify_n<const N: usize>(
     })
 }
 
-/// The scale factor of [`ItemOutside::scale`] for a body whose centre is relative to the
-/// container's centre; `half_extents` are the container's (the radius repeated for a ball).
-fn containment_scale<const N: usize>(
-    body: &Body<N>,
-    kind: ContainerKind,
-    half_extents: &[f64],
-) -> f64 {
-    let mut a = [0.0; N];
-    for (k, slot) in a.iter_mut().enumerate() {
-        *slot = half_extents.get(k).copied().unwrap_or(f64::NAN);
-    }
-    match model_container(kind) {
-        ModelContainer::Box => {
-            let (c, m) = (body.centre(), body.shape_matrix());
-            // The support of the item along ±e_k is ±c_k + sqrt(M_kk).
-            (0..N)
-                .map(|k| (c[k].abs() + m[k][k].sqrt()) / a[k])
-                .fold(0.0, f64::max)
-        }
-        // The container's own map C⁻¹ makes it the unit ball: h = max |C⁻¹ p|² over the item.
-        ModelContainer::Ball | ModelContainer::Ellipsoid => farthest_point(body, &a).0.sqrt(),
-    }
-}
-
-/// The summary's certificate: the model's verdicts and the smallest μ² over the pairs whose
-/// enclosing balls meet.
-fn certificate_of<const N: usize>(
-    packing: &Packing,
-    model: &implicit_packing::model::Certificate,
-    problem: &mut Problem<N>,
-    x: &[f64],
-) -> Result<Certificate, PackError> {
-    let _ = packing;
-    let bodies = problem.bodies_at(x)?.to_vec();
-    let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
-    let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
-    let mut min_mu2: Option<f64> = None;
-    if bodies.len() > 1 {
-        let grid_error = |e: cell_grid::Error| PackError::Mismatch(format!("neighbour grid: {e}"));
-        let grid = cell_grid::Grid::<N>::with_radii(&radii)
-            .build(&centres)
-            .map_err(grid_error)?;
-        grid.for_each_pair_within(&centres, |i, j, _| {
-            if let Some(mu2) = contact_mu2(&bodies[i], &bodies[j]) {
-                min_mu2 = Some(min_mu2.map_or(mu2, |m: f64| m.min(mu2)));
-            }
-        })
-        .map_err(grid_error)?;
-    }
-    Ok(Certificate {
-        overlapping_pairs: model.overlapping_pairs.len() as u64,
+/// The summary's certificate: the counts and the smallest μ² of the one certificate.
+fn certificate_of(model: &implicit_packing::model::Certificate) -> Certificate {
+    Certificate {
+        overlapping_pairs: model.overlapping.len() as u64,
         containment_violations: model.outside.len() as u64,
-        min_mu2,
-    })
+        min_mu2: model.min_mu2,
+    }
 }
 
 /// The model's container for a container kind of the files.

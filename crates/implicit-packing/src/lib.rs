@@ -29,6 +29,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod batch;
+pub mod certificate;
 pub mod containment;
 pub mod derivatives;
 pub mod error;

@@ -97,57 +97,13 @@ impl ModelGradient {
     }
 }
 
-/// The verdict of [`Problem::certify`].
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct Certificate {
-    /// Pairs `(i, j)`, `i < j`, that overlap according to PW85 (`μ² < 1`).
-    pub overlapping_pairs: Vec<(usize, usize)>,
-    /// Ellipsoids not inside the container.
-    pub outside: Vec<usize>,
-    /// Number of pairs tested (enclosing balls intersecting).
-    pub pairs_checked: usize,
-}
-
-impl Certificate {
-    /// No overlap and every ellipsoid inside.
-    pub fn is_feasible(&self) -> bool {
-        self.overlapping_pairs.is_empty() && self.outside.is_empty()
-    }
-}
-
-/// `pw85::overlap` in the PW85 storage (upper triangle of the shape matrix, `r12 = c_j − c_i`).
-fn pw85_overlap<const N: usize>(i: &Body<N>, j: &Body<N>) -> Result<bool, String> {
-    let (mi, mj) = (i.shape_matrix(), j.shape_matrix());
-    let (ci, cj) = (i.centre(), j.centre());
-    let at = |m: &[[f64; N]; N], r: usize, c: usize| {
-        m.get(r).and_then(|row| row.get(c)).copied().unwrap_or(0.0)
-    };
-    let d = |k: usize| cj.get(k).copied().unwrap_or(0.0) - ci.get(k).copied().unwrap_or(0.0);
-    let result = if N == 3 {
-        let sym = |m: &[[f64; N]; N]| {
-            [
-                at(m, 0, 0),
-                at(m, 0, 1),
-                at(m, 0, 2),
-                at(m, 1, 1),
-                at(m, 1, 2),
-                at(m, 2, 2),
-            ]
-        };
-        pw85::overlap(&[d(0), d(1), d(2)], &sym(&mi), &sym(&mj))
-    } else {
-        let sym = |m: &[[f64; N]; N]| [at(m, 0, 0), at(m, 0, 1), at(m, 1, 1)];
-        pw85::overlap_2d(&[d(0), d(1)], &sym(&mi), &sym(&mj))
-    };
-    result.map_err(|e| e.to_string())
-}
+pub use crate::certificate::Certificate;
 
 /// A packing problem: the semi-axes of the `m` ellipsoids and the kind of container, with the
 /// workspace reused by every evaluation.
 #[derive(Debug)]
 pub struct Problem<const N: usize> {
     semi_axes: Vec<[f64; N]>,
-    radii: Vec<f64>,
     kind: ContainerKind,
     bodies: Vec<Body<N>>,
     centres: Vec<[f64; N]>,
@@ -207,7 +163,6 @@ impl<const N: usize> Problem<N> {
         .map_err(grid_error)?;
         Ok(Problem {
             semi_axes,
-            radii,
             kind,
             bodies: Vec::new(),
             centres: Vec::new(),
@@ -537,45 +492,14 @@ impl<const N: usize> Problem<N> {
         Ok(())
     }
 
-    /// Certifies a configuration independently of the model: every pair whose enclosing balls
-    /// intersect is tested with `pw85::overlap` (the Perram–Wertheim contact function,
-    /// `μ² < 1`), and every ellipsoid with the exact containment test.
+    /// Certifies a configuration independently of the model ([`crate::certificate::certify`]
+    /// on the bodies and the container that `x` stands for).
     ///
     /// # Errors
-    /// Those of [`Problem::evaluate`], and [`Error::Certification`] if PW85 rejects a pair.
+    /// Those of [`Problem::evaluate`], and those of [`crate::certificate::certify`].
     pub fn certify(&mut self, x: &[f64]) -> Result<Certificate, Error> {
         let container = self.load(x)?;
-        // A grid of its own, built afresh: the certificate shares no state with the model's
-        // pair list.
-        let grid = cell_grid::Grid::<N>::with_radii(&self.radii)
-            .build(&self.centres)
-            .map_err(grid_error)?;
-        let bodies = &self.bodies;
-        let mut cert = Certificate::default();
-        let mut failure = None;
-        grid.for_each_close_pair(|i, j, _, _| {
-            cert.pairs_checked += 1;
-            match pw85_overlap(&bodies[i], &bodies[j]) {
-                Ok(true) => cert.overlapping_pairs.push((i.min(j), i.max(j))),
-                Ok(false) => {}
-                Err(message) => {
-                    failure.get_or_insert(Error::Certification {
-                        pair: (i, j),
-                        message,
-                    });
-                }
-            }
-        });
-        if let Some(e) = failure {
-            return Err(e);
-        }
-        cert.overlapping_pairs.sort_unstable();
-        for (i, b) in bodies.iter().enumerate() {
-            if containment_residual(b, &container) > 0.0 {
-                cert.outside.push(i);
-            }
-        }
-        Ok(cert)
+        crate::certificate::certify(&self.bodies, &container)
     }
 
     /// Reference: the overlap sum of eq. 19 over **all** `m(m−1)/2` pairs, `O(m²)`.

@@ -26,7 +26,6 @@
 
 use crate::error::Error;
 use crate::model::{Certificate, ModelGradient, Problem};
-use crate::shape::Body;
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
 use std::cell::RefCell;
 
@@ -354,13 +353,10 @@ pub fn repair<const N: usize>(
     // Pairs: μ² grows as s², so s = 1/μ settles each overlapping pair exactly; a relative
     // margin keeps the verdict clear of rounding at tangency.
     const MARGIN: f64 = 1e-12;
-    let bodies: Vec<Body<N>> = problem.bodies_at(x)?.to_vec();
     let mut s = 1.0_f64;
-    for &(i, j) in &certificate.overlapping_pairs {
-        if let Some(mu2) = contact_mu2(&bodies[i], &bodies[j])
-            && mu2 > 0.0
-        {
-            s = s.max(1.0 / mu2.sqrt());
+    for overlap in &certificate.overlapping {
+        if overlap.mu2 > 0.0 {
+            s = s.max(1.0 / overlap.mu2.sqrt());
         }
     }
     let mut s = s * (1.0 + MARGIN);
@@ -379,7 +375,7 @@ pub fn repair<const N: usize>(
             return Err(Error::Solver(format!(
                 "the solver's point cannot be certified by a dilation up to {MAX_DILATION}: \
                  {} overlapping pairs, {} items outside the container",
-                cert.overlapping_pairs.len(),
+                cert.overlapping.len(),
                 cert.outside.len()
             )));
         }
@@ -419,37 +415,6 @@ fn dilate<const N: usize>(problem: &Problem<N>, x: &[f64], s: f64) -> Vec<f64> {
             }
         })
         .collect()
-}
-
-/// μ² of two bodies by PW85 (`None` if PW85 refuses them): the PW85 contact function of the
-/// pair in PW85's storage (upper triangle of each shape matrix, r12 = c_j − c_i).
-pub fn contact_mu2<const N: usize>(i: &Body<N>, j: &Body<N>) -> Option<f64> {
-    let (mi, mj) = (i.shape_matrix(), j.shape_matrix());
-    let (ci, cj) = (i.centre(), j.centre());
-    let r: Vec<f64> = (0..N).map(|k| cj[k] - ci[k]).collect();
-    let upper = |m: &[[f64; N]; N]| -> Vec<f64> {
-        let mut v = Vec::with_capacity(N * (N + 1) / 2);
-        for a in 0..N {
-            for b in a..N {
-                v.push(m[a][b]);
-            }
-        }
-        v
-    };
-    let (qi, qj) = (upper(&mi), upper(&mj));
-    let contact = match N {
-        2 => pw85::contact_function_2d(
-            &[r[0], r[1]],
-            &[qi[0], qi[1], qi[2]],
-            &[qj[0], qj[1], qj[2]],
-        ),
-        _ => pw85::contact_function(
-            &[r[0], r[1], r[2]],
-            &[qi[0], qi[1], qi[2], qi[3], qi[4], qi[5]],
-            &[qj[0], qj[1], qj[2], qj[3], qj[4], qj[5]],
-        ),
-    };
-    contact.ok().map(|c| c.mu2)
 }
 
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality

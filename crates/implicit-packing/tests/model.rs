@@ -301,7 +301,25 @@ fn certification_agrees_with_the_model() {
                 }
             }
         }
-        assert_eq!(cert.overlapping_pairs, expect);
+        assert_eq!(cert.overlapping_pairs(), expect);
+        for o in &cert.overlapping {
+            let (i, j) = o.items;
+            let mu2 = implicit_packing::certificate::contact(&b[i], &b[j])
+                .unwrap()
+                .mu2;
+            assert_eq!(o.mu2, mu2);
+            assert!(mu2 < 1.0);
+        }
+        let least = cert
+            .overlapping
+            .iter()
+            .map(|o| o.mu2)
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(
+            cert.min_mu2,
+            Some(least),
+            "the overlapping pairs hold the least μ²"
+        );
         assert!(!cert.is_feasible());
     }
     // Two separated ellipses well inside a disc: feasible.
@@ -309,8 +327,9 @@ fn certification_agrees_with_the_model() {
     let cert = p.certify(&[-1.5, 0.0, 0.0, 1.5, 0.0, 0.3, 4.0]).unwrap();
     assert!(cert.is_feasible(), "{cert:?}");
     let cert = p.certify(&[-0.5, 0.0, 0.0, 0.5, 0.0, 0.3, 1.2]).unwrap();
-    assert_eq!(cert.overlapping_pairs, vec![(0, 1)]);
-    assert_eq!(cert.outside, vec![0, 1]);
+    assert_eq!(cert.overlapping_pairs(), vec![(0, 1)]);
+    assert_eq!(cert.outside_items(), vec![0, 1]);
+    assert!(cert.outside.iter().all(|o| o.scale > 1.0), "{cert:?}");
 }
 
 /// Coincident centres put the pair in the hard case (no Hessian): the Hessian–vector product

@@ -1,0 +1,168 @@
+//! The certificate of a configuration, independent of the model's overlap measure: the PW85
+//! contact function μ² of every pair whose enclosing balls meet (one pass of a neighbour grid,
+//! [`cell_grid`]), and exact containment. This is the one test that decides whether a packing
+//! is written: the packer, `ellipack verify` and the validation studies all call [`certify`].
+//!
+//! A pair overlaps iff μ² < 1 (PW85 theory, eq. 6); the smallest μ² over the checked pairs
+//! says how close the packing is to touching (μ² = 1: tangent). An item is outside iff its
+//! containment residual (eq. 36 of the packing paper, via [`crate::containment`]) is positive;
+//! by how much is the factor by which the container, scaled about its centre, would have to
+//! grow to hold it.
+//!
+//! # References
+//! - J. W. Perram and M. S. Wertheim, J. Comput. Phys. 58 (1985) 409–416 (the contact
+//!   function).
+//! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
+//!   variables for packing ellipsoids*, J. Global Optim. (2017), Section 5.2 (the grid).
+
+use crate::containment::{Container, containment_residual, farthest_point};
+use crate::error::Error;
+use crate::shape::Body;
+
+/// Two items that overlap: their indices and μ² < 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Overlap {
+    /// The items `(i, j)`, `i < j`.
+    pub items: (usize, usize),
+    /// Their PW85 contact function μ² (< 1).
+    pub mu2: f64,
+}
+
+/// An item outside the container, and by how much.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outside {
+    /// The item's index.
+    pub item: usize,
+    /// The least factor t > 1 by which the container, scaled about its centre, holds the item.
+    pub scale: f64,
+}
+
+/// What [`certify`] found.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Certificate {
+    /// The overlapping pairs, in increasing `(i, j)`.
+    pub overlapping: Vec<Overlap>,
+    /// The items outside the container, in increasing index.
+    pub outside: Vec<Outside>,
+    /// Number of pairs tested (enclosing balls meeting).
+    pub pairs_checked: usize,
+    /// The smallest μ² over the tested pairs (`None` when no pair was tested).
+    pub min_mu2: Option<f64>,
+}
+
+impl Certificate {
+    /// No overlap and every item inside.
+    pub fn is_feasible(&self) -> bool {
+        self.overlapping.is_empty() && self.outside.is_empty()
+    }
+
+    /// The overlapping pairs `(i, j)`, without their μ².
+    pub fn overlapping_pairs(&self) -> Vec<(usize, usize)> {
+        self.overlapping.iter().map(|o| o.items).collect()
+    }
+
+    /// The indices of the items outside, without by how much.
+    pub fn outside_items(&self) -> Vec<usize> {
+        self.outside.iter().map(|o| o.item).collect()
+    }
+}
+
+/// The PW85 contact function of two bodies, from their shape matrices in PW85's storage
+/// (upper triangle, row-major) and r12 = c_j − c_i.
+///
+/// # Errors
+/// PW85's refusal (a shape matrix that is not positive definite, non-finite entries).
+pub fn contact<const N: usize>(i: &Body<N>, j: &Body<N>) -> Result<pw85::Contact, pw85::Error> {
+    let (mi, mj) = (i.shape_matrix(), j.shape_matrix());
+    let (ci, cj) = (i.centre(), j.centre());
+    let at = |m: &[[f64; N]; N], r: usize, c: usize| {
+        m.get(r).and_then(|row| row.get(c)).copied().unwrap_or(0.0)
+    };
+    let d = |k: usize| cj.get(k).copied().unwrap_or(0.0) - ci.get(k).copied().unwrap_or(0.0);
+    if N == 3 {
+        let sym = |m: &[[f64; N]; N]| {
+            [
+                at(m, 0, 0),
+                at(m, 0, 1),
+                at(m, 0, 2),
+                at(m, 1, 1),
+                at(m, 1, 2),
+                at(m, 2, 2),
+            ]
+        };
+        pw85::contact_function(&[d(0), d(1), d(2)], &sym(&mi), &sym(&mj))
+    } else {
+        let sym = |m: &[[f64; N]; N]| [at(m, 0, 0), at(m, 0, 1), at(m, 1, 1)];
+        pw85::contact_function_2d(&[d(0), d(1)], &sym(&mi), &sym(&mj))
+    }
+}
+
+/// The certificate of `bodies` in `container` (centred at the origin).
+///
+/// # Errors
+/// [`Error::Grid`] when the neighbour grid refuses the centres, [`Error::Certification`] when
+/// PW85 refuses a pair.
+pub fn certify<const N: usize>(
+    bodies: &[Body<N>],
+    container: &Container<N>,
+) -> Result<Certificate, Error> {
+    let mut cert = Certificate::default();
+    if bodies.len() > 1 {
+        let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
+        let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
+        let grid = cell_grid::Grid::<N>::with_radii(&radii)
+            .build(&centres)
+            .map_err(|e| Error::Grid(e.to_string()))?;
+        let mut failure = None;
+        grid.for_each_close_pair(|i, j, _, _| {
+            cert.pairs_checked += 1;
+            match contact(&bodies[i], &bodies[j]) {
+                Ok(c) => {
+                    cert.min_mu2 = Some(cert.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
+                    if c.mu2 < 1.0 {
+                        cert.overlapping.push(Overlap {
+                            items: (i.min(j), i.max(j)),
+                            mu2: c.mu2,
+                        });
+                    }
+                }
+                Err(e) => {
+                    failure.get_or_insert(Error::Certification {
+                        pair: (i, j),
+                        message: e.to_string(),
+                    });
+                }
+            }
+        });
+        if let Some(e) = failure {
+            return Err(e);
+        }
+        cert.overlapping.sort_unstable_by_key(|o| o.items);
+    }
+    for (item, body) in bodies.iter().enumerate() {
+        if containment_residual(body, container) > 0.0 {
+            cert.outside.push(Outside {
+                item,
+                scale: containment_scale(body, container),
+            });
+        }
+    }
+    Ok(cert)
+}
+
+/// The least factor t by which `container`, scaled about its centre, holds `body`: for a ball
+/// or an ellipsoid with semi-axes A, t² = max over the body of |A⁻¹ p|² (the farthest point in
+/// the container's own metric, [`farthest_point`]); for a box, the largest ratio of the body's
+/// support (|c_k| + √M_kk along ±e_k) to the half-side.
+pub fn containment_scale<const N: usize>(body: &Body<N>, container: &Container<N>) -> f64 {
+    match *container {
+        Container::Box { half_sides } => {
+            let (c, m) = (body.centre(), body.shape_matrix());
+            (0..N)
+                .map(|k| (c[k].abs() + m[k][k].sqrt()) / half_sides[k])
+                .fold(0.0, f64::max)
+        }
+        Container::Ball { radius } => farthest_point(body, &[radius; N]).0.sqrt(),
+        Container::Ellipsoid { semi_axes } => farthest_point(body, &semi_axes).0.sqrt(),
+    }
+}
