@@ -19,34 +19,18 @@ use std::time::Duration;
 use cell_grid::Grid;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-
-/// splitmix64: deterministic points without a `rand` dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn unif(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use testkit::Rng;
 
 /// Jittered, shuffled lattice of about `m` points (the lattice side is rounded up).
 fn lattice<const D: usize>(m: usize, seed: u64) -> Vec<[f64; D]> {
     let side = (m as f64).powf(1.0 / D as f64).ceil() as usize;
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut pts = Vec::with_capacity(m);
     'fill: for code in 0.. {
         let mut c = code;
         let mut p = [0.0; D];
         for x in &mut p {
-            *x = (c % side) as f64 + 0.6 * (rng.unif() - 0.5);
+            *x = (c % side) as f64 + 0.6 * (rng.uniform() - 0.5);
             c /= side;
         }
         pts.push(p);

@@ -8,13 +8,8 @@ use cell_grid::Grid;
 
 fn run<const D: usize>(m: usize, neighbours: f64, shuffle: bool, radii: bool) {
     let side = (m as f64).powf(1.0 / D as f64).ceil() as usize;
-    let mut s = 12345u64;
-    let mut unif = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = testkit::Rng::new(12345);
+    let mut unif = move || rng.uniform();
     let mut pts: Vec<[f64; D]> = (0..m)
         .map(|c| {
             let mut p = [0.0; D];

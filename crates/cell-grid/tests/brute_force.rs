@@ -3,7 +3,8 @@
 mod common;
 
 use cell_grid::{Grid, GridBuilder, Layout};
-use common::{Box, Rng, brute_pairs, check_grid, neighbour_lists};
+use common::{Box, brute_pairs, check_grid, neighbour_lists};
+use testkit::Rng;
 
 /// Builds with a global cutoff, dense and hashed, and checks both against brute force.
 fn check_cutoff<const D: usize>(pts: &[[f64; D]], cutoff: f64) -> usize {
@@ -50,7 +51,7 @@ fn clustered<const D: usize>(rng: &mut Rng, m: usize) -> Vec<[f64; D]> {
 
 #[test]
 fn uniform_random_2d_and_3d() {
-    let mut rng = Rng(1);
+    let mut rng = Rng::new(1);
     for &(m, side) in &[(2usize, 1.0), (50, 3.0), (400, 10.0), (1500, 20.0)] {
         let p2 = uniform::<2>(&mut rng, m, side);
         check_cutoff(&p2, 1.0);
@@ -64,7 +65,7 @@ fn uniform_random_2d_and_3d() {
 
 #[test]
 fn clustered_points() {
-    let mut rng = Rng(2);
+    let mut rng = Rng::new(2);
     let p2 = clustered::<2>(&mut rng, 800);
     assert!(check_cutoff(&p2, 0.3) > 1000);
     let p3 = clustered::<3>(&mut rng, 800);
@@ -84,7 +85,7 @@ fn all_points_identical() {
 
 #[test]
 fn points_on_a_line() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let p2: Vec<[f64; 2]> = (0..300).map(|_| [rng.range(0.0, 30.0), 4.0]).collect();
     check_cutoff(&p2, 0.5);
     // A diagonal line in 3D: degenerate in none of the axes but sparse in the volume.
@@ -102,7 +103,7 @@ fn points_on_a_line() {
 
 #[test]
 fn points_outside_a_given_domain_go_to_border_cells() {
-    let mut rng = Rng(4);
+    let mut rng = Rng::new(4);
     for layout_cap in [None, Some(0)] {
         let pts: Vec<[f64; 3]> = (0..700).map(|_| rng.point::<3>(-5.0, 15.0)).collect();
         let mut b = GridBuilder::<3>::with_cutoff(1.0).domain([0.0; 3], [10.0; 3]);
@@ -138,12 +139,12 @@ fn points_outside_a_given_domain_go_to_border_cells() {
 
 #[test]
 fn polydisperse_radii_spanning_100x() {
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     for _ in 0..2 {
         let m = 600;
         let pts3: Vec<[f64; 3]> = (0..m).map(|_| rng.point::<3>(0.0, 20.0)).collect();
         // Log-uniform over [0.01, 1]: 100x between smallest and largest.
-        let mut radii: Vec<f64> = (0..m).map(|_| 0.01 * 100f64.powf(rng.unif())).collect();
+        let mut radii: Vec<f64> = (0..m).map(|_| 0.01 * 100f64.powf(rng.uniform())).collect();
         radii[0] = 0.01;
         radii[1] = 1.0;
         check_radii(&pts3, &radii);
@@ -188,7 +189,7 @@ fn bimodal<const D: usize>(rng: &mut Rng, m: usize, side: f64) -> (Vec<[f64; D]>
 
 #[test]
 fn size_split_keeps_pairs_exact_and_cuts_candidates() {
-    let mut rng = Rng(13);
+    let mut rng = Rng::new(13);
     let (pts, radii) = bimodal::<3>(&mut rng, 2400, 6.0);
     let bx = Box::<3>::open();
     let expected = brute_pairs(&pts, |i, j| radii[i] + radii[j], &bx);
@@ -302,7 +303,7 @@ fn periodic_pairs_across_faces_and_corners() {
     let got = check_periodic(&pts, [0.0; 3], [10.0; 3], [true, true, false], 0.5);
     assert!(!got.contains(&(4, 5)) && got.contains(&(0, 1)) && got.contains(&(2, 3)));
 
-    let mut rng = Rng(6);
+    let mut rng = Rng::new(6);
     let pts: Vec<[f64; 3]> = (0..800).map(|_| rng.point::<3>(-2.0, 8.0)).collect();
     let got = check_periodic(&pts, [-2.0; 3], [8.0; 3], [true; 3], 1.0);
     assert!(got.len() > 500);
@@ -316,7 +317,7 @@ fn periodic_pairs_across_faces_and_corners() {
 
 #[test]
 fn periodic_boxes_with_one_or_two_cells_per_axis() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     // cutoff = L/2 exactly: one cell along the axis (edge carries a margin above cutoff).
     for &(side, cutoff) in &[(2.0, 1.0), (2.5, 1.0), (3.1, 1.0), (4.0, 1.3)] {
         let pts: Vec<[f64; 3]> = (0..120).map(|_| rng.point::<3>(0.0, side)).collect();
@@ -374,7 +375,7 @@ fn pairs_exactly_at_the_cutoff_and_on_cell_boundaries() {
 
 #[test]
 fn tiny_cutoff_against_a_huge_domain_uses_hashed_cells() {
-    let mut rng = Rng(8);
+    let mut rng = Rng::new(8);
     // 1e12 cells per axis would be needed: the dense array is refused by the default cap.
     let mut pts: Vec<[f64; 3]> = (0..500).map(|_| rng.point::<3>(0.0, 1e12)).collect();
     for k in 0..100 {
@@ -398,14 +399,14 @@ fn tiny_cutoff_against_a_huge_domain_uses_hashed_cells() {
 
 #[test]
 fn one_dimensional_grid() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let pts: Vec<[f64; 1]> = (0..400).map(|_| [rng.range(0.0, 100.0)]).collect();
     check_cutoff(&pts, 0.7);
 }
 
 #[test]
 fn rebuild_matches_a_fresh_build() {
-    let mut rng = Rng(10);
+    let mut rng = Rng::new(10);
     let mut pts: Vec<[f64; 3]> = (0..600).map(|_| rng.point::<3>(0.0, 9.0)).collect();
     let radii: Vec<f64> = (0..600).map(|_| rng.range(0.2, 0.6)).collect();
     let mut g = Grid::<3>::build(&pts, 1.0).unwrap();
@@ -443,7 +444,7 @@ fn rebuild_matches_a_fresh_build() {
 
 #[test]
 fn near_point_queries_match_brute_force() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let pts: Vec<[f64; 3]> = (0..500).map(|_| rng.point::<3>(0.0, 10.0)).collect();
     let radii: Vec<f64> = (0..500).map(|_| rng.range(0.05, 0.5)).collect();
     let open = GridBuilder::<3>::with_cutoff(0.8).build(&pts).unwrap();
@@ -497,7 +498,7 @@ fn near_point_queries_match_brute_force() {
 
 #[test]
 fn cells_partition_the_items() {
-    let mut rng = Rng(12);
+    let mut rng = Rng::new(12);
     let pts: Vec<[f64; 2]> = (0..500).map(|_| rng.point::<2>(0.0, 10.0)).collect();
     for cap in [None, Some(0)] {
         let mut b = GridBuilder::<2>::with_cutoff(0.7);
@@ -533,7 +534,7 @@ fn cells_partition_the_items() {
 fn large_inputs_match_the_hashed_layout_and_sampled_brute_force() {
     // Above 2^15 items the dense layout sorts through blocks of cells; the hashed layout
     // never does, so the two are independent computations of the same pairs.
-    let mut rng = Rng(14);
+    let mut rng = Rng::new(14);
     let pts: Vec<[f64; 3]> = (0..40_000).map(|_| rng.point::<3>(0.0, 30.0)).collect();
     let radii: Vec<f64> = (0..pts.len())
         .map(|i| {
@@ -616,7 +617,7 @@ fn sparse_points_skip_the_empty_cells() {
     // Few points over many cells: nearly every slot of the dense array is empty, and the
     // enumeration, `cells`, `nonempty_cell_count` and `cell_of_item` (which find the cells
     // by skipping empty slots, not from a stored list) must still see each cell once.
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let pts: Vec<[f64; 3]> = uniform(&mut rng, 300, 25.0);
     let n = check_cutoff(&pts, 1.5);
     assert!(n > 0, "the test needs some pairs");

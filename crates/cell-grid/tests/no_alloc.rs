@@ -7,7 +7,7 @@ use std::alloc::{GlobalAlloc, Layout as AllocLayout, System};
 use std::cell::Cell;
 
 use cell_grid::{Grid, GridBuilder, Layout};
-use common::Rng;
+use testkit::Rng;
 
 struct Counting;
 
@@ -54,7 +54,7 @@ fn jiggle<const D: usize>(rng: &mut Rng, pts: &mut [[f64; D]], step: f64) {
 
 #[test]
 fn rebuild_after_small_moves_allocates_nothing() {
-    let mut rng = Rng(42);
+    let mut rng = Rng::new(42);
     let side = 12.0;
     let mut pts: Vec<[f64; 3]> = (0..3000).map(|_| rng.point::<3>(0.0, side)).collect();
     let radii: Vec<f64> = (0..3000).map(|_| rng.range(0.1, 0.5)).collect();
@@ -116,7 +116,7 @@ fn rebuild_after_small_moves_allocates_nothing() {
 #[test]
 fn blocked_rebuild_of_a_large_input_allocates_nothing() {
     // 40 000 points take the blocked counting sort (from 2^15 items on).
-    let mut rng = Rng(43);
+    let mut rng = Rng::new(43);
     let mut pts: Vec<[f64; 3]> = (0..40_000).map(|_| rng.point::<3>(0.0, 30.0)).collect();
     let radii: Vec<f64> = (0..pts.len())
         .map(|i| if i % 4000 == 0 { 3.0 } else { 0.3 })
@@ -148,7 +148,7 @@ fn the_counter_sees_allocations() {
         std::hint::black_box(v);
     });
     assert_eq!(n, 1);
-    let mut rng = Rng(1);
+    let mut rng = Rng::new(1);
     let pts: Vec<[f64; 3]> = (0..100).map(|_| rng.point::<3>(0.0, 5.0)).collect();
     let mut g = Grid::<3>::build(&pts[..10], 1.0).unwrap();
     assert!(allocations_during(|| g.rebuild(&pts).unwrap()) > 0);

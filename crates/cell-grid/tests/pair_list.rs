@@ -3,8 +3,9 @@
 mod common;
 
 use cell_grid::{Error, Grid, GridBuilder, PairList};
-use common::{Box, Rng, brute_pairs};
+use common::{Box, brute_pairs};
 use proptest::prelude::*;
+use testkit::Rng;
 
 /// The list's pairs at `pts`, in the order it reports them, with their deltas and distances.
 type Reported<const D: usize> = Vec<(usize, usize, [f64; D], f64)>;
@@ -81,7 +82,7 @@ fn cloud<const D: usize>(rng: &mut Rng, n: usize, side: f64) -> Vec<[f64; D]> {
 
 #[test]
 fn a_walk_with_small_steps_reuses_the_list_and_stays_exact() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let pts = cloud::<3>(&mut rng, 400, 8.0);
     let radii: Vec<f64> = (0..400).map(|_| rng.range(0.3, 0.6)).collect();
     // Steps of up to 0.01 per coordinate: a skin of 0.2 (0.1 per item) lasts at least 5
@@ -100,7 +101,7 @@ fn a_walk_with_small_steps_reuses_the_list_and_stays_exact() {
 
 #[test]
 fn without_a_skin_every_query_rebuilds() {
-    let mut rng = Rng(8);
+    let mut rng = Rng::new(8);
     let pts = cloud::<2>(&mut rng, 200, 5.0);
     let builds = walk(pts, None, 0.7, Box::open(), (0.0, 0.01, 10), &mut rng).expect("exact");
     assert_eq!(builds, 10);
@@ -108,7 +109,7 @@ fn without_a_skin_every_query_rebuilds() {
 
 #[test]
 fn a_periodic_box_uses_the_minimum_image() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let pts = cloud::<3>(&mut rng, 300, 6.0);
     let bx = Box {
         lo: [0.0; 3],
@@ -122,7 +123,7 @@ fn a_periodic_box_uses_the_minimum_image() {
 
 #[test]
 fn the_list_is_the_pairs_in_ascending_order_with_the_grids_bits() {
-    let mut rng = Rng(10);
+    let mut rng = Rng::new(10);
     let pts = cloud::<3>(&mut rng, 2000, 12.0);
     let radii: Vec<f64> = (0..2000).map(|_| rng.range(0.2, 0.5)).collect();
     let mut list = PairList::new(GridBuilder::with_radii(&radii), 0.1).expect("valid skin");
@@ -205,7 +206,7 @@ fn bad_input_is_reported_and_the_list_recovers() {
 #[cfg(feature = "rayon")]
 #[test]
 fn the_parallel_fold_gives_the_serial_pairs_in_order() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let pts = cloud::<3>(&mut rng, 20_000, 30.0);
     let mut list = PairList::new(GridBuilder::with_cutoff(1.1), 0.1).expect("valid");
     let serial = reported(&mut list, &pts);
@@ -236,7 +237,7 @@ proptest! {
         skin in 0.0f64..0.5,
         step in 0.0f64..0.1,
     ) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let side = 4.0;
         let pts = cloud::<3>(&mut rng, n, side);
         let r = radii.then(|| (0..n).map(|_| rng.range(0.05, 0.5)).collect());

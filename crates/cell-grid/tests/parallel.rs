@@ -6,7 +6,7 @@ mod common;
 use std::sync::Mutex;
 
 use cell_grid::GridBuilder;
-use common::Rng;
+use testkit::Rng;
 
 fn sorted(mut v: Vec<(usize, usize)>) -> Vec<(usize, usize)> {
     v.sort_unstable();
@@ -15,7 +15,7 @@ fn sorted(mut v: Vec<(usize, usize)>) -> Vec<(usize, usize)> {
 
 #[test]
 fn parallel_pairs_equal_serial_pairs() {
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21);
     let pts: Vec<[f64; 3]> = (0..20_000).map(|_| rng.point::<3>(0.0, 25.0)).collect();
     let radii: Vec<f64> = (0..pts.len()).map(|_| rng.range(0.2, 0.7)).collect();
     // A few items 20x larger than the rest: kept out of the cells.

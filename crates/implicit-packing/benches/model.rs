@@ -17,23 +17,13 @@ use implicit_packing::model::{ModelGradient, PAIR_LIST_SKIN, Problem};
 use implicit_packing::pair::separated_along_centre_line;
 use std::hint::black_box;
 use std::time::Instant;
-
-struct SplitMix(u64);
-impl SplitMix {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use testkit::Rng;
 
 fn configuration(m: usize, density: f64) -> (Vec<[f64; 3]>, Vec<f64>) {
-    let mut rng = SplitMix(m as u64);
+    let mut rng = Rng::new(m as u64);
     let axes: Vec<[f64; 3]> = (0..m)
         .map(|_| {
-            let s = 0.9 + 0.2 * rng.next();
+            let s = 0.9 + 0.2 * rng.uniform();
             [s, 0.75 * s, 0.5 * s]
         })
         .collect();
@@ -47,11 +37,11 @@ fn configuration(m: usize, density: f64) -> (Vec<[f64; 3]>, Vec<f64>) {
     let mut x = Vec::with_capacity(6 * m + 3);
     for i in 0..m {
         for idx in [i % per, (i / per) % per, i / (per * per)] {
-            x.push((idx as f64 + 0.5) * h - side / 2.0 + (rng.next() - 0.5) * 0.2 * h);
+            x.push((idx as f64 + 0.5) * h - side / 2.0 + (rng.uniform() - 0.5) * 0.2 * h);
         }
-        x.push(6.0 * rng.next() - 3.0);
-        x.push(3.0 * rng.next() - 1.5);
-        x.push(6.0 * rng.next() - 3.0);
+        x.push(6.0 * rng.uniform() - 3.0);
+        x.push(3.0 * rng.uniform() - 1.5);
+        x.push(6.0 * rng.uniform() - 3.0);
     }
     x.extend_from_slice(&[0.5 * side; 3]);
     (axes, x)

@@ -13,32 +13,9 @@ use implicit_packing::derivatives::{pair_derivatives, pair_gradient};
 use implicit_packing::{Body, Ellipsoid, overlap_measure};
 use std::hint::black_box;
 use std::time::Instant;
+use testkit::{Rng, shape::upper};
 
 const PAIRS: usize = 20_000;
-
-struct SplitMix(u64);
-impl SplitMix {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn unit(&mut self, n: usize) -> Vec<f64> {
-        loop {
-            let v: Vec<f64> = (0..n).map(|_| 2.0 * self.next() - 1.0).collect();
-            let s = v.iter().map(|x| x * x).sum::<f64>();
-            if s > 1e-4 && s <= 1.0 {
-                return v.iter().map(|x| x / s.sqrt()).collect();
-            }
-        }
-    }
-}
-
-fn sym(m: &[[f64; 3]; 3]) -> [f64; 6] {
-    [m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]]
-}
 
 struct Case {
     i: Ellipsoid,
@@ -49,24 +26,19 @@ struct Case {
 }
 
 fn cases() -> Vec<Case> {
-    let mut rng = SplitMix(0x00B1_0BA7);
+    let mut rng = Rng::new(0x00B1_0BA7);
     let axes = [1.0, 0.75, 0.5];
     (0..PAIRS)
         .map(|_| {
-            let qi = rng.unit(4);
-            let qj = rng.unit(4);
-            let dir = rng.unit(3);
-            let i =
-                Body::from_quaternion([0.0; 3], axes, [qi[0], qi[1], qi[2], qi[3]]).expect("valid");
-            let j0 =
-                Body::from_quaternion([dir[0], dir[1], dir[2]], axes, [qj[0], qj[1], qj[2], qj[3]])
-                    .expect("valid");
-            let q1 = sym(&i.shape_matrix());
-            let q2 = sym(&j0.shape_matrix());
-            let mu2 = pw85::contact_function(&[dir[0], dir[1], dir[2]], &q1, &q2)
-                .expect("pw85")
-                .mu2;
-            let target = 2f64.powf(rng.next() - 0.5);
+            let qi = rng.unit_quaternion();
+            let qj = rng.unit_quaternion();
+            let dir = rng.direction();
+            let i = Body::from_quaternion([0.0; 3], axes, qi).expect("valid");
+            let j0 = Body::from_quaternion(dir, axes, qj).expect("valid");
+            let q1 = upper(&i.shape_matrix());
+            let q2 = upper(&j0.shape_matrix());
+            let mu2 = pw85::contact_function(&dir, &q1, &q2).expect("pw85").mu2;
+            let target = 2f64.powf(rng.uniform() - 0.5);
             let scale = (target / mu2).sqrt();
             let r12 = [dir[0] * scale, dir[1] * scale, dir[2] * scale];
             let j = j0.with_centre(r12).expect("valid");

@@ -12,42 +12,19 @@
 
 use implicit_packing::derivatives::pair_derivatives;
 use implicit_packing::{Body, Ellipsoid, overlap_measure};
+use testkit::{Rng, shape::upper};
 
-struct SplitMix(u64);
-impl SplitMix {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn unit(&mut self, n: usize) -> Vec<f64> {
-        loop {
-            let v: Vec<f64> = (0..n).map(|_| 2.0 * self.next() - 1.0).collect();
-            let s = v.iter().map(|x| x * x).sum::<f64>();
-            if s > 1e-4 && s <= 1.0 {
-                return v.iter().map(|x| x / s.sqrt()).collect();
-            }
-        }
-    }
-}
-
-fn sym(m: &[[f64; 3]; 3]) -> [f64; 6] {
-    [m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]]
-}
-
-fn body(rng: &mut SplitMix, centre: [f64; 3], stiff: bool) -> Ellipsoid {
+fn body(rng: &mut Rng, centre: [f64; 3], stiff: bool) -> Ellipsoid {
     let mut l = [0.0; 3];
     for v in l.iter_mut() {
         *v = if stiff {
-            10f64.powf(4.0 * rng.next() - 2.0)
+            10f64.powf(4.0 * rng.uniform() - 2.0)
         } else {
-            0.2 + 1.8 * rng.next()
+            0.2 + 1.8 * rng.uniform()
         };
     }
-    let q = rng.unit(4);
-    Body::from_quaternion(centre, l, [q[0], q[1], q[2], q[3]]).expect("valid shape")
+    let q = rng.unit_quaternion();
+    Body::from_quaternion(centre, l, q).expect("valid shape")
 }
 
 fn main() {
@@ -55,26 +32,29 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(1_000_000);
-    let mut rng = SplitMix(0x00C0_FFEE);
+    let mut rng = Rng::new(0x00C0_FFEE);
     let (mut agree, mut disagree, mut skipped, mut overlapping) = (0usize, 0usize, 0usize, 0usize);
     let (mut scale_checked, mut scale_worst, mut scale_over) = (0usize, 0.0f64, 0usize);
     for k in 0..n {
         let stiff = k % 4 == 3;
         let i = body(&mut rng, [0.0; 3], stiff);
-        let dir = rng.unit(3);
-        let dist = rng.next() * (i.bounding_radius() + 2.0);
+        let dir = rng.direction();
+        let dist = rng.uniform() * (i.bounding_radius() + 2.0);
         let j0 = body(&mut rng, [0.0; 3], stiff);
         let dist = dist.min(i.bounding_radius() + j0.bounding_radius());
         let r12 = [dist * dir[0], dist * dir[1], dist * dir[2]];
         let j = j0.with_centre(r12).expect("valid centre");
-        let mu2 =
-            match pw85::contact_function(&r12, &sym(&i.shape_matrix()), &sym(&j.shape_matrix())) {
-                Ok(c) => c.mu2,
-                Err(e) => {
-                    eprintln!("pair {k}: pw85 error {e}");
-                    continue;
-                }
-            };
+        let mu2 = match pw85::contact_function(
+            &r12,
+            &upper(&i.shape_matrix()),
+            &upper(&j.shape_matrix()),
+        ) {
+            Ok(c) => c.mu2,
+            Err(e) => {
+                eprintln!("pair {k}: pw85 error {e}");
+                continue;
+            }
+        };
         if (mu2 - 1.0).abs() < 1e-12 {
             skipped += 1;
             continue;

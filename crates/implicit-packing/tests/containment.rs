@@ -4,12 +4,12 @@
 
 mod common;
 
-use common::Rng;
 use implicit_packing::containment::{
     Container, ContainerKind, containment_gradient, containment_residual, farthest_point,
 };
 use implicit_packing::derivatives::angle_gradient_3d;
 use implicit_packing::{Body, Ellipsoid};
+use testkit::Rng;
 
 fn random_body(rng: &mut Rng, spread: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
     let c = [
@@ -32,7 +32,7 @@ fn random_body(rng: &mut Rng, spread: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
 
 #[test]
 fn farthest_point_is_a_kkt_point_and_beats_sampling() {
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     for _ in 0..200 {
         let (c, l, ang) = random_body(&mut rng, 3.0);
         let body = Ellipsoid::from_angles(c, l, ang).unwrap();
@@ -100,7 +100,7 @@ fn closed_forms_sphere_in_ball_and_box_support() {
 
 #[test]
 fn containment_gradients_match_finite_differences() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     for kind in [
         ContainerKind::Ball,
         ContainerKind::Ellipsoid,
@@ -154,7 +154,7 @@ fn containment_gradients_match_finite_differences() {
 #[test]
 fn containment_gradients_match_finite_differences_2d() {
     use implicit_packing::Ellipse;
-    let mut rng = Rng(10);
+    let mut rng = Rng::new(10);
     for kind in [
         ContainerKind::Ball,
         ContainerKind::Ellipsoid,
@@ -208,7 +208,7 @@ fn containment_hessian_vector_products_match_finite_differences() {
     use implicit_packing::containment::{ContainmentDirection, containment_gradient_derivative};
     use implicit_packing::derivatives::angular_velocity_derivatives_3d;
     use implicit_packing::shape::angular_velocities_3d;
-    let mut rng = Rng(12);
+    let mut rng = Rng::new(12);
     for kind in [
         ContainerKind::Ball,
         ContainerKind::Ellipsoid,

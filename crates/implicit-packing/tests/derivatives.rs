@@ -4,11 +4,11 @@
 
 mod common;
 
-use common::Rng;
 use implicit_packing::derivatives::{a1_reference, angle_gradient_3d, pair_derivatives};
 use implicit_packing::pair::pair_term;
 use implicit_packing::shape::angular_velocities_3d;
 use implicit_packing::{Body, Ellipse, Ellipsoid};
+use testkit::Rng;
 
 /// Variables of a 3D pair: [c_i, angles_i, c_j, angles_j].
 fn bodies3(v: &[f64; 12], li: [f64; 3], lj: [f64; 3]) -> (Ellipsoid, Ellipsoid) {
@@ -36,7 +36,7 @@ fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
     ];
     let ri = li.iter().cloned().fold(0.0, f64::max);
     let rj = lj.iter().cloned().fold(0.0, f64::max);
-    let dir = rng.unit3();
+    let dir = rng.direction();
     let dist = rng.range(0.0, 1.1) * (ri + rj);
     let mut v = [0.0; 12];
     for k in 0..3 {
@@ -66,7 +66,7 @@ fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
 
 #[test]
 fn gradient_of_f_matches_finite_differences_3d() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut checked = 0;
     let mut worst = 0.0f64;
     let (mut worst_u, mut n_u) = (0.0f64, 0);
@@ -132,7 +132,7 @@ fn gradient_of_f_matches_finite_differences_3d() {
 
 #[test]
 fn gradient_of_f_matches_finite_differences_2d() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let mut checked = 0;
     let mut worst = 0.0f64;
     while checked < 1000 {
@@ -197,7 +197,7 @@ fn gradient_of_f_matches_finite_differences_2d() {
 /// the (n+1)×(n+1) system of Appendix A.1, parameter by parameter.
 #[test]
 fn envelope_form_equals_appendix_a1() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let mut worst_d2 = 0.0f64;
     let mut worst_u = 0.0f64;
     let mut n = 0;
@@ -269,7 +269,7 @@ fn hessian_vector_products_match_finite_differences() {
         g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
         g
     };
-    let mut rng = Rng(99);
+    let mut rng = Rng::new(99);
     let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
     while checked < 1000 {
         let (v, li, lj) = random_pair3(&mut rng);

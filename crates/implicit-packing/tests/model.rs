@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::Rng;
 use implicit_packing::Error;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::{ModelGradient, Problem};
+use testkit::Rng;
 
 /// m ellipsoids on a jittered cubic lattice at about the given volume fraction, random angles;
 /// container dimensions last.
@@ -74,7 +74,7 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
 
 #[test]
 fn grid_sum_equals_all_pairs_sum() {
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21);
     for &(m, density) in &[(200usize, 0.6), (343, 0.3), (50, 0.7)] {
         let (axes, x) = config3(&mut rng, m, density, ContainerKind::Box);
         let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
@@ -152,7 +152,7 @@ fn fd_check(
 
 #[test]
 fn model_gradient_matches_finite_differences() {
-    let mut rng = Rng(33);
+    let mut rng = Rng::new(33);
     for kind in [
         ContainerKind::Ball,
         ContainerKind::Ellipsoid,
@@ -209,7 +209,7 @@ type Grad<'a> = &'a mut dyn FnMut(&[f64], &mut ModelGradient);
 /// and symmetric (uᵀHv = vᵀHu), for the three containers in 3D and a box in 2D.
 #[test]
 fn hessian_vector_products_match_finite_differences() {
-    let mut rng = Rng(55);
+    let mut rng = Rng::new(55);
     let check = |p: Hvp<'_>, grad: Grad<'_>, x: &[f64], rng: &mut Rng| {
         let n = x.len();
         let (mut hu, mut hv) = (ModelGradient::default(), ModelGradient::default());
@@ -287,7 +287,7 @@ fn hessian_vector_products_match_finite_differences() {
 /// overlaps, and an ellipsoid is reported outside exactly when its residual is positive.
 #[test]
 fn certification_agrees_with_the_model() {
-    let mut rng = Rng(66);
+    let mut rng = Rng::new(66);
     for &density in &[0.3, 0.6] {
         let (axes, x) = config3(&mut rng, 125, density, ContainerKind::Box);
         let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
@@ -357,7 +357,7 @@ fn hessian_vector_product_in_the_hard_case_is_finite() {
 /// Bodies → variables → bodies is the identity (up to rounding of the angle recovery).
 #[test]
 fn pack_variables_round_trips() {
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     let (axes, x) = config3(&mut rng, 8, 0.4, ContainerKind::Ball);
     let mut p = Problem::<3>::new(axes, ContainerKind::Ball).unwrap();
     let bodies = p.bodies_at(&x).unwrap().to_vec();

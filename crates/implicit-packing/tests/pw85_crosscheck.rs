@@ -6,9 +6,9 @@
 
 mod common;
 
-use common::Rng;
 use implicit_packing::derivatives::pair_derivatives;
 use implicit_packing::{Body, Ellipsoid, overlap_measure};
+use testkit::Rng;
 
 fn sym(m: &[[f64; 3]; 3]) -> [f64; 6] {
     [m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]]
@@ -43,7 +43,7 @@ fn random_pair(rng: &mut Rng, stiff: bool) -> (Ellipsoid, Ellipsoid) {
     let (lj, qj) = random_shape(rng, stiff);
     let ri = li.iter().cloned().fold(0.0, f64::max);
     let rj = lj.iter().cloned().fold(0.0, f64::max);
-    let dir = rng.unit3();
+    let dir = rng.direction();
     let dist = rng.range(0.0, 1.0) * (ri + rj);
     let ci = [
         rng.range(-1.0, 1.0),
@@ -71,7 +71,7 @@ fn mu2(i: &Ellipsoid, j: &Ellipsoid) -> f64 {
 
 #[test]
 fn verdict_agrees_with_pw85_on_random_pairs() {
-    let mut rng = Rng(2024);
+    let mut rng = Rng::new(2024);
     let (mut n, mut skipped, mut overlaps) = (0, 0, 0);
     for k in 0..20_000 {
         let (i, j) = random_pair(&mut rng, k % 4 == 3);
@@ -103,7 +103,7 @@ fn verdict_agrees_with_pw85_on_random_pairs() {
 /// ellipsoids at the 1e-12 level (checked with 60-digit arithmetic on the rounded `M`).
 #[test]
 fn contact_scale_agrees_with_pw85() {
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     let mut worst = 0.0f64;
     for k in 0..2000 {
         let (i, j) = random_pair(&mut rng, false);

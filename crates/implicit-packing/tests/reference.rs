@@ -1,5 +1,5 @@
 //! The pair term against the independent 100-digit reference values
-//! (`../shared/reference/blm_3d.csv`, `blm_2d.csv`).
+//! (`validation/reference/blm_3d.csv`, `blm_2d.csv`).
 #![allow(clippy::needless_range_loop)]
 
 mod common;
@@ -7,6 +7,7 @@ mod common;
 use common::*;
 use implicit_packing::{Route, pair_term_by};
 use std::collections::BTreeMap;
+use testkit::reference;
 
 #[derive(Default, Debug)]
 struct Worst {
@@ -30,67 +31,95 @@ fn table(name: &str, rows: &BTreeMap<String, Worst>) {
     }
 }
 
-fn check<const N: usize>(
-    name: &str,
-    rows: Vec<Row>,
-    solve: impl Fn(&Row) -> implicit_packing::PairTerm<N>,
-) {
+/// The reference values of one case, the same for both files.
+struct Expected<'a, const N: usize> {
+    id: &'a str,
+    category: &'a str,
+    u: f64,
+    d2: f64,
+    eps: f64,
+    f: f64,
+    mu2: f64,
+    x: Option<[f64; N]>,
+}
+
+impl<'a> From<&'a reference::Blm3Case> for Expected<'a, 3> {
+    fn from(c: &'a reference::Blm3Case) -> Self {
+        Expected {
+            id: &c.id,
+            category: &c.category,
+            u: c.u,
+            d2: c.d2,
+            eps: c.eps,
+            f: c.f,
+            mu2: c.mu2,
+            x: c.x,
+        }
+    }
+}
+
+impl<'a> From<&'a reference::Blm2Case> for Expected<'a, 2> {
+    fn from(c: &'a reference::Blm2Case) -> Self {
+        Expected {
+            id: &c.id,
+            category: &c.category,
+            u: c.u,
+            d2: c.d2,
+            eps: c.eps,
+            f: c.f,
+            mu2: c.mu2,
+            x: c.x,
+        }
+    }
+}
+
+fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packing::PairTerm<N>)>) {
     let mut worst: BTreeMap<String, Worst> = BTreeMap::new();
     let mut failures = Vec::new();
-    for r in &rows {
-        let cat = r.text("category").to_string();
-        let p = solve(r);
+    for (r, p) in &rows {
+        let cat = r.category.to_string();
         let w = worst.entry(cat.clone()).or_default();
         w.n += 1;
-        let eu = scaled_err(p.u, r.num("U"));
-        let ed = scaled_err(p.d2, r.num("d2"));
-        let eps_ref = r.num("eps");
+        let eu = scaled_err(p.u, r.u);
+        let ed = scaled_err(p.d2, r.d2);
+        let eps_ref = r.eps;
         let ee = (p.eps - eps_ref).abs() / eps_ref;
         w.u = w.u.max(eu);
         w.d2 = w.d2.max(ed);
         w.eps = w.eps.max(ee);
-        let f_ref = r.num("f");
-        let mu2 = r.num("mu2_pw85");
+        let f_ref = r.f;
+        let mu2 = r.mu2;
         // The verdict of the reference, confirmed by PW85 (they agree on every case).
         let overlap_ref = f_ref > 0.0 || mu2 < 1.0;
         if (p.f > 0.0) != overlap_ref {
             w.wrong_sign += 1;
             failures.push(format!(
                 "{name} case {}: f = {:e}, reference f = {:e}, d2 = {:e}",
-                r.text("case_id"),
-                p.f,
-                f_ref,
-                p.d2
+                r.id, p.f, f_ref, p.d2
             ));
         }
         if eu > 1e-12 || ed > 1e-12 {
             failures.push(format!(
                 "{name} case {} ({cat}): err U {eu:.2e}, err d2 {ed:.2e}",
-                r.text("case_id")
+                r.id
             ));
         }
         if ee > 1e-15 {
-            failures.push(format!(
-                "{name} case {}: eps rel err {ee:.2e}",
-                r.text("case_id")
-            ));
+            failures.push(format!("{name} case {}: eps rel err {ee:.2e}", r.id));
         }
-        let xref: Vec<Option<f64>> = (1..=N).map(|k| r.opt(&format!("X_{k}"))).collect();
-        if cat != "near_hard" && xref.iter().all(|x| x.is_some()) {
+        if cat != "near_hard"
+            && let Some(xref) = r.x
+        {
             let mut num = 0.0;
             let mut den = 0.0;
             for k in 0..N {
-                let xr = xref[k].unwrap_or(0.0);
-                num += (p.x[k] - xr) * (p.x[k] - xr);
-                den += xr * xr;
+                num += (p.x[k] - xref[k]) * (p.x[k] - xref[k]);
+                den += xref[k] * xref[k];
             }
             let ex = (num / den).sqrt();
             w.x = w.x.max(ex);
             if ex > 1e-12 {
-                failures.push(format!(
-                    "{name} case {} ({cat}): rel err X {ex:.2e}",
-                    r.text("case_id")
-                ));
+                failures.push(format!("{name} case {} ({cat}): rel err X {ex:.2e}", r.id));
             }
         }
     }
@@ -105,20 +134,30 @@ fn check<const N: usize>(
 
 #[test]
 fn blm_3d_reference() {
+    let cases = reference::blm_3d().unwrap_or_else(|e| panic!("{e}"));
     for (name, route) in [("3d", Route::Auto), ("3d-svd", Route::Svd)] {
-        check::<3>(name, read_csv("blm_3d.csv"), |r| {
-            let (i, j) = bodies_3d(r);
-            pair_term_by(&i, &j, route)
-        });
+        let rows = cases
+            .iter()
+            .map(|c| {
+                let (i, j) = bodies_3d(c);
+                (c.into(), pair_term_by(&i, &j, route))
+            })
+            .collect();
+        check::<3>(name, rows);
     }
 }
 
 #[test]
 fn blm_2d_reference() {
+    let cases = reference::blm_2d().unwrap_or_else(|e| panic!("{e}"));
     for (name, route) in [("2d", Route::Auto), ("2d-svd", Route::Svd)] {
-        check::<2>(name, read_csv("blm_2d.csv"), |r| {
-            let (i, j) = bodies_2d(r);
-            pair_term_by(&i, &j, route)
-        });
+        let rows = cases
+            .iter()
+            .map(|c| {
+                let (i, j) = bodies_2d(c);
+                (c.into(), pair_term_by(&i, &j, route))
+            })
+            .collect();
+        check::<2>(name, rows);
     }
 }

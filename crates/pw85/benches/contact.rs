@@ -15,49 +15,19 @@
 
 use criterion::{Criterion, Throughput, criterion_group};
 use pw85::batch::{Pair, Pair2d, contact_functions_2d_into, contact_functions_into, overlaps_into};
-use pw85::shape::{from_axes_angle_2d, from_axes_quaternion};
 use std::hint::black_box;
 use std::time::Instant;
+use testkit::Rng;
 
 const PAIRS: usize = 100_000;
 
-struct SplitMix(u64);
-impl SplitMix {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn unit_quaternion(&mut self) -> [f64; 4] {
-        loop {
-            let q: [f64; 4] = core::array::from_fn(|_| 2.0 * self.next() - 1.0);
-            let n = q.iter().map(|x| x * x).sum::<f64>();
-            if n > 1e-4 && n <= 1.0 {
-                return q.map(|x| x / n.sqrt());
-            }
-        }
-    }
-    fn direction(&mut self) -> [f64; 3] {
-        loop {
-            let v: [f64; 3] = core::array::from_fn(|_| 2.0 * self.next() - 1.0);
-            let n = v.iter().map(|x| x * x).sum::<f64>();
-            if n > 1e-4 && n <= 1.0 {
-                return v.map(|x| x / n.sqrt());
-            }
-        }
-    }
-}
-
 fn pairs() -> Vec<Pair> {
-    let mut rng = SplitMix(0x5EED_0085);
-    let ellipsoid = |rng: &mut SplitMix| {
-        let u = rng.next();
-        let s = 2f64.powf(2.0 * rng.next() - 1.0);
+    let mut rng = Rng::new(0x5EED_0085);
+    let ellipsoid = |rng: &mut Rng| {
+        let u = rng.uniform();
+        let s = 2f64.powf(2.0 * rng.uniform() - 1.0);
         let thin = s * 10f64.powf(-u);
-        let q = rng.unit_quaternion();
-        from_axes_quaternion(&[s, thin, thin], &q).expect("valid shape")
+        rng.ellipsoid([s, thin, thin])
     };
     (0..PAIRS)
         .map(|_| {
@@ -67,7 +37,7 @@ fn pairs() -> Vec<Pair> {
             let unit = pw85::contact_function(&dir, &q1, &q2)
                 .expect("valid pair")
                 .mu2;
-            let target = 2f64.powf(4.0 * rng.next() - 2.0);
+            let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
             let scale = (target / unit).sqrt();
             Pair {
                 r12: dir.map(|x| x * scale),
@@ -79,23 +49,22 @@ fn pairs() -> Vec<Pair> {
 }
 
 fn pairs_2d() -> Vec<Pair2d> {
-    let mut rng = SplitMix(0x5EED_2D85);
-    let ellipse = |rng: &mut SplitMix| {
-        let u = rng.next();
-        let s = 2f64.powf(2.0 * rng.next() - 1.0);
-        let angle = std::f64::consts::TAU * rng.next();
-        from_axes_angle_2d(&[s, s * 10f64.powf(-u)], angle).expect("valid shape")
+    let mut rng = Rng::new(0x5EED_2D85);
+    let ellipse = |rng: &mut Rng| {
+        let u = rng.uniform();
+        let s = 2f64.powf(2.0 * rng.uniform() - 1.0);
+        rng.ellipse([s, s * 10f64.powf(-u)])
     };
     (0..PAIRS)
         .map(|_| {
             let q1 = ellipse(&mut rng);
             let q2 = ellipse(&mut rng);
-            let angle = std::f64::consts::TAU * rng.next();
+            let angle = std::f64::consts::TAU * rng.uniform();
             let dir = [angle.cos(), angle.sin()];
             let unit = pw85::contact_function_2d(&dir, &q1, &q2)
                 .expect("valid pair")
                 .mu2;
-            let target = 2f64.powf(4.0 * rng.next() - 2.0);
+            let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
             let scale = (target / unit).sqrt();
             Pair2d {
                 r12: dir.map(|x| x * scale),

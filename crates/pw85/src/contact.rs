@@ -1261,7 +1261,8 @@ mod calibration {
     /// coefficients (against the double-double ones) on the bench's distribution of pairs.
     #[test]
     fn bound_versus_actual_error() {
-        let mut next = crate::test_rng::uniform_stream(12345u64);
+        let mut rng = testkit::Rng::new(12345u64);
+        let mut next = move || rng.uniform();
         let mut rows = Vec::new();
         for _ in 0..20000 {
             let mut ell = |decades: f64| {

@@ -63,8 +63,6 @@ mod overlap;
 pub mod poly;
 pub mod shape;
 pub mod sym;
-#[cfg(test)]
-mod test_rng;
 
 pub use contact::{
     Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function, contact_function_2d,

@@ -777,7 +777,8 @@ mod tests {
     /// 10^±25 and 10^±45.
     #[test]
     fn contact_point_claims_are_right() {
-        let mut next = crate::test_rng::uniform_stream(0xC0417u64);
+        let mut rng = testkit::Rng::new(0xC0417u64);
+        let mut next = move || rng.uniform();
         let (mut open, mut decided, mut decided_scaled, mut decided_near) = (0, 0, 0, 0);
         for i in 0..40_000 {
             let decades = [0.0, 1.0, 2.0, 6.0][i % 4];
@@ -818,7 +819,8 @@ mod tests {
     /// where it must abstain).
     #[test]
     fn axis_test_claims_are_right() {
-        let mut next = crate::test_rng::uniform_stream(0xA515u64);
+        let mut rng = testkit::Rng::new(0xA515u64);
+        let mut next = move || rng.uniform();
         let (mut decided, mut decided_scaled, mut decided_spheres) = (0, 0, 0);
         for i in 0..20_000 {
             let decades = [0.0, 1.0, 4.0][i % 3];

@@ -7,41 +7,19 @@ use pw85::{
     Argument, Error, Sym3, contact_details, contact_function, contact_function_2d, overlap,
     overlap_2d,
 };
+use testkit::Rng;
 
-/// A small deterministic generator (SplitMix64), so that failures reproduce.
-struct Rng(u64);
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    fn quaternion(&mut self) -> [f64; 4] {
-        loop {
-            let q: [f64; 4] = core::array::from_fn(|_| self.range(-1.0, 1.0));
-            let n = q.iter().map(|x| x * x).sum::<f64>();
-            if n > 0.01 && n < 1.0 {
-                return q.map(|x| x / n.sqrt());
-            }
-        }
-    }
-    fn ellipsoid(&mut self, max_aspect_decades: f64) -> Sym3 {
-        let axes = core::array::from_fn(|_| 10f64.powf(self.range(-max_aspect_decades, 0.0)));
-        from_axes_quaternion(&axes, &self.quaternion()).unwrap()
-    }
-    fn direction(&mut self) -> [f64; 3] {
-        let q = self.quaternion();
-        let r = rotation_from_quaternion(&q).unwrap();
-        [r[0][0], r[1][0], r[2][0]]
-    }
+/// An ellipsoid with semi-axes spread over `max_aspect_decades` decades, built by pw85 itself
+/// (the code under test) from a random rotation.
+fn ellipsoid(rng: &mut Rng, max_aspect_decades: f64) -> Sym3 {
+    let axes = core::array::from_fn(|_| 10f64.powf(rng.range(-max_aspect_decades, 0.0)));
+    from_axes_quaternion(&axes, &rng.unit_quaternion()).unwrap()
+}
+
+/// A random unit vector: the first column of a random rotation.
+fn direction(rng: &mut Rng) -> [f64; 3] {
+    let r = rotation_from_quaternion(&rng.unit_quaternion()).unwrap();
+    [r[0][0], r[1][0], r[2][0]]
 }
 
 fn rotate(q: &Sym3, r: &[[f64; 3]; 3]) -> Sym3 {
@@ -64,12 +42,12 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn spheres_have_the_closed_form() {
-    let mut rng = Rng(1);
+    let mut rng = Rng::new(1);
     for _ in 0..1000 {
         let (a1, a2) = (rng.range(0.01, 10.0), rng.range(0.01, 10.0));
         let q1 = pw85::spheroid(a1, a1, &[0.0, 0.0, 1.0]).unwrap();
         let q2 = pw85::spheroid(a2, a2, &[0.0, 0.0, 1.0]).unwrap();
-        let r = rng.direction().map(|x| x * rng.range(0.01, 30.0));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.01, 30.0));
         let c = contact_function(&r, &q1, &q2).unwrap();
         let d = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
         let mu = d / (a1 + a2);
@@ -80,13 +58,13 @@ fn spheres_have_the_closed_form() {
 
 #[test]
 fn invariant_under_rotation_scaling_swap_and_translation() {
-    let mut rng = Rng(2);
+    let mut rng = Rng::new(2);
     for _ in 0..2000 {
-        let (q1, q2) = (rng.ellipsoid(1.0), rng.ellipsoid(1.0));
-        let r = rng.direction().map(|x| x * rng.range(0.1, 4.0));
+        let (q1, q2) = (ellipsoid(&mut rng, 1.0), ellipsoid(&mut rng, 1.0));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.1, 4.0));
         let base = contact_function(&r, &q1, &q2).unwrap();
 
-        let rot = rotation_from_quaternion(&rng.quaternion()).unwrap();
+        let rot = rotation_from_quaternion(&rng.unit_quaternion()).unwrap();
         let rr: [f64; 3] = core::array::from_fn(|i| (0..3).map(|k| rot[i][k] * r[k]).sum());
         let c = contact_function(&rr, &rotate(&q1, &rot), &rotate(&q2, &rot)).unwrap();
         assert!(
@@ -115,8 +93,8 @@ fn invariant_under_rotation_scaling_swap_and_translation() {
         assert!((c.lambda - (1.0 - base.lambda)).abs() < 1e-7, "swap: λ");
 
         // Translating both centres: r12 = (c2 + t) − (c1 + t), rounded.
-        let t = rng.direction().map(|x| 10.0 * x);
-        let c1 = rng.direction();
+        let t = direction(&mut rng).map(|x| 10.0 * x);
+        let c1 = direction(&mut rng);
         let c2: [f64; 3] = core::array::from_fn(|k| c1[k] + r[k]);
         let moved: [f64; 3] = core::array::from_fn(|k| (c2[k] + t[k]) - (c1[k] + t[k]));
         let direct: [f64; 3] = core::array::from_fn(|k| c2[k] - c1[k]);
@@ -144,11 +122,11 @@ fn coincident_centres_give_zero() {
 
 #[test]
 fn overlap_agrees_with_mu2_including_near_tangency() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let mut decided = 0;
     for i in 0..20_000 {
-        let (q1, q2) = (rng.ellipsoid(2.0), rng.ellipsoid(2.0));
-        let dir = rng.direction();
+        let (q1, q2) = (ellipsoid(&mut rng, 2.0), ellipsoid(&mut rng, 2.0));
+        let dir = direction(&mut rng);
         let unit = contact_function(&dir, &q1, &q2).unwrap();
         // Place the pair at μ² = target: μ² scales with |r|².
         let target = match i % 4 {
@@ -175,10 +153,10 @@ fn overlap_agrees_with_mu2_including_near_tangency() {
 
 #[test]
 fn gradients_match_central_differences() {
-    let mut rng = Rng(4);
+    let mut rng = Rng::new(4);
     for _ in 0..300 {
-        let (q1, q2) = (rng.ellipsoid(0.7), rng.ellipsoid(0.7));
-        let r = rng.direction().map(|x| x * rng.range(0.3, 3.0));
+        let (q1, q2) = (ellipsoid(&mut rng, 0.7), ellipsoid(&mut rng, 0.7));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.3, 3.0));
         let d = contact_details(&r, &q1, &q2).unwrap();
         let mu2 = |r: &[f64; 3], q1: &Sym3, q2: &Sym3| contact_function(r, q1, q2).unwrap().mu2;
         let h = 1e-6;
@@ -230,7 +208,7 @@ fn gradients_match_central_differences() {
 
 #[test]
 fn two_d_equals_the_3d_embedding() {
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     for _ in 0..2000 {
         let a = [rng.range(0.01, 3.0), rng.range(0.01, 3.0)];
         let b = [rng.range(0.01, 3.0), rng.range(0.01, 3.0)];
@@ -408,10 +386,10 @@ proptest! {
 
 #[test]
 fn refined_path_agrees_with_the_fast_path_within_its_bound() {
-    let mut rng = Rng(6);
+    let mut rng = Rng::new(6);
     for _ in 0..2000 {
-        let (q1, q2) = (rng.ellipsoid(1.5), rng.ellipsoid(1.5));
-        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2) = (ellipsoid(&mut rng, 1.5), ellipsoid(&mut rng, 1.5));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
         let fast = contact_function(&r, &q1, &q2).unwrap();
         let exact = pw85::contact_function_refined(&r, &q1, &q2).unwrap();
         assert!(exact.refined);
@@ -494,12 +472,12 @@ fn scaled<const D: usize, const S: usize>(
 
 #[test]
 fn power_of_two_scalings_give_the_same_bits() {
-    let mut rng = Rng(0x5CA1E);
+    let mut rng = Rng::new(0x5CA1E);
     let bits = |c: pw85::Contact| (c.mu2.to_bits(), c.lambda.to_bits(), c.refined);
     for i in 0..1000 {
         let decades = [0.5, 2.0, 4.0][i % 3];
-        let (q1, q2) = (rng.ellipsoid(decades), rng.ellipsoid(decades));
-        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2) = (ellipsoid(&mut rng, decades), ellipsoid(&mut rng, decades));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
         let base = bits(contact_function(&r, &q1, &q2).unwrap());
         let angle = rng.range(0.0, 6.3);
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
@@ -528,7 +506,7 @@ fn power_of_two_scalings_give_the_same_bits() {
 /// typed errors, coincident centres, refinements and extreme shapes included.
 #[test]
 fn batch_2d_equals_scalar_bit_for_bit() {
-    let mut rng = Rng(0x2D_BA7C);
+    let mut rng = Rng::new(0x2D_BA7C);
     let pairs: Vec<pw85::batch::Pair2d> = (0..20_003)
         .map(|i| {
             let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
@@ -574,16 +552,16 @@ fn batch_2d_equals_scalar_bit_for_bit() {
 /// refinement), centre distances from deep overlap to far apart, lanes mixed at random.
 #[test]
 fn batch_equals_scalar_bit_for_bit_on_extreme_pairs() {
-    let mut rng = Rng(0x0BA7_C4E5);
+    let mut rng = Rng::new(0x0BA7_C4E5);
     let pairs: Vec<pw85::batch::Pair> = (0..20_000)
         .map(|i| {
             let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
             let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i % 3 == 0));
-            let q1 = rng.ellipsoid(decades).map(|x| x * size * size);
-            let q2 = rng.ellipsoid(decades);
+            let q1 = ellipsoid(&mut rng, decades).map(|x| x * size * size);
+            let q2 = ellipsoid(&mut rng, decades);
             let dist = 10f64.powf(rng.range(-4.0, 2.0));
             pw85::batch::Pair {
-                r12: rng.direction().map(|x| x * dist),
+                r12: direction(&mut rng).map(|x| x * dist),
                 q1,
                 q2,
             }
@@ -659,13 +637,13 @@ fn assert_scaled(
 /// scalar, overlap, 2D and batch forms.
 #[test]
 fn every_power_of_two_scaling_across_the_double_range_is_exact() {
-    let mut rng = Rng(0x0E87_E0E5);
+    let mut rng = Rng::new(0x0E87_E0E5);
     let mut pairs = Vec::new();
     let mut pairs_2d = Vec::new();
     for i in 0..120 {
         let decades = [0.5, 2.0, 4.0][i % 3];
-        let (q1, q2) = (rng.ellipsoid(decades), rng.ellipsoid(decades));
-        let r = rng.direction().map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2) = (ellipsoid(&mut rng, decades), ellipsoid(&mut rng, decades));
+        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
         let base = contact_function(&r, &q1, &q2).unwrap();
         let angle = rng.range(0.0, 6.3);
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();

@@ -1,51 +1,11 @@
-//! μ² against the independent 36-digit reference values of `shared/reference/pw85_contact.csv`
+//! μ² against the independent 36-digit reference values of `validation/reference/pw85_contact.csv`
 //! (305 cases in 12 categories; see that folder's README).
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use testkit::reference::{self, ContactCase};
 
-struct Case {
-    id: String,
-    category: String,
-    r12: [f64; 3],
-    q1: [f64; 6],
-    q2: [f64; 6],
-    lambda: f64,
-    mu2: f64,
-}
-
-fn reference_dir() -> PathBuf {
-    std::env::var_os("ELLIPACK_REFERENCE_DIR").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/reference"),
-        PathBuf::from,
-    )
-}
-
-fn cases() -> Vec<Case> {
-    let path = reference_dir().join("pw85_contact.csv");
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (r, q1, q2) = (col("r12_x"), col("q1_0"), col("q2_0"));
-    let (lambda, mu2) = (col("lambda_ref"), col("mu2_ref"));
-    lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|line| {
-            let f: Vec<&str> = line.split(',').collect();
-            let num = |i: usize| f[i].trim().parse::<f64>().unwrap();
-            Case {
-                id: f[col("case_id")].to_string(),
-                category: f[col("category")].to_string(),
-                r12: core::array::from_fn(|k| num(r + k)),
-                q1: core::array::from_fn(|k| num(q1 + k)),
-                q2: core::array::from_fn(|k| num(q2 + k)),
-                lambda: num(lambda),
-                mu2: num(mu2),
-            }
-        })
-        .collect()
+fn cases() -> Vec<ContactCase> {
+    reference::contact_cases().unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn relative_error(value: f64, reference: f64) -> f64 {

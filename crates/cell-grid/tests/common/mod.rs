@@ -1,33 +1,7 @@
-//! Shared helpers: a seeded generator and the O(m^2) reference.
+//! Shared helpers: the O(m^2) reference.
 #![allow(dead_code)]
 
 use cell_grid::Grid;
-
-/// splitmix64: tiny, seedable, good enough to scatter test points.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unif(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unif()
-    }
-
-    pub fn point<const D: usize>(&mut self, lo: f64, hi: f64) -> [f64; D] {
-        std::array::from_fn(|_| self.range(lo, hi))
-    }
-}
 
 /// The reference: how a pair is judged close, independent of the grid's code.
 #[derive(Clone, Copy)]

@@ -1,0 +1,249 @@
+//! The independent high-precision reference values of `validation/reference/` (see the README
+//! there for what each column is and how it was computed), as typed rows.
+
+use crate::table::{Error, Row, Table};
+use std::path::PathBuf;
+
+/// The folder of the reference files: `$ELLIPACK_REFERENCE_DIR` when set, otherwise the
+/// repository's `validation/reference/` (located from this crate's source folder, so a test
+/// finds it from any working directory).
+pub fn dir() -> PathBuf {
+    match std::env::var_os("ELLIPACK_REFERENCE_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../validation/reference"),
+    }
+}
+
+/// The path of the reference file `name` (e.g. `"pw85_contact.csv"`).
+pub fn path(name: &str) -> PathBuf {
+    dir().join(name)
+}
+
+/// One row of `pw85_contact.csv`.
+#[derive(Debug, Clone)]
+pub struct ContactCase {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// `case_id`.
+    pub id: String,
+    /// `category`.
+    pub category: String,
+    /// `r12_x, r12_y, r12_z`.
+    pub r12: [f64; 3],
+    /// `q1_0 .. q1_5`: the first form, upper triangle row by row.
+    pub q1: [f64; 6],
+    /// `q2_0 .. q2_5`.
+    pub q2: [f64; 6],
+    /// `lambda_ref`, the maximiser; NaN where `r12 = 0`.
+    pub lambda: f64,
+    /// `mu2_ref` rounded to the nearest double.
+    pub mu2: f64,
+    /// `mu2_ref` as written (36 digits).
+    pub mu2_digits: String,
+}
+
+impl ContactCase {
+    /// μ² − 1 from the digits, without rounding μ² first: near tangency μ² rounds to 1 while
+    /// μ² − 1 is still known to many digits.
+    pub fn mu2_minus_one(&self) -> f64 {
+        minus_one(&self.mu2_digits, self.mu2)
+    }
+}
+
+fn minus_one(digits: &str, rounded: f64) -> f64 {
+    if let Some(rest) = digits.strip_prefix("1.")
+        && !rest.contains(['e', 'E'])
+        && let Ok(frac) = format!("0.{rest}").parse::<f64>()
+    {
+        return frac;
+    }
+    if let Some(mantissa) = digits.strip_suffix("e-1")
+        && let Some(rest) = mantissa.strip_prefix("9.")
+        && rest.bytes().all(|c| c.is_ascii_digit())
+    {
+        // 9.d₁…dₙe-1 − 1 = −(1 − 0.d₁…dₙ)/10, and 1 − 0.d₁…dₙ = 0.(9−d₁)…(9−dₙ) + 10⁻ⁿ:
+        // complementing digit by digit avoids the cancellation of the subtraction.
+        let complement: String = rest.bytes().map(|c| char::from(b'9' - (c - b'0'))).collect();
+        if let Ok(v) = format!("0.{complement}").parse::<f64>() {
+            let last = 10f64.powi(-(rest.len() as i32));
+            return -(v + last) / 10.0;
+        }
+    }
+    rounded - 1.0
+}
+
+/// One row of `blm_3d.csv`: a pair of ellipsoids (centre, semi-axes, quaternion) and the
+/// implicit-variable measure with body i mapped to the unit ball.
+#[derive(Debug, Clone)]
+pub struct Blm3Case {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// `case_id`.
+    pub id: String,
+    /// `category`.
+    pub category: String,
+    /// `cix, ciy, ciz`.
+    pub ci: [f64; 3],
+    /// `ai, bi, ci_ax`: semi-axes of i.
+    pub li: [f64; 3],
+    /// `qwi, qxi, qyi, qzi`.
+    pub qi: [f64; 4],
+    /// `cjx, cjy, cjz`.
+    pub cj: [f64; 3],
+    /// `aj, bj, cj_ax`.
+    pub lj: [f64; 3],
+    /// `qwj, qxj, qyj, qzj`.
+    pub qj: [f64; 4],
+    /// `X_1, X_2, X_3`, or `None` where X is not unique (blank cells).
+    pub x: Option<[f64; 3]>,
+    /// `U`.
+    pub u: f64,
+    /// `d2`.
+    pub d2: f64,
+    /// `eps`.
+    pub eps: f64,
+    /// `f`.
+    pub f: f64,
+    /// `mu2_pw85`: the PW85 contact function of the same pair.
+    pub mu2: f64,
+}
+
+/// One row of `blm_2d.csv`: a pair of ellipses (centre, semi-axes, angle) and the measure.
+#[derive(Debug, Clone)]
+pub struct Blm2Case {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// `case_id`.
+    pub id: String,
+    /// `category`.
+    pub category: String,
+    /// `cix, ciy`.
+    pub ci: [f64; 2],
+    /// `ai, bi`.
+    pub li: [f64; 2],
+    /// `theta_i`.
+    pub theta_i: f64,
+    /// `cjx, cjy`.
+    pub cj: [f64; 2],
+    /// `aj, bj`.
+    pub lj: [f64; 2],
+    /// `theta_j`.
+    pub theta_j: f64,
+    /// `X_1, X_2`, or `None` where X is not unique.
+    pub x: Option<[f64; 2]>,
+    /// `U`.
+    pub u: f64,
+    /// `d2`.
+    pub d2: f64,
+    /// `eps`.
+    pub eps: f64,
+    /// `f`.
+    pub f: f64,
+    /// `mu2_pw85`.
+    pub mu2: f64,
+}
+
+fn rows<T>(name: &str, each: impl Fn(&Row<'_>) -> Result<T, Error>) -> Result<Vec<T>, Error> {
+    let table = Table::read(path(name))?;
+    table.rows().map(|r| each(&r)).collect()
+}
+
+fn all_or_none<const K: usize>(r: &Row<'_>, names: [&str; K]) -> Result<Option<[f64; K]>, Error> {
+    let mut out = [0.0; K];
+    for (o, name) in out.iter_mut().zip(names) {
+        match r.opt(name)? {
+            Some(v) => *o = v,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(out))
+}
+
+/// The rows of `pw85_contact.csv`.
+pub fn contact_cases() -> Result<Vec<ContactCase>, Error> {
+    rows("pw85_contact.csv", |r| {
+        Ok(ContactCase {
+            line: r.line(),
+            id: r.text("case_id")?.to_string(),
+            category: r.text("category")?.to_string(),
+            r12: r.nums(["r12_x", "r12_y", "r12_z"])?,
+            q1: r.nums(["q1_0", "q1_1", "q1_2", "q1_3", "q1_4", "q1_5"])?,
+            q2: r.nums(["q2_0", "q2_1", "q2_2", "q2_3", "q2_4", "q2_5"])?,
+            lambda: r.num("lambda_ref")?,
+            mu2: r.num("mu2_ref")?,
+            mu2_digits: r.text("mu2_ref")?.to_string(),
+        })
+    })
+}
+
+/// The rows of `blm_3d.csv`.
+pub fn blm_3d() -> Result<Vec<Blm3Case>, Error> {
+    rows("blm_3d.csv", |r| {
+        Ok(Blm3Case {
+            line: r.line(),
+            id: r.text("case_id")?.to_string(),
+            category: r.text("category")?.to_string(),
+            ci: r.nums(["cix", "ciy", "ciz"])?,
+            li: r.nums(["ai", "bi", "ci_ax"])?,
+            qi: r.nums(["qwi", "qxi", "qyi", "qzi"])?,
+            cj: r.nums(["cjx", "cjy", "cjz"])?,
+            lj: r.nums(["aj", "bj", "cj_ax"])?,
+            qj: r.nums(["qwj", "qxj", "qyj", "qzj"])?,
+            x: all_or_none(r, ["X_1", "X_2", "X_3"])?,
+            u: r.num("U")?,
+            d2: r.num("d2")?,
+            eps: r.num("eps")?,
+            f: r.num("f")?,
+            mu2: r.num("mu2_pw85")?,
+        })
+    })
+}
+
+/// The rows of `blm_2d.csv`.
+pub fn blm_2d() -> Result<Vec<Blm2Case>, Error> {
+    rows("blm_2d.csv", |r| {
+        Ok(Blm2Case {
+            line: r.line(),
+            id: r.text("case_id")?.to_string(),
+            category: r.text("category")?.to_string(),
+            ci: r.nums(["cix", "ciy"])?,
+            li: r.nums(["ai", "bi"])?,
+            theta_i: r.num("theta_i")?,
+            cj: r.nums(["cjx", "cjy"])?,
+            lj: r.nums(["aj", "bj"])?,
+            theta_j: r.num("theta_j")?,
+            x: all_or_none(r, ["X_1", "X_2"])?,
+            u: r.num("U")?,
+            d2: r.num("d2")?,
+            eps: r.num("eps")?,
+            f: r.num("f")?,
+            mu2: r.num("mu2_pw85")?,
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn minus_one_keeps_digits_beyond_double_precision() {
+        assert_eq!(minus_one("1.00000000000000000123", 1.0), 1.23e-18);
+        let v = minus_one("9.99999999999999999e-1", 1.0);
+        assert!((v + 1e-18).abs() < 1e-30, "{v}");
+        assert_eq!(minus_one("2.5", 2.5), 1.5);
+    }
+
+    #[test]
+    fn the_three_files_load_from_the_repository() {
+        let contact = contact_cases().unwrap();
+        assert_eq!(contact.len(), 305);
+        assert!(contact.iter().any(|c| c.lambda.is_nan()));
+        let b3 = blm_3d().unwrap();
+        assert_eq!(b3.len(), 257);
+        assert!(b3.iter().any(|c| c.x.is_none()) && b3.iter().any(|c| c.x.is_some()));
+        assert_eq!(blm_2d().unwrap().len(), 104);
+        // The first case's line, for errors that point into the file.
+        assert_eq!(contact[0].line, 2);
+    }
+}
