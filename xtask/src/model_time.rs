@@ -10,9 +10,9 @@ use crate::output::{self, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::report::Section;
 use crate::scene::LoadedScene;
+use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::{ModelGradient, Problem};
-use implicit_packing::pack::lattice_start;
 use std::hint::black_box;
 use std::time::Instant;
 

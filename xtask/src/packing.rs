@@ -1,4 +1,4 @@
-//! Figure 6: packings. A multi-start run of the packer (`implicit_packing::multistart`: lattice
+//! Figure 6: packings. A multi-start run of the packer (`ellipsoid_packer::multistart`: lattice
 //! start, augmented-Lagrangian local minimisations from perturbations, PW85 certificate and
 //! repair of every result) on a small 2D instance with a wall-time limit: the best density
 //! against wall time, and a picture of the best certified packing.
@@ -9,10 +9,10 @@ use crate::output::{self, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::report::Section;
 use crate::scene::LoadedScene;
+use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
+use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Problem;
-use implicit_packing::multistart::{MultiStartSettings, multistart};
-use implicit_packing::pack::lattice_start;
 use std::time::Duration;
 
 fn refused(e: implicit_packing::Error) -> Error {
@@ -192,7 +192,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         )?;
     }
     let text = format!(
-        "{m} ellipses with semi-axes ({}, {}) in the smallest ball, by `implicit_packing::\
+        "{m} ellipses with semi-axes ({}, {}) in the smallest ball, by `ellipsoid_packer::\
          multistart` (the paper's lattice start, perturbations of the latest feasible packing, \
          one thread, seed {}) for {seconds} s of wall time: {} local minimisations, each \
          certified with PW85 and repaired. The best density, {:.4} (container radius {:.4}), \

@@ -11,10 +11,11 @@ use crate::packing::{
     PackingError, Summary,
 };
 use crate::scene::Scene;
+use ellipsoid_packer::local::LocalSettings;
+use ellipsoid_packer::multistart::{MultiStartProgress, MultiStartSettings, multistart};
+use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::containment::ContainerKind as ModelContainer;
 use implicit_packing::model::Problem;
-use implicit_packing::multistart::{MultiStartProgress, MultiStartSettings, multistart};
-use implicit_packing::pack::{LocalSettings, lattice_start};
 use implicit_packing::shape::{angles_from_rotation, rotation_from_quaternion};
 use std::path::{Path, PathBuf};
 use std::time::Duration;

@@ -15,10 +15,13 @@
 //!   and exact Hessian–vector products;
 //! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first
 //!   derivatives and exact Hessian–vector products;
-//! * [`lattice`]: dense lattice starts (hexagonal and face-centred cubic, cut to the
-//!   container);
 //! * [`model`]: the whole sum over the grid's candidate pairs (Section 5.2), containment and
-//!   objective, with gradients, Hessian–vector products and a PW85 certificate.
+//!   objective, with gradients and Hessian–vector products;
+//! * [`certificate`]: the verdict that decides whether a configuration is a packing, independent
+//!   of the model (PW85 on every close pair, exact containment).
+//!
+//! The packer (starts, local minimisation, repair, multi-start) is the crate
+//! `ellipsoid-packer`; this crate is the model alone and depends on no solver.
 //!
 //! # References
 //! E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
@@ -34,11 +37,8 @@ pub mod containment;
 pub mod derivatives;
 pub mod error;
 pub(crate) mod lanes;
-pub mod lattice;
 pub(crate) mod linalg;
 pub mod model;
-pub mod multistart;
-pub mod pack;
 pub mod pair;
 pub mod projection;
 pub mod shape;

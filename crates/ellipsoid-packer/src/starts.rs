@@ -1,7 +1,8 @@
-//! Dense lattice starts: affine images of the densest lattice packings of circles and spheres,
-//! cut to the container's shape.
+//! The starts of local minimisations: the paper's first initial solution ([`lattice_start`]),
+//! dense lattice starts ([`LatticeStart`], [`lattice_start_of`]) and random perturbations of a
+//! packing ([`perturb`]).
 //!
-//! The paper's first initial solution ([`lattice_start`](crate::pack::lattice_start)) puts the
+//! The paper's first initial solution ([`lattice_start`]) puts the
 //! items, unrotated, on the affine image of the hexagonal circle lattice in 2D but of the
 //! *simple cubic* lattice in 3D, whose density is π/6 ≈ 0.52 of the items' bounding boxes. Its
 //! single start also fixes the container's aspect ratio to that of a round cluster. A box
@@ -32,8 +33,9 @@
 //! - J. H. Conway, N. J. A. Sloane, *Sphere Packings, Lattices and Groups*, 3rd ed., Springer
 //!   1999, chapter 1 (the hexagonal and face-centred cubic lattices).
 
-use crate::containment::ContainerKind;
-use crate::model::Problem;
+use implicit_packing::Error;
+use implicit_packing::containment::ContainerKind;
+use implicit_packing::model::Problem;
 
 /// One dense lattice start: which lattice orientation, shifted by how much, cut to which
 /// container aspect.
@@ -146,7 +148,7 @@ impl<const N: usize> LatticeStart<N> {
 pub fn lattice_start_of<const N: usize>(problem: &Problem<N>, start: &LatticeStart<N>) -> Vec<f64> {
     let m = problem.len();
     let kind = problem.container_kind();
-    let l = crate::pack::lattice_semi_axes(problem);
+    let l = lattice_semi_axes(problem);
     let reach = l.iter().fold(0.0_f64, |a, &b| a.max(b));
     let aspect = if kind == ContainerKind::Ball {
         [1.0; N]
@@ -275,6 +277,152 @@ fn container_holding<const N: usize>(
     }
 }
 
+/// The paper's first initial solution: items not rotated, centres on a lattice nearest the
+/// origin — the affine image of the hexagonal circle packing in 2D (rows `2 a` apart in x,
+/// `√3 b` in y, alternate rows shifted by `a`), the points `(2δ₁ l₁, 2δ₂ l₂, 2δ₃ l₃)`, δ ∈ ℤ³,
+/// in 3D (`l` the largest semi-axis of each direction over all items, so nothing overlaps) —
+/// and the smallest container of the problem's kind that holds every item's enclosing ball.
+pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
+    let m = problem.len();
+    let spacing = lattice_semi_axes(problem);
+    let points = lattice_points::<N>(m, &spacing);
+    let stride = Problem::<N>::vars_per_body();
+    let mut x = vec![0.0; problem.var_count()];
+    let mut reach = [0.0_f64; N];
+    let mut radius = 0.0_f64;
+    for (i, (p, l)) in points.iter().zip(problem.semi_axes()).enumerate() {
+        x[i * stride..i * stride + N].copy_from_slice(p);
+        let r = l.iter().fold(0.0_f64, |a, &b| a.max(b));
+        let norm = p.iter().map(|v| v * v).sum::<f64>().sqrt();
+        radius = radius.max(norm + r);
+        for k in 0..N {
+            reach[k] = reach[k].max(p[k].abs() + r);
+        }
+    }
+    // The enclosing balls touch the container; the same relative gap as the lattice.
+    let (radius, reach) = (radius * (1.0 + 1e-9), reach.map(|r| r * (1.0 + 1e-9)));
+    let dims = &mut x[m * stride..];
+    match problem.container_kind() {
+        implicit_packing::containment::ContainerKind::Ball => dims[0] = radius,
+        implicit_packing::containment::ContainerKind::Ellipsoid => dims.fill(radius),
+        implicit_packing::containment::ContainerKind::Box => dims.copy_from_slice(&reach),
+    }
+    x
+}
+
+/// The largest semi-axis of each direction over all items, which unrotated items on a lattice
+/// scaled by it never exceed. Lattice neighbours are then exactly tangent; a relative gap of
+/// 1e-9 keeps lattice starts certified under rounding.
+pub(crate) fn lattice_semi_axes<const N: usize>(problem: &Problem<N>) -> [f64; N] {
+    let mut l = [0.0_f64; N];
+    for axes in problem.semi_axes() {
+        for k in 0..N {
+            l[k] = l[k].max(axes[k]);
+        }
+    }
+    l.map(|v| v * (1.0 + 1e-9))
+}
+
+/// The `m` lattice points nearest the origin (ties broken by coordinates, so the start is
+/// deterministic).
+fn lattice_points<const N: usize>(m: usize, l: &[f64; N]) -> Vec<[f64; N]> {
+    // Enough shells that the m nearest points are among the candidates.
+    let reach = ((m as f64).powf(1.0 / N as f64) + 2.0).ceil() as i64;
+    let mut candidates: Vec<([f64; N], [i64; N])> = Vec::new();
+    let mut index = [-reach; N];
+    loop {
+        let mut p = [0.0; N];
+        if N == 2 {
+            // Hexagonal: row j at height √3 b j, shifted by a on odd rows.
+            let row = index[1];
+            p[0] = 2.0 * l[0] * index[0] as f64 + if row.rem_euclid(2) == 1 { l[0] } else { 0.0 };
+            p[1] = 3f64.sqrt() * l[1] * row as f64;
+        } else {
+            for k in 0..N {
+                p[k] = 2.0 * l[k] * index[k] as f64;
+            }
+        }
+        candidates.push((p, index));
+        // Next multi-index.
+        let mut k = 0;
+        loop {
+            if k == N {
+                candidates.sort_by(|a, b| {
+                    let na: f64 = a.0.iter().map(|v| v * v).sum();
+                    let nb: f64 = b.0.iter().map(|v| v * v).sum();
+                    na.total_cmp(&nb).then(a.1.cmp(&b.1))
+                });
+                return candidates.into_iter().take(m).map(|c| c.0).collect();
+            }
+            index[k] += 1;
+            if index[k] <= reach {
+                break;
+            }
+            index[k] = -reach;
+            k += 1;
+        }
+    }
+}
+
+/// The start `index` of a run: `x` with every centre coordinate moved by up to
+/// `fraction × extent` (the container's half-extent along that axis) and every angle by up to
+/// `fraction × π`, from a generator seeded by `(seed, index)`.
+pub fn perturb<const N: usize>(
+    x: &[f64],
+    items: usize,
+    fraction: f64,
+    seed: u64,
+    index: u64,
+) -> Vec<f64> {
+    let stride = Problem::<N>::vars_per_body();
+    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let dims = &x[items * stride..];
+    let extent = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(1.0);
+    let mut y = x.to_vec();
+    for i in 0..items {
+        for v in 0..stride {
+            let scale = if v < N {
+                extent(v)
+            } else {
+                std::f64::consts::PI
+            };
+            y[i * stride + v] += fraction * scale * (2.0 * rng.uniform() - 1.0);
+        }
+    }
+    y
+}
+
+/// SplitMix64 (Steele, Lea, Flood 2014): small, fast and good enough to place perturbations;
+/// kept here so that runs are reproducible without a random-number dependency (the crate's
+/// tests draw from it too).
+pub(crate) struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub(crate) fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    /// Uniform in `[0, 1)`.
+    pub(crate) fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The paper's first initial solution for these items ([`lattice_start`]).
+///
+/// # Errors
+/// Errors of [`Problem::new`] (no items, invalid semi-axes).
+pub fn paper_start<const N: usize>(
+    semi_axes: &[[f64; N]],
+    kind: ContainerKind,
+) -> Result<Vec<f64>, Error> {
+    Ok(lattice_start(&Problem::<N>::new(semi_axes.to_vec(), kind)?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,7 +432,7 @@ mod tests {
         let x = lattice_start_of(&p, &LatticeStart::sequence(k));
         let c = p.certify(&x).unwrap();
         assert!(c.is_feasible(), "start {k} of {kind:?}: {c:?}");
-        crate::pack::item_measure(&p) / p.evaluate(&x, None).unwrap().objective
+        crate::local::item_measure(&p) / p.evaluate(&x, None).unwrap().objective
     }
 
     #[test]
@@ -305,8 +453,8 @@ mod tests {
     fn fcc_starts_are_denser_than_the_papers_cubic_start_in_a_box() {
         let m = 100;
         let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerKind::Box).unwrap();
-        let paper = crate::pack::lattice_start(&p);
-        let paper = crate::pack::item_measure(&p) / p.evaluate(&paper, None).unwrap().objective;
+        let paper = crate::starts::lattice_start(&p);
+        let paper = crate::local::item_measure(&p) / p.evaluate(&paper, None).unwrap().objective;
         let best = (0..16)
             .map(|k| certified([1.0, 0.75, 0.5], m, ContainerKind::Box, k))
             .fold(0.0, f64::max);

@@ -27,11 +27,11 @@
 //! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
 //!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6.
 
-use crate::containment::ContainerKind;
-use crate::error::Error;
-use crate::lattice::{LatticeStart, lattice_start_of};
-use crate::model::Problem;
-use crate::pack::{LocalResult, LocalSettings, certified_start, lattice_start, local_minimisation};
+use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
+use crate::starts::{LatticeStart, lattice_start_of, perturb};
+use implicit_packing::Error;
+use implicit_packing::containment::ContainerKind;
+use implicit_packing::model::Problem;
 use std::time::{Duration, Instant};
 
 /// Settings of a multi-start run.
@@ -398,68 +398,10 @@ fn start_kind(settings: &MultiStartSettings, index: usize) -> Start {
     Start::Perturbed(settings.perturbation * 0.5f64.powi(level))
 }
 
-/// The start `index` of a run: `x` with every centre coordinate moved by up to
-/// `fraction × extent` (the container's half-extent along that axis) and every angle by up to
-/// `fraction × π`, from a generator seeded by `(seed, index)`.
-pub fn perturb<const N: usize>(
-    x: &[f64],
-    items: usize,
-    fraction: f64,
-    seed: u64,
-    index: u64,
-) -> Vec<f64> {
-    let stride = Problem::<N>::vars_per_body();
-    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    let dims = &x[items * stride..];
-    let extent = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(1.0);
-    let mut y = x.to_vec();
-    for i in 0..items {
-        for v in 0..stride {
-            let scale = if v < N {
-                extent(v)
-            } else {
-                std::f64::consts::PI
-            };
-            y[i * stride + v] += fraction * scale * (2.0 * rng.uniform() - 1.0);
-        }
-    }
-    y
-}
-
-/// SplitMix64 (Steele, Lea, Flood 2014): small, fast and good enough to place perturbations;
-/// kept here so that runs are reproducible without a random-number dependency (the crate's
-/// tests draw from it too).
-pub(crate) struct SplitMix64(u64);
-
-impl SplitMix64 {
-    pub(crate) fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub(crate) fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// The paper's first initial solution for these items ([`lattice_start`]).
-///
-/// # Errors
-/// Errors of [`Problem::new`] (no items, invalid semi-axes).
-pub fn paper_start<const N: usize>(
-    semi_axes: &[[f64; N]],
-    kind: ContainerKind,
-) -> Result<Vec<f64>, Error> {
-    Ok(lattice_start(&Problem::<N>::new(semi_axes.to_vec(), kind)?))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::starts::paper_start;
 
     fn run(threads: usize, seed: u64) -> MultiStartResult {
         let axes = vec![[2.0, 1.0]; 6];

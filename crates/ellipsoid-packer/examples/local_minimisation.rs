@@ -1,11 +1,12 @@
 //! One local minimisation from the paper's lattice start (or, with a fourth argument `dense`,
-//! the face-centred cubic / hexagonal start of `implicit_packing::lattice`), certified and
+//! the face-centred cubic / hexagonal start of `ellipsoid_packer::starts`), certified and
 //! repaired: `cargo run --release -p implicit-packing --example local_minimisation -- 3 ball 100`.
 
+use ellipsoid_packer::local::{LocalSettings, local_minimisation};
+use ellipsoid_packer::starts::lattice_start;
+use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::lattice::{LatticeStart, lattice_start_of};
 use implicit_packing::model::Problem;
-use implicit_packing::pack::{LocalSettings, lattice_start, local_minimisation};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

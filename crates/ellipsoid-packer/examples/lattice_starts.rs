@@ -1,10 +1,11 @@
 //! One local minimisation from each of the first K dense lattice starts, against the paper's
 //! start: `cargo run --release -p implicit-packing --example lattice_starts -- 3 box 100 8`.
 
+use ellipsoid_packer::local::{LocalSettings, item_measure, local_minimisation};
+use ellipsoid_packer::starts::lattice_start;
+use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::lattice::{LatticeStart, lattice_start_of};
 use implicit_packing::model::Problem;
-use implicit_packing::pack::{LocalSettings, item_measure, lattice_start, local_minimisation};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

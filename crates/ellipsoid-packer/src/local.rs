@@ -24,9 +24,9 @@
 //!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6 (initial
 //!   solutions, Algencan).
 
-use crate::error::Error;
-use crate::model::{Certificate, ModelGradient, Problem};
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
+use implicit_packing::Error;
+use implicit_packing::model::{Certificate, ModelGradient, Problem};
 use std::cell::RefCell;
 
 /// Settings of one local minimisation.
@@ -79,93 +79,6 @@ pub struct LocalResult {
     pub certificate: Certificate,
     /// What the solver did.
     pub report: Report,
-}
-
-/// The paper's first initial solution: items not rotated, centres on a lattice nearest the
-/// origin — the affine image of the hexagonal circle packing in 2D (rows `2 a` apart in x,
-/// `√3 b` in y, alternate rows shifted by `a`), the points `(2δ₁ l₁, 2δ₂ l₂, 2δ₃ l₃)`, δ ∈ ℤ³,
-/// in 3D (`l` the largest semi-axis of each direction over all items, so nothing overlaps) —
-/// and the smallest container of the problem's kind that holds every item's enclosing ball.
-pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
-    let m = problem.len();
-    let spacing = lattice_semi_axes(problem);
-    let points = lattice_points::<N>(m, &spacing);
-    let stride = Problem::<N>::vars_per_body();
-    let mut x = vec![0.0; problem.var_count()];
-    let mut reach = [0.0_f64; N];
-    let mut radius = 0.0_f64;
-    for (i, (p, l)) in points.iter().zip(problem.semi_axes()).enumerate() {
-        x[i * stride..i * stride + N].copy_from_slice(p);
-        let r = l.iter().fold(0.0_f64, |a, &b| a.max(b));
-        let norm = p.iter().map(|v| v * v).sum::<f64>().sqrt();
-        radius = radius.max(norm + r);
-        for k in 0..N {
-            reach[k] = reach[k].max(p[k].abs() + r);
-        }
-    }
-    // The enclosing balls touch the container; the same relative gap as the lattice.
-    let (radius, reach) = (radius * (1.0 + 1e-9), reach.map(|r| r * (1.0 + 1e-9)));
-    let dims = &mut x[m * stride..];
-    match problem.container_kind() {
-        crate::containment::ContainerKind::Ball => dims[0] = radius,
-        crate::containment::ContainerKind::Ellipsoid => dims.fill(radius),
-        crate::containment::ContainerKind::Box => dims.copy_from_slice(&reach),
-    }
-    x
-}
-
-/// The largest semi-axis of each direction over all items, which unrotated items on a lattice
-/// scaled by it never exceed. Lattice neighbours are then exactly tangent; a relative gap of
-/// 1e-9 keeps lattice starts certified under rounding.
-pub(crate) fn lattice_semi_axes<const N: usize>(problem: &Problem<N>) -> [f64; N] {
-    let mut l = [0.0_f64; N];
-    for axes in problem.semi_axes() {
-        for k in 0..N {
-            l[k] = l[k].max(axes[k]);
-        }
-    }
-    l.map(|v| v * (1.0 + 1e-9))
-}
-
-/// The `m` lattice points nearest the origin (ties broken by coordinates, so the start is
-/// deterministic).
-fn lattice_points<const N: usize>(m: usize, l: &[f64; N]) -> Vec<[f64; N]> {
-    // Enough shells that the m nearest points are among the candidates.
-    let reach = ((m as f64).powf(1.0 / N as f64) + 2.0).ceil() as i64;
-    let mut candidates: Vec<([f64; N], [i64; N])> = Vec::new();
-    let mut index = [-reach; N];
-    loop {
-        let mut p = [0.0; N];
-        if N == 2 {
-            // Hexagonal: row j at height √3 b j, shifted by a on odd rows.
-            let row = index[1];
-            p[0] = 2.0 * l[0] * index[0] as f64 + if row.rem_euclid(2) == 1 { l[0] } else { 0.0 };
-            p[1] = 3f64.sqrt() * l[1] * row as f64;
-        } else {
-            for k in 0..N {
-                p[k] = 2.0 * l[k] * index[k] as f64;
-            }
-        }
-        candidates.push((p, index));
-        // Next multi-index.
-        let mut k = 0;
-        loop {
-            if k == N {
-                candidates.sort_by(|a, b| {
-                    let na: f64 = a.0.iter().map(|v| v * v).sum();
-                    let nb: f64 = b.0.iter().map(|v| v * v).sum();
-                    na.total_cmp(&nb).then(a.1.cmp(&b.1))
-                });
-                return candidates.into_iter().take(m).map(|c| c.0).collect();
-            }
-            index[k] += 1;
-            if index[k] <= reach {
-                break;
-            }
-            index[k] = -reach;
-            k += 1;
-        }
-    }
 }
 
 /// Item area (2D) or volume (3D) of all the problem's items.
@@ -550,7 +463,8 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::containment::ContainerKind;
+    use crate::starts::lattice_start;
+    use implicit_packing::containment::ContainerKind;
 
     #[test]
     fn lattice_start_is_certified_feasible() {

@@ -5,8 +5,11 @@
 //! every n perturbations (0: never), a new chain after n starts without improvement (0:
 //! never).
 
+use ellipsoid_packer::{
+    multistart::{MultiStartSettings, multistart},
+    starts::paper_start,
+};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::multistart::{MultiStartSettings, multistart, paper_start};
 use std::time::Duration;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -34,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     settings.fresh_lattice_every = arg(10, "0").parse()?;
     settings.restart_after = arg(11, "0").parse()?;
     settings.time_limit = Some(Duration::from_secs_f64(seconds));
-    let mut report = |p: &implicit_packing::multistart::MultiStartProgress| {
+    let mut report = |p: &ellipsoid_packer::multistart::MultiStartProgress| {
         eprintln!(
             "{:4} local minimisations, {:7.1} s: last {:.5}, best {:.5}",
             p.local_minimisations,

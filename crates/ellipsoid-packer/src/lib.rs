@@ -1,0 +1,37 @@
+//! # ellipsoid-packer — dense packings of ellipses and ellipsoids in a minimum container
+//!
+//! The packer of Birgin, Lobato and Martínez's implicit-variable model
+//! ([`implicit_packing`]): it minimises the container's area or volume subject to the model's
+//! overlap and containment constraints with the augmented Lagrangian of [`auglag`], certifies
+//! every result with PW85 and exact containment ([`implicit_packing::certificate`]), repairs
+//! it by the least dilation, and repeats from many starts.
+//!
+//! - [`starts`] — the paper's first initial solution, dense lattice starts, perturbations.
+//! - [`local`] — one local minimisation with its polish, certificate and repair.
+//! - [`multistart`] — the multi-start with chains, parallel rounds, a time limit, progress
+//!   and cancellation.
+//!
+//! ```
+//! use ellipsoid_packer::{local::{LocalSettings, local_minimisation}, starts::lattice_start};
+//! use implicit_packing::{containment::ContainerKind, model::Problem};
+//!
+//! // Five ellipses (2, 1) in the smallest disc the solver finds from the paper's start.
+//! let mut problem = Problem::<2>::new(vec![[2.0, 1.0]; 5], ContainerKind::Ball)?;
+//! let x0 = lattice_start(&problem);
+//! let result = local_minimisation(&mut problem, &x0, &LocalSettings::default(), &mut |_| false)?;
+//! assert!(result.certificate.is_feasible());
+//! assert!(result.density > 0.5);
+//! # Ok::<(), implicit_packing::Error>(())
+//! ```
+//!
+//! # References
+//! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
+//!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6.
+#![deny(missing_docs)]
+#![allow(clippy::needless_range_loop)]
+
+pub mod local;
+pub mod multistart;
+pub mod starts;
+
+pub use implicit_packing::Error;
