@@ -14,9 +14,9 @@ use crate::scene::Scene;
 use ellipsoid_packer::local::LocalSettings;
 use ellipsoid_packer::multistart::{MultiStartProgress, MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
-use implicit_packing::containment::ContainerKind as ModelContainer;
+use implicit_packing::Body;
+use implicit_packing::containment::{Container as ContainerShape, ContainerKind as ModelContainer};
 use implicit_packing::model::Problem;
-use implicit_packing::shape::{angles_from_rotation, rotation_from_quaternion};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -495,7 +495,7 @@ fn packing_of<const N: usize>(
     x: &[f64],
     kind: ContainerKind,
 ) -> Result<Packing, PackError> {
-    let dims = x[problem.len() * Problem::<N>::vars_per_body()..].to_vec();
+    let shape = problem.container_at(x)?;
     let bodies = problem.bodies_at(x)?;
     let items = if N == 2 {
         Items::Ellipses(
@@ -532,7 +532,12 @@ fn packing_of<const N: usize>(
                 .collect(),
         )
     };
-    let d = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(0.0);
+    let dims: Vec<f64> = match shape {
+        ContainerShape::Ball { radius } => vec![radius; N],
+        ContainerShape::Ellipsoid { semi_axes } => semi_axes.to_vec(),
+        ContainerShape::Box { half_sides } => half_sides.to_vec(),
+    };
+    let d = |k: usize| dims.get(k).copied().unwrap_or(0.0);
     let container = match kind {
         ContainerKind::Circle => Container::Circle {
             center: [0.0; 2],
@@ -577,55 +582,60 @@ fn variables_of<const N: usize>(
         )));
     }
     let centre = packing.container.center().to_vec();
-    let mut x = Vec::with_capacity(axes.len() * Problem::<N>::vars_per_body() + N);
     let same = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
             .all(|(p, q)| (p - q).abs() <= 1e-12 * q.abs())
     };
-    match &packing.items {
-        Items::Ellipses(v) if N == 2 => {
-            for (i, e) in v.iter().enumerate() {
-                if !same(&e.semi_axes, &axes[i]) {
-                    return Err(PackError::Mismatch(format!(
-                        "item {i} has semi-axes {:?} in the packing, {:?} in the scene",
-                        e.semi_axes, axes[i]
-                    )));
-                }
-                x.extend([e.center[0] - centre[0], e.center[1] - centre[1], e.theta]);
-            }
-        }
-        Items::Ellipsoids(v) if N == 3 => {
-            for (i, e) in v.iter().enumerate() {
-                if !same(&e.semi_axes, &axes[i]) {
-                    return Err(PackError::Mismatch(format!(
-                        "item {i} has semi-axes {:?} in the packing, {:?} in the scene",
-                        e.semi_axes, axes[i]
-                    )));
-                }
-                let r = rotation_from_quaternion(e.quaternion)?;
-                let angles = angles_from_rotation(&r);
-                x.extend([
-                    e.center[0] - centre[0],
-                    e.center[1] - centre[1],
-                    e.center[2] - centre[2],
-                ]);
-                x.extend(angles);
-            }
-        }
-        _ => {
-            return Err(PackError::Mismatch(
-                "the packing has the other dimension".into(),
-            ));
-        }
-    }
+    let mismatch = |i: usize, found: &[f64]| {
+        PackError::Mismatch(format!(
+            "item {i} has semi-axes {found:?} in the packing, {:?} in the scene",
+            axes[i]
+        ))
+    };
     let size = packing.container.size();
     let dims: Vec<f64> = match kind {
         ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
         _ => size,
     };
-    x.extend(dims);
-    Ok(x)
+    // The bodies relative to the container's centre, with the scene's semi-axes (equal to the
+    // packing's within 1e-12, checked here), so that the model takes them as its own.
+    let axis = |i: usize, k: usize| axes[i].get(k).copied().unwrap_or(f64::NAN);
+    match &packing.items {
+        Items::Ellipses(v) if N == 2 => {
+            let mut bodies = Vec::with_capacity(v.len());
+            for (i, e) in v.iter().enumerate() {
+                if !same(&e.semi_axes, &axes[i]) {
+                    return Err(mismatch(i, &e.semi_axes));
+                }
+                let l = [axis(i, 0), axis(i, 1)];
+                let c = [e.center[0] - centre[0], e.center[1] - centre[1]];
+                bodies.push(Body::ellipse(c, l, e.theta)?);
+            }
+            let axes: Vec<[f64; 2]> = bodies.iter().map(Body::semi_axes).collect();
+            Ok(Problem::<2>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
+        }
+        Items::Ellipsoids(v) if N == 3 => {
+            let mut bodies = Vec::with_capacity(v.len());
+            for (i, e) in v.iter().enumerate() {
+                if !same(&e.semi_axes, &axes[i]) {
+                    return Err(mismatch(i, &e.semi_axes));
+                }
+                let l = [axis(i, 0), axis(i, 1), axis(i, 2)];
+                let c = [
+                    e.center[0] - centre[0],
+                    e.center[1] - centre[1],
+                    e.center[2] - centre[2],
+                ];
+                bodies.push(Body::from_quaternion(c, l, e.quaternion)?);
+            }
+            let axes: Vec<[f64; 3]> = bodies.iter().map(Body::semi_axes).collect();
+            Ok(Problem::<3>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
+        }
+        _ => Err(PackError::Mismatch(
+            "the packing has the other dimension".into(),
+        )),
+    }
 }
 
 #[cfg(test)]

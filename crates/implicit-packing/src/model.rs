@@ -526,6 +526,14 @@ impl<const N: usize> Problem<N> {
         &self.bodies
     }
 
+    /// The container that the variables `x` stand for (centred at the origin).
+    ///
+    /// # Errors
+    /// As [`Problem::evaluate`].
+    pub fn container_at(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
+        self.load(x)
+    }
+
     /// The bodies (centres and rotations) that the variables `x` stand for.
     ///
     /// # Errors
