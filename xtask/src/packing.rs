@@ -9,7 +9,7 @@ use crate::output::{self, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::report::Section;
 use crate::scene::LoadedScene;
-use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
+use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress, MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Problem;
@@ -78,7 +78,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         ContainerKind::Ball,
         &x0,
         &settings,
-        &mut |p| {
+        &mut Callbacks::on_finished(|p: &MultiStartProgress| {
             let t = p.elapsed.as_secs_f64();
             best.push((t, p.best_density));
             last.push((t, p.last_density));
@@ -88,9 +88,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                     p.local_minimisations, p.best_density
                 ));
             }
-        },
-        &|_| {},
-        &|| false,
+        }),
     )
     .map_err(refused)?;
     let mut problem = Problem::<2>::new(semi_axes, ContainerKind::Ball).map_err(refused)?;
@@ -263,7 +261,7 @@ fn solved_scenes(
             ..Default::default()
         };
         crate::progress(run.start)(&format!("  {} ({seconds} s)", scene.title()));
-        let outcome = ellipack::pack::run(&scene, &options, &mut |_| {}, &|_| {}, &|| false)
+        let outcome = ellipack::pack::run(&scene, &options, &mut ())
             .map_err(|e| pack_error(e.to_string()))?;
         let c = outcome.summary.certificate;
         if !c.is_certified() {

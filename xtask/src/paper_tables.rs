@@ -12,6 +12,7 @@ use ellipack::output::write_atomically;
 use ellipack::pack::{RunOptions, run};
 use ellipack::packing::write_files;
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
+use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Duration;
@@ -89,7 +90,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         let outcome = run(
             &scene,
             &run_options,
-            &mut |p| {
+            &mut Callbacks::on_finished(|p: &MultiStartProgress| {
                 if p.best_density > best {
                     best = p.best_density;
                     eprintln!(
@@ -99,9 +100,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
                         p.local_minimisations
                     );
                 }
-            },
-            &|_| {},
-            &|| false,
+            }),
         )
         .map_err(|e| format!("{}: {e}", instance.name))?;
         let c = outcome.summary.certificate;

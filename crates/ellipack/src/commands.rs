@@ -2,7 +2,8 @@
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
-    RunOptions, probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
+    MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
+    time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
     CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
@@ -85,52 +86,15 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     );
     bar.enable_steady_tick(Duration::from_millis(200));
     bar.set_message(format!("{}: first local minimisation", scene.title()));
-    let stop = {
-        let flag = Arc::clone(&interrupted);
-        move || flag.load(Ordering::SeqCst)
+    let mut terminal = Terminal {
+        bar: bar.clone(),
+        best: AtomicU64::new(0f64.to_bits()),
+        // One row per finished local minimisation, written beside the packing as history.csv.
+        history: String::from("local_minimisation,seconds,density,best_density\n"),
+        interrupted: Arc::clone(&interrupted),
     };
-    // The best certified density is known between local minimisations (main thread); the
-    // objective and infeasibility inside them (worker threads): both feed one message.
-    let best = Arc::new(AtomicU64::new(0f64.to_bits()));
-    let observe = {
-        let (bar, best) = (bar.clone(), Arc::clone(&best));
-        move |p: &auglag::Progress<'_>| {
-            if let auglag::Event::Outer {
-                objective,
-                infeasibility,
-                ..
-            } = p.event
-            {
-                let best = f64::from_bits(best.load(Ordering::Relaxed));
-                bar.set_message(format!(
-                    "objective {objective:.6}, infeasibility {infeasibility:.1e}, best certified \
-                     density {best:.5}"
-                ));
-            }
-        }
-    };
-    // One row per finished local minimisation, written beside the packing as history.csv.
-    let mut history = String::from("local_minimisation,seconds,density,best_density\n");
-    let outcome = run(
-        &scene,
-        &options,
-        &mut |p| {
-            history.push_str(&format!(
-                "{},{:.3},{:.9},{:.9}\n",
-                p.local_minimisations,
-                p.elapsed.as_secs_f64(),
-                p.last_density,
-                p.best_density
-            ));
-            best.store(p.best_density.to_bits(), Ordering::Relaxed);
-            bar.set_message(format!(
-                "{} local minimisations, last density {:.5}, best certified density {:.5}",
-                p.local_minimisations, p.last_density, p.best_density
-            ));
-        },
-        &observe,
-        &stop,
-    )?;
+    let outcome = run(&scene, &options, &mut terminal)?;
+    let history = terminal.history;
     bar.finish_and_clear();
 
     // The whole set is written into a staging folder and swapped in, so that the folder never
@@ -367,4 +331,50 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
         println!("NOT certified");
         ExitCode::FAILURE
     })
+}
+
+/// The run as the terminal shows it: a spinner with the solver's objective and infeasibility
+/// (worker threads) and the best certified density (known between local minimisations), the
+/// rows of history.csv, and Ctrl-C, SIGTERM or SIGHUP as the request to stop.
+struct Terminal {
+    bar: ProgressBar,
+    best: AtomicU64,
+    history: String,
+    interrupted: Arc<AtomicBool>,
+}
+
+impl Observer for Terminal {
+    fn finished(&mut self, p: &MultiStartProgress) {
+        self.history.push_str(&format!(
+            "{},{:.3},{:.9},{:.9}\n",
+            p.local_minimisations,
+            p.elapsed.as_secs_f64(),
+            p.last_density,
+            p.best_density
+        ));
+        self.best.store(p.best_density.to_bits(), Ordering::Relaxed);
+        self.bar.set_message(format!(
+            "{} local minimisations, last density {:.5}, best certified density {:.5}",
+            p.local_minimisations, p.last_density, p.best_density
+        ));
+    }
+
+    fn iteration(&self, p: &auglag::Progress<'_>) {
+        if let auglag::Event::Outer {
+            objective,
+            infeasibility,
+            ..
+        } = p.event
+        {
+            let best = f64::from_bits(self.best.load(Ordering::Relaxed));
+            self.bar.set_message(format!(
+                "objective {objective:.6}, infeasibility {infeasibility:.1e}, best certified \
+                 density {best:.5}"
+            ));
+        }
+    }
+
+    fn should_stop(&self) -> bool {
+        self.interrupted.load(Ordering::SeqCst)
+    }
 }

@@ -12,7 +12,8 @@ use crate::packing::{
 };
 use crate::scene::Scene;
 use ellipsoid_packer::local::LocalSettings;
-use ellipsoid_packer::multistart::{MultiStartProgress, MultiStartSettings, multistart};
+pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer};
+use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::Body;
 use implicit_packing::containment::{Container as ContainerShape, ContainerKind as ModelContainer};
@@ -247,13 +248,11 @@ pub struct RunOutcome {
 pub fn run(
     scene: &Scene,
     options: &RunOptions,
-    progress: &mut dyn FnMut(&MultiStartProgress),
-    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
-    interrupt: &(dyn Fn() -> bool + Sync),
+    observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     match (scene.ellipse_axes(), scene.ellipsoid_axes()) {
-        (Some(axes), _) => run_n::<2>(scene, &axes, options, progress, observe, interrupt),
-        (_, Some(axes)) => run_n::<3>(scene, &axes, options, progress, observe, interrupt),
+        (Some(axes), _) => run_n::<2>(scene, &axes, options, observer),
+        (_, Some(axes)) => run_n::<3>(scene, &axes, options, observer),
         _ => Err(PackError::Mismatch("the scene has no items".into())),
     }
 }
@@ -262,9 +261,7 @@ fn run_n<const N: usize>(
     scene: &Scene,
     axes: &[[f64; N]],
     options: &RunOptions,
-    progress: &mut dyn FnMut(&MultiStartProgress),
-    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
-    interrupt: &(dyn Fn() -> bool + Sync),
+    observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     let kind = model_container(scene.container);
     let problem = Problem::<N>::new(axes.to_vec(), kind)?;
@@ -323,7 +320,7 @@ fn run_n<const N: usize>(
             .map_or(usize::MAX, |n| usize::try_from(n).unwrap_or(usize::MAX)),
         time_limit: Some(options.time_limit.unwrap_or(scene.solver.time_limit)),
     };
-    let result = multistart(axes, kind, &x0, &settings, progress, observe, interrupt)?;
+    let result = multistart(axes, kind, &x0, &settings, observer)?;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(&result.best.certificate);
     let mut summary = Summary::new(
@@ -651,14 +648,7 @@ mod tests {
             "t.toml",
         )
         .unwrap();
-        let out = run(
-            &scene,
-            &RunOptions::default(),
-            &mut |_| {},
-            &|_| {},
-            &|| false,
-        )
-        .unwrap();
+        let out = run(&scene, &RunOptions::default(), &mut ()).unwrap();
         assert!(out.summary.certificate.is_certified());
         assert!(out.summary.certificate.min_mu2.is_some_and(|m| m >= 1.0));
         assert_eq!(out.summary.local_minimisations, 2);
@@ -669,7 +659,7 @@ mod tests {
             resume_from: Some(out.packing.clone()),
             ..RunOptions::default()
         };
-        let out2 = run(&scene, &resumed, &mut |_| {}, &|_| {}, &|| false).unwrap();
+        let out2 = run(&scene, &resumed, &mut ()).unwrap();
         assert!(out2.summary.density >= out.summary.density * (1.0 - 1e-6));
     }
 

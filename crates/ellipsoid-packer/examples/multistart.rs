@@ -6,7 +6,7 @@
 //! never).
 
 use ellipsoid_packer::{
-    multistart::{MultiStartSettings, multistart},
+    multistart::{Callbacks, MultiStartProgress, MultiStartSettings, multistart},
     starts::paper_start,
 };
 use implicit_packing::containment::ContainerKind;
@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     settings.fresh_lattice_every = arg(10, "0").parse()?;
     settings.restart_after = arg(11, "0").parse()?;
     settings.time_limit = Some(Duration::from_secs_f64(seconds));
-    let mut report = |p: &ellipsoid_packer::multistart::MultiStartProgress| {
+    let mut report = Callbacks::on_finished(|p: &MultiStartProgress| {
         eprintln!(
             "{:4} local minimisations, {:7.1} s: last {:.5}, best {:.5}",
             p.local_minimisations,
@@ -45,15 +45,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             p.last_density,
             p.best_density
         );
-    };
+    });
     let r = if dim == 2 {
         let axes = vec![[2.0, 1.0]; m];
         let x0 = paper_start(&axes, kind)?;
-        multistart(&axes, kind, &x0, &settings, &mut report, &|_| {}, &|| false)?
+        multistart(&axes, kind, &x0, &settings, &mut report)?
     } else {
         let axes = vec![[1.0, 0.75, 0.5]; m];
         let x0 = paper_start(&axes, kind)?;
-        multistart(&axes, kind, &x0, &settings, &mut report, &|_| {}, &|| false)?
+        multistart(&axes, kind, &x0, &settings, &mut report)?
     };
     println!(
         "{dim}D m = {m} {kind:?}: best density {:.5} after {:.1} s ({} local minimisations, {} restarts, in {:.1} s, {threads} threads)",

@@ -128,6 +128,67 @@ pub struct MultiStartResult {
     pub start_kept: bool,
 }
 
+/// What a run tells its caller, and how the caller stops it. Every method has a default (tell
+/// nothing, never stop), so an observer implements only what it needs; `()` is the observer
+/// that does nothing, and [`Callbacks`] makes one of three closures.
+pub trait Observer: Sync {
+    /// After every finished local minimisation, on the calling thread.
+    fn finished(&mut self, _progress: &MultiStartProgress) {}
+    /// At every iteration of the solver inside a local minimisation, on any thread of the run.
+    fn iteration(&self, _progress: &SolverProgress<'_>) {}
+    /// Whether to stop now: asked at every iteration and between local minimisations, on any
+    /// thread. The run then returns its best certified packing.
+    fn should_stop(&self) -> bool {
+        false
+    }
+}
+
+impl Observer for () {}
+
+/// An [`Observer`] made of three closures.
+pub struct Callbacks<F, I, S> {
+    /// [`Observer::finished`].
+    pub finished: F,
+    /// [`Observer::iteration`].
+    pub iteration: I,
+    /// [`Observer::should_stop`].
+    pub should_stop: S,
+}
+
+/// The solver's report at each iteration (see [`Observer::iteration`]).
+pub use auglag::Progress as SolverProgress;
+
+impl<F> Callbacks<F, fn(&SolverProgress<'_>), fn() -> bool>
+where
+    F: FnMut(&MultiStartProgress) + Sync,
+{
+    /// An observer that hears only of finished local minimisations and never stops the run.
+    pub fn on_finished(finished: F) -> Self {
+        Callbacks {
+            finished,
+            iteration: |_| {},
+            should_stop: || false,
+        }
+    }
+}
+
+impl<F, I, S> Observer for Callbacks<F, I, S>
+where
+    F: FnMut(&MultiStartProgress) + Sync,
+    I: Fn(&SolverProgress<'_>) + Sync,
+    S: Fn() -> bool + Sync,
+{
+    fn finished(&mut self, progress: &MultiStartProgress) {
+        (self.finished)(progress);
+    }
+    fn iteration(&self, progress: &SolverProgress<'_>) {
+        (self.iteration)(progress);
+    }
+    fn should_stop(&self) -> bool {
+        (self.should_stop)()
+    }
+}
+
 /// Runs the multi-start from `x0` (for example [`lattice_start`], or a packing read back to
 /// resume a run). When `x0` is itself a certified packing it is the first best packing
 /// ([`certified_start`]): the result is never less dense than the start, and a run stopped
@@ -143,13 +204,10 @@ pub fn multistart<const N: usize>(
     kind: ContainerKind,
     x0: &[f64],
     settings: &MultiStartSettings,
-    progress: &mut dyn FnMut(&MultiStartProgress),
-    observe: &(dyn Fn(&auglag::Progress<'_>) + Sync),
-    interrupt: &(dyn Fn() -> bool + Sync),
+    observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
-    let stop = || interrupt() || out_of_time();
     let mut problem = Problem::<N>::new(semi_axes.to_vec(), kind)?;
     // A certified start is the first best packing: whatever happens to the first local
     // minimisation (cut off by the time limit at a point no dilation repairs, or ending worse
@@ -159,12 +217,12 @@ pub fn multistart<const N: usize>(
     let start_ready = start.elapsed();
     let mut failed_starts = 0;
     let mut done = 0;
-    let first = if stop() {
+    let first = if observer.should_stop() || out_of_time() {
         None
     } else {
         let result = local_minimisation(&mut problem, x0, &settings.local, &mut |p| {
-            observe(p);
-            stop()
+            observer.iteration(p);
+            observer.should_stop() || out_of_time()
         });
         match result {
             Ok(r) => Some(r),
@@ -180,7 +238,7 @@ pub fn multistart<const N: usize>(
         (Some(first), Some(given)) => {
             done = 1;
             let best_density = first.density.max(given.density);
-            progress(&MultiStartProgress {
+            observer.finished(&MultiStartProgress {
                 local_minimisations: done,
                 best_density,
                 last_density: first.density,
@@ -195,7 +253,7 @@ pub fn multistart<const N: usize>(
         }
         (Some(first), None) => {
             done = 1;
-            progress(&MultiStartProgress {
+            observer.finished(&MultiStartProgress {
                 local_minimisations: done,
                 best_density: first.density,
                 last_density: first.density,
@@ -223,12 +281,15 @@ pub fn multistart<const N: usize>(
     let mut chain = Chain::new(&first);
     let mut best = first;
     let threads = settings.threads.max(1);
-    while done < settings.max_local_minimisations && !stop() {
+    while done < settings.max_local_minimisations && !(observer.should_stop() || out_of_time()) {
         let round = threads.min(settings.max_local_minimisations - done);
         let started = (done + failed_starts + cut_off).max(1);
         let restart = settings.from_best
             && settings.restart_after > 0
             && chain.stale >= settings.restart_after;
+        // Shared with the round's threads; the calling thread hears of each result after it.
+        let shared: &dyn Observer = &*observer;
+        let out_of_time = &out_of_time;
         let results: Vec<Result<LocalResult, Error>> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..round)
                 .map(|k| {
@@ -253,12 +314,11 @@ pub fn multistart<const N: usize>(
                         ),
                     };
                     let local = &settings.local;
-                    let stop = &stop;
                     scope.spawn(move || {
                         let mut p = Problem::<N>::new(semi_axes.to_vec(), kind)?;
                         local_minimisation(&mut p, &x, local, &mut |progress| {
-                            observe(progress);
-                            stop()
+                            shared.iteration(progress);
+                            shared.should_stop() || out_of_time()
                         })
                     })
                 })
@@ -295,7 +355,7 @@ pub fn multistart<const N: usize>(
                 best = result.clone();
                 time_to_best = start.elapsed();
             }
-            progress(&MultiStartProgress {
+            observer.finished(&MultiStartProgress {
                 local_minimisations: done,
                 best_density: best.density,
                 last_density: result.density,
@@ -325,7 +385,7 @@ pub fn multistart<const N: usize>(
         restarts: chain.restarts,
         time_to_best,
         wall_time: start.elapsed(),
-        interrupted: interrupt(),
+        interrupted: observer.should_stop(),
     })
 }
 
@@ -411,16 +471,7 @@ mod tests {
             max_local_minimisations: 3,
             ..MultiStartSettings::paper(2, seed)
         };
-        multistart(
-            &axes,
-            ContainerKind::Ellipsoid,
-            &x0,
-            &settings,
-            &mut |_| {},
-            &|_| {},
-            &|| false,
-        )
-        .unwrap()
+        multistart(&axes, ContainerKind::Ellipsoid, &x0, &settings, &mut ()).unwrap()
     }
 
     #[test]
@@ -446,11 +497,9 @@ mod tests {
             ContainerKind::Ball,
             &x0,
             &settings,
-            &mut |p| {
+            &mut Callbacks::on_finished(|p: &MultiStartProgress| {
                 first.get_or_insert(p.last_density);
-            },
-            &|_| {},
-            &|| false,
+            }),
         )
         .unwrap();
         assert!(r.best.density >= first.unwrap());
@@ -490,9 +539,7 @@ mod tests {
             ContainerKind::Box,
             &x0,
             settings,
-            &mut |p| densities.push(p.last_density),
-            &|_| {},
-            &|| false,
+            &mut Callbacks::on_finished(|p: &MultiStartProgress| densities.push(p.last_density)),
         )
         .unwrap();
         (r, densities)
@@ -595,9 +642,11 @@ mod tests {
             ContainerKind::Ball,
             &x0,
             &MultiStartSettings::paper(2, 1),
-            &mut |_| {},
-            &|_| {},
-            &|| true,
+            &mut Callbacks {
+                finished: |_: &MultiStartProgress| {},
+                iteration: |_: &SolverProgress<'_>| {},
+                should_stop: || true,
+            },
         )
         .unwrap();
         assert!(r.interrupted && r.local_minimisations == 0);
@@ -617,11 +666,13 @@ mod tests {
             ContainerKind::Ball,
             &x0,
             &MultiStartSettings::paper(2, 1),
-            &mut |_| {},
-            &|_| {
-                calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            &mut Callbacks {
+                finished: |_: &MultiStartProgress| {},
+                iteration: |_: &SolverProgress<'_>| {
+                    calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                },
+                should_stop: || calls.load(std::sync::atomic::Ordering::SeqCst) > 0,
             },
-            &|| calls.load(std::sync::atomic::Ordering::SeqCst) > 0,
         )
         .unwrap();
         let start = r.start_density.unwrap();
