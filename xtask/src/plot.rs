@@ -98,7 +98,8 @@ static FONT: OnceLock<bool> = OnceLock::new();
 /// registration is an error before any drawing starts.
 fn register_font(path: &Path) -> Result<(), Error> {
     let ok = *FONT.get_or_init(|| {
-        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+        let bytes: &'static [u8] =
+            include_bytes!("../../crates/ellipack/assets/fonts/DejaVuSans.ttf");
         plotters::style::register_font(FONT_NAME, FontStyle::Normal, bytes).is_ok()
     });
     if ok {
@@ -106,7 +107,7 @@ fn register_font(path: &Path) -> Result<(), Error> {
     } else {
         Err(Error::Plot {
             path: path.to_path_buf(),
-            message: "the embedded font assets/fonts/DejaVuSans.ttf could not be registered".into(),
+            message: "the embedded font crates/ellipack/assets/fonts/DejaVuSans.ttf could not be registered".into(),
         })
     }
 }

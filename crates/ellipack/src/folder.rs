@@ -24,12 +24,15 @@
 //! output folder still sees the old, removed folder until it changes into it again.
 
 use crate::packing::{CSV_FILE, SUMMARY_FILE, XYZ_FILE};
-use crate::render::{PNG_FILE, SVG_FILE};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 /// The file name of the per-run history table.
 pub const HISTORY_FILE: &str = "history.csv";
+/// The file name of the SVG picture (drawn by `render` with the `pictures` feature).
+pub const SVG_FILE: &str = "packing.svg";
+/// The file name of the PNG picture (drawn by `render` with the `pictures` feature).
+pub const PNG_FILE: &str = "packing.png";
 
 /// Every file `ellipack pack` writes into an output folder. Anything else there belongs to the
 /// user and is kept.

@@ -1,5 +1,12 @@
 //! The parts of the `ellipack` command that a person touches — file formats, error messages,
 //! atomic output — as a library, so that `cargo xtask` and tests reuse them.
+//!
+//! # Features
+//! * `cli` (default): the `ellipack` program. It brings clap, indicatif and ctrlc, which a
+//!   library user does not need: depend on `ellipack` with `default-features = false`.
+//! * `pictures` (default, implied by `cli`): the `render` module, which draws packing.svg
+//!   and packing.png with plotters. Without it the module is absent; the file names stay in
+//!   [`folder`].
 #![deny(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
@@ -11,6 +18,7 @@ pub mod output;
 pub mod pack;
 pub mod packing;
 pub mod pairs;
+#[cfg(feature = "pictures")]
 pub mod render;
 pub mod scene;
 pub mod table;

@@ -19,14 +19,11 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
 
-/// The file name of the SVG picture.
-pub const SVG_FILE: &str = "packing.svg";
-/// The file name of the PNG picture.
-pub const PNG_FILE: &str = "packing.png";
+pub use crate::folder::{PNG_FILE, SVG_FILE};
 
 /// The font of every label (DejaVu Sans, embedded: plotters has no system font loader in this
 /// build, and text without a registered font panics).
-const FONT_BYTES: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+const FONT_BYTES: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 const FONT: &str = "sans-serif";
 
 /// What to draw besides the packing.
