@@ -268,27 +268,32 @@ fn outcomes(
     layout: Layout,
     criterion: Criterion,
 ) -> Vec<Result<Outcome, pw85::Error>> {
-    use pw85::batch;
-    fn wrap<T>(
-        results: Vec<Result<T, pw85::Error>>,
-        f: fn(T) -> Outcome,
+    use pw85::batch::{BatchPair, Parallelism, contact_functions, overlaps};
+    fn outcomes<P: BatchPair>(
+        pairs: &[P],
+        criterion: Criterion,
     ) -> Vec<Result<Outcome, pw85::Error>> {
-        results.into_iter().map(|r| r.map(f)).collect()
+        match criterion {
+            Criterion::Contact => {
+                let mut out = vec![Ok(pw85::batch::EMPTY_CONTACT); pairs.len()];
+                contact_functions(pairs, &mut out, Parallelism::Serial);
+                out.into_iter().map(|r| r.map(Outcome::Contact)).collect()
+            }
+            Criterion::Overlap => {
+                let mut out = vec![Ok(false); pairs.len()];
+                overlaps(pairs, &mut out, Parallelism::Serial);
+                out.into_iter().map(|r| r.map(Outcome::Verdict)).collect()
+            }
+        }
     }
     match layout {
         Layout::ThreeD => {
             let pairs: Vec<Pair> = values.iter().map(|v| pair_3d(v)).collect();
-            match criterion {
-                Criterion::Contact => wrap(batch::contact_functions(&pairs), Outcome::Contact),
-                Criterion::Overlap => wrap(batch::overlaps(&pairs), Outcome::Verdict),
-            }
+            outcomes(&pairs, criterion)
         }
         Layout::TwoD => {
             let pairs: Vec<Pair2d> = values.iter().map(|v| pair_2d(v)).collect();
-            match criterion {
-                Criterion::Contact => wrap(batch::contact_functions_2d(&pairs), Outcome::Contact),
-                Criterion::Overlap => wrap(batch::overlaps_2d(&pairs), Outcome::Verdict),
-            }
+            outcomes(&pairs, criterion)
         }
     }
 }

@@ -2,7 +2,7 @@
 //! `rayon` feature.
 //!
 //! The λ iteration of one pair is a chain of dependent operations (one division per step), so
-//! a single call spends much of its time waiting on latency. [`contact_functions_into`]
+//! a single call spends much of its time waiting on latency. [`contact_functions`]
 //! advances the iterations of four independent pairs in lock-step, and computes the
 //! coefficients, the normalisation, the orientation, μ² and its error estimate for the four
 //! pairs at once (one 256-bit register per quantity); only validation, the rare refinement
@@ -77,58 +77,6 @@ fn each<P, R>(pairs: &[P], out: &mut [R], one: impl Fn(&P) -> R) {
     }
 }
 
-/// `run` on chunks of 1024 pairs, on all cores (rayon).
-#[cfg(feature = "rayon")]
-fn par_chunked<P: Sync, R: Send>(
-    pairs: &[P],
-    out: &mut [R],
-    run: impl Fn(&[P], &mut [R]) + Sync + Send,
-) {
-    use rayon::prelude::*;
-    assert!(
-        out.len() >= pairs.len(),
-        "output slice shorter than the input"
-    );
-    pairs
-        .par_chunks(1024)
-        .zip(out.par_chunks_mut(1024))
-        .for_each(|(p, o)| run(p, o));
-}
-
-/// [`crate::contact_function`] for every pair, into `out[i]` for `pairs[i]`.
-///
-/// # Panics
-/// If `out` is shorter than `pairs` (a programming error, not a data error).
-pub fn contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    by_fours(pairs, out, contact_x4, |p| {
-        crate::contact_function(&p.r12, &p.q1, &p.q2)
-    });
-}
-
-/// [`crate::contact_function`] for every pair.
-pub fn contact_functions(pairs: &[Pair]) -> Vec<Result<Contact, Error>> {
-    let mut out = vec![Ok(EMPTY_CONTACT); pairs.len()];
-    contact_functions_into(pairs, &mut out);
-    out
-}
-
-/// [`crate::overlap`] for every pair, into `out[i]` for `pairs[i]`. The verdict usually stops
-/// after one or two evaluations, so there is little latency to hide and this is a plain loop.
-///
-/// # Panics
-/// If `out` is shorter than `pairs`.
-pub fn overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
-    each(pairs, out, |p| crate::overlap(&p.r12, &p.q1, &p.q2));
-}
-
-/// [`crate::overlap`] for every pair.
-pub fn overlaps(pairs: &[Pair]) -> Vec<Result<bool, Error>> {
-    pairs
-        .iter()
-        .map(|p| crate::overlap(&p.r12, &p.q1, &p.q2))
-        .collect()
-}
-
 /// One pair of ellipses: r12 = c2 − c1 and the two quadratic forms (Q11, Q12, Q22).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pair2d {
@@ -140,65 +88,108 @@ pub struct Pair2d {
     pub q2: Sym2,
 }
 
-/// [`crate::contact_function_2d`] for every pair, into `out[i]` for `pairs[i]`: four pairs
-/// at a time, as [`contact_functions_into`] (the ellipses' coefficients are degree-elevated
-/// to the same Bernstein form, so the four-lane solve is shared). The results are identical
-/// to the scalar function's.
+/// Where a batch runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Parallelism {
+    /// On the calling thread.
+    #[default]
+    Serial,
+    /// On all cores, in chunks of 1024 pairs (with the `rayon` feature; without it, on the
+    /// calling thread).
+    Threads,
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::Pair {}
+    impl Sealed for super::Pair2d {}
+}
+
+/// A pair the batch functions take: [`Pair`] (two ellipsoids) or [`Pair2d`] (two ellipses).
+/// The dimension is the pair's type: one set of functions serves both.
+pub trait BatchPair: sealed::Sealed + Sync + Sized {
+    /// The contact functions of `pairs` into `out`, on the calling thread.
+    #[doc(hidden)]
+    fn contacts(pairs: &[Self], out: &mut [Result<Contact, Error>]);
+    /// The verdicts of `pairs` into `out`, on the calling thread.
+    #[doc(hidden)]
+    fn verdicts(pairs: &[Self], out: &mut [Result<bool, Error>]);
+}
+
+impl BatchPair for Pair {
+    fn contacts(pairs: &[Self], out: &mut [Result<Contact, Error>]) {
+        by_fours(pairs, out, contact_x4, |p| {
+            crate::contact_function(&p.r12, &p.q1, &p.q2)
+        });
+    }
+    fn verdicts(pairs: &[Self], out: &mut [Result<bool, Error>]) {
+        each(pairs, out, |p| crate::overlap(&p.r12, &p.q1, &p.q2));
+    }
+}
+
+impl BatchPair for Pair2d {
+    fn contacts(pairs: &[Self], out: &mut [Result<Contact, Error>]) {
+        by_fours(pairs, out, contact_x4_2d, |p| {
+            crate::contact_function_2d(&p.r12, &p.q1, &p.q2)
+        });
+    }
+    fn verdicts(pairs: &[Self], out: &mut [Result<bool, Error>]) {
+        each(pairs, out, |p| crate::overlap_2d(&p.r12, &p.q1, &p.q2));
+    }
+}
+
+/// `run` on the calling thread, or on all cores in chunks of 1024 pairs.
+fn split<P: Sync, R: Send>(
+    pairs: &[P],
+    out: &mut [R],
+    parallelism: Parallelism,
+    run: impl Fn(&[P], &mut [R]) + Sync + Send,
+) {
+    assert!(
+        out.len() >= pairs.len(),
+        "output slice shorter than the input"
+    );
+    match parallelism {
+        #[cfg(feature = "rayon")]
+        Parallelism::Threads => {
+            use rayon::prelude::*;
+            pairs
+                .par_chunks(1024)
+                .zip(out.par_chunks_mut(1024))
+                .for_each(|(p, o)| run(p, o));
+        }
+        _ => run(pairs, out),
+    }
+}
+
+/// The contact function ([`crate::contact_function`], [`crate::contact_function_2d`]) of every
+/// pair, into `out[i]` for `pairs[i]`: four pairs at a time, in lock-step (the results are the
+/// scalar function's, to the bit), on the calling thread or on all cores. The ellipses'
+/// coefficients are degree-elevated to the same Bernstein form, so both dimensions share the
+/// four-lane solve.
 ///
 /// # Panics
 /// If `out` is shorter than `pairs` (a programming error, not a data error).
-pub fn contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
-    by_fours(pairs, out, contact_x4_2d, |p| {
-        crate::contact_function_2d(&p.r12, &p.q1, &p.q2)
-    });
+pub fn contact_functions<P: BatchPair>(
+    pairs: &[P],
+    out: &mut [Result<Contact, Error>],
+    parallelism: Parallelism,
+) {
+    split(pairs, out, parallelism, P::contacts);
 }
 
-/// [`crate::contact_function_2d`] for every pair.
-pub fn contact_functions_2d(pairs: &[Pair2d]) -> Vec<Result<Contact, Error>> {
-    let mut out = vec![Ok(EMPTY_CONTACT); pairs.len()];
-    contact_functions_2d_into(pairs, &mut out);
-    out
-}
-
-/// [`crate::overlap_2d`] for every pair, into `out[i]` for `pairs[i]` (a plain loop, as
-/// [`overlaps_into`]).
+/// The verdict ([`crate::overlap`], [`crate::overlap_2d`]) of every pair, into `out[i]` for
+/// `pairs[i]`. The verdict usually stops after one or two evaluations, so there is little
+/// latency to hide: each chunk is a plain loop.
 ///
 /// # Panics
 /// If `out` is shorter than `pairs`.
-pub fn overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
-    each(pairs, out, |p| crate::overlap_2d(&p.r12, &p.q1, &p.q2));
-}
-
-/// [`crate::overlap_2d`] for every pair.
-pub fn overlaps_2d(pairs: &[Pair2d]) -> Vec<Result<bool, Error>> {
-    pairs
-        .iter()
-        .map(|p| crate::overlap_2d(&p.r12, &p.q1, &p.q2))
-        .collect()
-}
-
-/// [`contact_functions_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
-#[cfg(feature = "rayon")]
-pub fn par_contact_functions_2d_into(pairs: &[Pair2d], out: &mut [Result<Contact, Error>]) {
-    par_chunked(pairs, out, contact_functions_2d_into);
-}
-
-/// [`overlaps_2d_into`] on all cores (rayon), in chunks of 1024 pairs.
-#[cfg(feature = "rayon")]
-pub fn par_overlaps_2d_into(pairs: &[Pair2d], out: &mut [Result<bool, Error>]) {
-    par_chunked(pairs, out, overlaps_2d_into);
-}
-
-/// [`contact_functions_into`] on all cores (rayon), in chunks of 1024 pairs.
-#[cfg(feature = "rayon")]
-pub fn par_contact_functions_into(pairs: &[Pair], out: &mut [Result<Contact, Error>]) {
-    par_chunked(pairs, out, contact_functions_into);
-}
-
-/// [`overlaps_into`] on all cores (rayon), in chunks of 1024 pairs.
-#[cfg(feature = "rayon")]
-pub fn par_overlaps_into(pairs: &[Pair], out: &mut [Result<bool, Error>]) {
-    par_chunked(pairs, out, overlaps_into);
+pub fn overlaps<P: BatchPair>(
+    pairs: &[P],
+    out: &mut [Result<bool, Error>],
+    parallelism: Parallelism,
+) {
+    split(pairs, out, parallelism, P::verdicts);
 }
 
 multiversion! {
@@ -443,6 +434,18 @@ fn solve_x4<const FMA: bool>(
 mod tests {
     use super::*;
 
+    fn contacts<P: BatchPair>(pairs: &[P]) -> Vec<Result<Contact, Error>> {
+        let mut out = vec![Ok(EMPTY_CONTACT); pairs.len()];
+        contact_functions(pairs, &mut out, Parallelism::Serial);
+        out
+    }
+
+    fn verdicts<P: BatchPair>(pairs: &[P]) -> Vec<Result<bool, Error>> {
+        let mut out = vec![Ok(false); pairs.len()];
+        overlaps(pairs, &mut out, Parallelism::Serial);
+        out
+    }
+
     /// Lanes at scales where the largest α or β is subnormal or beyond 2¹⁰²³ (their
     /// normalisation takes the other branch of the power of two, and they are refined),
     /// mixed with ordinary lanes in one chunk: still the scalar function's bits.
@@ -463,7 +466,7 @@ mod tests {
             let t = i as f64;
             pairs.push(scaled(k, [0.9 + 0.1 * t, -0.3, 0.2 * t]));
         }
-        let batch = contact_functions(&pairs);
+        let batch = contacts(&pairs);
         let mut other_branch = 0;
         for (p, b) in pairs.iter().zip(&batch) {
             let s = crate::contact_function(&p.r12, &p.q1, &p.q2);
@@ -506,13 +509,13 @@ mod tests {
             }
             pairs.push(Pair { r12, q1, q2 });
         }
-        let batch = contact_functions(&pairs);
+        let batch = contacts(&pairs);
         for (p, b) in pairs.iter().zip(&batch) {
             let s = crate::contact_function(&p.r12, &p.q1, &p.q2);
             // Debug text, not ==: the NaN carried by a NonFinite error is not equal to itself.
             assert_eq!(format!("{s:?}"), format!("{b:?}"));
         }
-        let verdicts = overlaps(&pairs);
+        let verdicts = verdicts(&pairs);
         for (p, v) in pairs.iter().zip(&verdicts) {
             assert_eq!(
                 format!("{:?}", crate::overlap(&p.r12, &p.q1, &p.q2)),
@@ -606,13 +609,13 @@ mod parallel_tests {
             .collect();
         let mut seq = vec![Ok(EMPTY_CONTACT); pairs.len()];
         let mut par = vec![Ok(EMPTY_CONTACT); pairs.len()];
-        contact_functions_into(&pairs, &mut seq);
-        par_contact_functions_into(&pairs, &mut par);
+        contact_functions(&pairs, &mut seq, Parallelism::Serial);
+        contact_functions(&pairs, &mut par, Parallelism::Threads);
         assert_eq!(seq, par);
         let mut vs = vec![Ok(false); pairs.len()];
         let mut vp = vec![Ok(false); pairs.len()];
-        overlaps_into(&pairs, &mut vs);
-        par_overlaps_into(&pairs, &mut vp);
+        overlaps(&pairs, &mut vs, Parallelism::Serial);
+        overlaps(&pairs, &mut vp, Parallelism::Threads);
         assert_eq!(vs, vp);
         assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
 
@@ -627,13 +630,13 @@ mod parallel_tests {
             .collect();
         let mut seq = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
         let mut par = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
-        contact_functions_2d_into(&pairs_2d, &mut seq);
-        par_contact_functions_2d_into(&pairs_2d, &mut par);
+        contact_functions(&pairs_2d, &mut seq, Parallelism::Serial);
+        contact_functions(&pairs_2d, &mut par, Parallelism::Threads);
         assert_eq!(seq, par);
         let mut vs = vec![Ok(false); pairs_2d.len()];
         let mut vp = vec![Ok(false); pairs_2d.len()];
-        overlaps_2d_into(&pairs_2d, &mut vs);
-        par_overlaps_2d_into(&pairs_2d, &mut vp);
+        overlaps(&pairs_2d, &mut vs, Parallelism::Serial);
+        overlaps(&pairs_2d, &mut vp, Parallelism::Threads);
         assert_eq!(vs, vp);
         assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
     }

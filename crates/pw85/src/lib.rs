@@ -19,14 +19,15 @@
 //!   normal and the gradient of μ².
 //! - [`overlap`] — the verdict alone, stopping as soon as it is certain.
 //! - [`contact_function_2d`], [`overlap_2d`] — the same for ellipses.
-//! - [`batch`] — slices of pairs, four at a time, and on all cores with the `rayon` feature.
+//! - [`batch`] — slices of pairs of either dimension, four at a time, on one thread or on all
+//!   cores (`Parallelism`; feature `rayon`).
 //! - [`shape`] — quadratic forms from semi-axes and a rotation (quaternion, matrix, the angles
 //!   of Birgin–Lobato–Martínez eq. 2) or a spheroid's axis.
-//! - [`sym`], [`poly`] — the building blocks (determinant, adjugate, the polynomials a, b, c of
-//!   eqs. 16–20, f and its derivatives).
 //! - `interop` (feature `nalgebra`) — conversions from and to nalgebra matrices.
-//! - [`baseline`] — the straightforward solvers (bisection on c(λ) as in PW85, Brent on f,
-//!   Newton on f′) for comparisons.
+//! - `sym`, `poly`, `baseline` (feature `internals`, outside the semver promise) — the
+//!   building blocks (determinant, adjugate, the polynomials a, b, c of eqs. 16–20) and the
+//!   straightforward solvers (bisection on c(λ) as in PW85, Brent on f, Newton on f′) that the
+//!   validation compares against.
 //!
 //! ```
 //! use pw85::{contact_function, overlap, shape::from_axes_quaternion};
@@ -50,7 +51,11 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 mod arith;
+#[cfg(feature = "internals")]
 pub mod baseline;
+#[cfg(not(feature = "internals"))]
+#[allow(dead_code)]
+mod baseline;
 pub mod batch;
 mod contact;
 mod dispatch;
@@ -60,9 +65,17 @@ mod extreme;
 pub mod interop;
 mod lanes;
 mod overlap;
+#[cfg(feature = "internals")]
 pub mod poly;
+#[cfg(not(feature = "internals"))]
+#[allow(dead_code)]
+mod poly;
 pub mod shape;
+#[cfg(feature = "internals")]
 pub mod sym;
+#[cfg(not(feature = "internals"))]
+#[allow(dead_code)]
+mod sym;
 
 pub use contact::{
     Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function, contact_function_2d,

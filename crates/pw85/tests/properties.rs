@@ -447,7 +447,7 @@ fn halley_does_not_stop_where_the_derivative_vanishes() {
     for lane in 0..4 {
         let mut chunk = [other; 4];
         chunk[lane] = pw85::batch::Pair { r12: r, q1, q2 };
-        let batch = pw85::batch::contact_functions(&chunk);
+        let batch = contacts(&chunk);
         assert_eq!(
             format!("{:?}", batch[lane]),
             format!("{:?}", Ok::<_, Error>(c))
@@ -529,8 +529,8 @@ fn batch_2d_equals_scalar_bit_for_bit() {
             pw85::batch::Pair2d { r12, q1, q2 }
         })
         .collect();
-    let batch = pw85::batch::contact_functions_2d(&pairs);
-    let verdicts = pw85::batch::overlaps_2d(&pairs);
+    let batch = contacts(&pairs);
+    let verdicts = verdicts(&pairs);
     let (mut refined, mut errors) = (0, 0);
     for ((p, b), v) in pairs.iter().zip(&batch).zip(&verdicts) {
         let s = contact_function_2d(&p.r12, &p.q1, &p.q2);
@@ -567,7 +567,7 @@ fn batch_equals_scalar_bit_for_bit_on_extreme_pairs() {
             }
         })
         .collect();
-    let batch = pw85::batch::contact_functions(&pairs);
+    let batch = contacts(&pairs);
     let mut refined = 0;
     for (p, b) in pairs.iter().zip(&batch) {
         let s = contact_function(&p.r12, &p.q1, &p.q2);
@@ -740,9 +740,9 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
     // Most scalings keep every input bit (the others are skipped above).
     assert!(pairs.len() > 2000, "{} scaled pairs", pairs.len());
     // The batches: the scalar function's bits, lane by lane, whatever their neighbours.
-    let batch = pw85::batch::contact_functions(&pairs);
-    let batch_2d = pw85::batch::contact_functions_2d(&pairs_2d);
-    let verdicts = pw85::batch::overlaps(&pairs);
+    let batch = contacts(&pairs);
+    let batch_2d = contacts(&pairs_2d);
+    let verdicts = verdicts(&pairs);
     for (k, p) in pairs.iter().enumerate() {
         let scalar = contact_function(&p.r12, &p.q1, &p.q2).unwrap();
         let lane = batch[k].unwrap();
@@ -953,4 +953,18 @@ proptest! {
             prop_assert_eq!(v, c.mu2 < 1.0);
         }
     }
+}
+
+/// The batch's contact functions of `pairs` (on the calling thread).
+fn contacts<P: pw85::batch::BatchPair>(pairs: &[P]) -> Vec<Result<pw85::Contact, Error>> {
+    let mut out = vec![Ok(pw85::batch::EMPTY_CONTACT); pairs.len()];
+    pw85::batch::contact_functions(pairs, &mut out, pw85::batch::Parallelism::Serial);
+    out
+}
+
+/// The batch's verdicts of `pairs` (on the calling thread).
+fn verdicts<P: pw85::batch::BatchPair>(pairs: &[P]) -> Vec<Result<bool, Error>> {
+    let mut out = vec![Ok(false); pairs.len()];
+    pw85::batch::overlaps(pairs, &mut out, pw85::batch::Parallelism::Serial);
+    out
 }
