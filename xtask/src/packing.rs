@@ -15,7 +15,7 @@ use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Problem;
 use std::time::Duration;
 
-fn refused(e: implicit_packing::Error) -> Error {
+fn refused(e: impl std::fmt::Display) -> Error {
     Error::Implicit {
         context: "the packing study".into(),
         message: e.to_string(),

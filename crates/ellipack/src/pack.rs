@@ -24,9 +24,12 @@ use std::time::Duration;
 /// Why a run or a check failed.
 #[derive(Debug, thiserror::Error)]
 pub enum PackError {
-    /// The model or the solver refused the problem.
+    /// The model refused the problem.
     #[error("{0}")]
     Model(#[from] implicit_packing::Error),
+    /// The packer could not give a certified packing.
+    #[error("{0}")]
+    Packer(#[from] ellipsoid_packer::Error),
     /// A packing file could not be read or written.
     #[error("{0}")]
     Packing(#[from] PackingError),

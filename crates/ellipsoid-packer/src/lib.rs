@@ -21,7 +21,7 @@
 //! let result = local_minimisation(&mut problem, &x0, &LocalSettings::default(), &mut |_| false)?;
 //! assert!(result.certificate.is_feasible());
 //! assert!(result.density > 0.5);
-//! # Ok::<(), implicit_packing::Error>(())
+//! # Ok::<(), ellipsoid_packer::Error>(())
 //! ```
 //!
 //! # References
@@ -30,8 +30,9 @@
 #![deny(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
+mod error;
 pub mod local;
 pub mod multistart;
 pub mod starts;
 
-pub use implicit_packing::Error;
+pub use error::Error;

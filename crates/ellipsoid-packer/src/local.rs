@@ -24,8 +24,8 @@
 //!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6 (initial
 //!   solutions, Algencan).
 
+use crate::Error;
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
-use implicit_packing::Error;
 use implicit_packing::model::{Certificate, ModelGradient, Problem};
 use std::cell::RefCell;
 
@@ -110,11 +110,12 @@ pub fn local_minimisation<const N: usize>(
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<LocalResult, Error> {
     if x0.len() != problem.var_count() {
-        return Err(Error::LengthMismatch {
+        return Err(implicit_packing::Error::LengthMismatch {
             what: "initial point",
             expected: problem.var_count(),
             found: x0.len(),
-        });
+        }
+        .into());
     }
     problem.evaluate(x0, None)?;
     let mut interrupted = false;
@@ -138,7 +139,7 @@ pub fn local_minimisation<const N: usize>(
                 Control::Continue
             }
         })
-        .map_err(|e| Error::Solver(e.to_string()))
+        .map_err(Error::Solver)
     };
     let first = solve(problem, x0, settings.feasibility_tolerance)?;
     let mut best = certified(problem, first)?;
@@ -172,11 +173,12 @@ pub fn certified_start<const N: usize>(
     x: &[f64],
 ) -> Result<Result<LocalResult, Certificate>, Error> {
     if x.len() != problem.var_count() {
-        return Err(Error::LengthMismatch {
+        return Err(implicit_packing::Error::LengthMismatch {
             what: "initial point",
             expected: problem.var_count(),
             found: x.len(),
-        });
+        }
+        .into());
     }
     let certificate = problem.certify(x)?;
     if !certificate.is_feasible() {
@@ -285,12 +287,11 @@ pub fn repair<const N: usize>(
         lo = s;
         s = 1.0 + 2.0 * (s - 1.0).max(1e-9);
         if s > MAX_DILATION {
-            return Err(Error::Solver(format!(
-                "the solver's point cannot be certified by a dilation up to {MAX_DILATION}: \
-                 {} overlapping pairs, {} items outside the container",
-                cert.overlapping.len(),
-                cert.outside.len()
-            )));
+            return Err(Error::NotCertifiable {
+                max_dilation: MAX_DILATION,
+                overlapping: cert.overlapping.len(),
+                outside: cert.outside.len(),
+            });
         }
         y = dilate::<N>(problem, x, s);
         cert = problem.certify(&y)?;

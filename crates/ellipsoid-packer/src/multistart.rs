@@ -27,9 +27,9 @@
 //! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
 //!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6.
 
+use crate::Error;
 use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
 use crate::starts::{LatticeStart, lattice_start_of, perturb};
-use implicit_packing::Error;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Problem;
 use std::time::{Duration, Instant};
@@ -268,11 +268,7 @@ pub fn multistart<const N: usize>(
         (None, None) => {
             // Only reachable when the start is not certified and the run was stopped before
             // its first local minimisation: nothing certified exists to return.
-            return Err(Error::Solver(
-                "stopped before the first local minimisation, and the start is not a \
-                 certified packing"
-                    .into(),
-            ));
+            return Err(Error::StoppedBeforeStart);
         }
     };
     let mut current = first.x.clone();
@@ -325,10 +321,7 @@ pub fn multistart<const N: usize>(
                 .collect();
             handles
                 .into_iter()
-                .map(|h| {
-                    h.join()
-                        .unwrap_or_else(|_| Err(Error::Solver("a start panicked".into())))
-                })
+                .map(|h| h.join().unwrap_or(Err(Error::StartPanicked)))
                 .collect()
         });
         let mut round_best: Option<LocalResult> = None;

@@ -33,7 +33,7 @@
 //! - J. H. Conway, N. J. A. Sloane, *Sphere Packings, Lattices and Groups*, 3rd ed., Springer
 //!   1999, chapter 1 (the hexagonal and face-centred cubic lattices).
 
-use implicit_packing::Error;
+use crate::Error;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Problem;
 

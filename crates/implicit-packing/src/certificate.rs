@@ -112,7 +112,7 @@ pub fn certify<const N: usize>(
         let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
         let grid = cell_grid::Grid::<N>::with_radii(&radii)
             .build(&centres)
-            .map_err(|e| Error::Grid(e.to_string()))?;
+            .map_err(Error::Grid)?;
         let mut failure = None;
         grid.for_each_close_pair(|i, j, _, _| {
             cert.pairs_checked += 1;
@@ -129,7 +129,7 @@ pub fn certify<const N: usize>(
                 Err(e) => {
                     failure.get_or_insert(Error::Certification {
                         pair: (i, j),
-                        message: e.to_string(),
+                        source: e,
                     });
                 }
             }

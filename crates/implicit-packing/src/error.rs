@@ -79,15 +79,13 @@ pub enum Error {
     /// The problem has no item.
     Empty,
     /// The neighbour grid rejected the input.
-    Grid(String),
-    /// The optimiser refused the problem, or a packing could not be repaired.
-    Solver(String),
+    Grid(cell_grid::Error),
     /// The PW85 contact function rejected a pair during certification.
     Certification {
         /// The pair `(i, j)`.
         pair: (usize, usize),
-        /// PW85's message.
-        message: String,
+        /// PW85's refusal.
+        source: pw85::Error,
     },
 }
 
@@ -188,19 +186,26 @@ impl fmt::Display for Error {
                 "pair {pair} is ({i}, {j}), but there are only {len} items"
             ),
             Error::Empty => write!(f, "the problem has no item"),
-            Error::Grid(ref msg) => write!(f, "neighbour grid: {msg}"),
-            Error::Solver(ref msg) => write!(f, "solver: {msg}"),
+            Error::Grid(ref e) => write!(f, "neighbour grid: {e}"),
             Error::Certification {
                 pair: (i, j),
-                ref message,
+                ref source,
             } => {
-                write!(f, "certification of items {i} and {j}: {message}")
+                write!(f, "certification of items {i} and {j}: {source}")
             }
         }
     }
 }
 
-impl std::error::Error for Error {}
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Grid(e) => Some(e),
+            Error::Certification { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
 
 #[cfg(test)]
 mod tests {

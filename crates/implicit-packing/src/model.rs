@@ -597,7 +597,7 @@ impl<const N: usize> Problem<N> {
 
 /// The model's error for a failure of the neighbour search.
 fn grid_error(e: cell_grid::Error) -> Error {
-    Error::Grid(e.to_string())
+    Error::Grid(e)
 }
 
 /// The pair list and the centres it is queried at.

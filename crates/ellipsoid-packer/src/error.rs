@@ -1,0 +1,36 @@
+//! The crate's error type.
+
+/// Why a packing run could not give a certified packing.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The model refused the items, the container or a point (see its message).
+    #[error(transparent)]
+    Model(#[from] implicit_packing::Error),
+    /// The augmented-Lagrangian solver refused the problem.
+    #[error("solver: {0}")]
+    Solver(#[from] auglag::Error),
+    /// The solver's point could not be certified by any dilation up to `max_dilation` (an
+    /// item's centre outside the container is never repaired by dilation).
+    #[error(
+        "the solver's point cannot be certified by a dilation up to {max_dilation}: \
+         {overlapping} overlapping pairs, {outside} items outside the container"
+    )]
+    NotCertifiable {
+        /// The largest dilation tried.
+        max_dilation: f64,
+        /// Overlapping pairs at that dilation.
+        overlapping: usize,
+        /// Items outside the container at that dilation.
+        outside: usize,
+    },
+    /// The run was stopped before its first local minimisation, and its start is not a
+    /// certified packing: nothing certified exists to return.
+    #[error(
+        "stopped before the first local minimisation, and the start is not a certified packing"
+    )]
+    StoppedBeforeStart,
+    /// A thread of the run panicked (a bug: please report it with the scene).
+    #[error("a start of the multi-start panicked")]
+    StartPanicked,
+}
