@@ -60,7 +60,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
 
     // (a) Reference categories.
     run.say("  reference categories");
-    let cases = reference::contact_cases(&run.root)?;
+    let cases = reference::contact_cases()?;
     let mut by_cat: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut wrong_verdicts = vec![0usize; methods.len() + 1];
     // The largest |μ² − 1| at which each method gave a wrong verdict.
@@ -113,7 +113,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     // The implicit criterion on its own reference file.
     let mut blm_cats: BTreeMap<String, (f64, f64)> = BTreeMap::new();
     if with_implicit {
-        for c in reference::blm_3d(&run.root)? {
+        for c in reference::blm_3d()? {
             let t = implicit::term(&c.pair)?;
             let e = blm_cats.entry(c.category.clone()).or_default();
             worst(
@@ -121,7 +121,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 scaled_error(t.u, c.u).max(scaled_error(t.d2, c.d2)),
             );
         }
-        for c in reference::blm_2d(&run.root)? {
+        for c in reference::blm_2d()? {
             let (i, j) = implicit::ellipses(&c.pair)?;
             let t = implicit::term_of(&i, &j);
             let e = blm_cats.entry(c.category.clone()).or_default();

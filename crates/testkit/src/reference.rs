@@ -63,7 +63,10 @@ fn minus_one(digits: &str, rounded: f64) -> f64 {
     {
         // 9.d₁…dₙe-1 − 1 = −(1 − 0.d₁…dₙ)/10, and 1 − 0.d₁…dₙ = 0.(9−d₁)…(9−dₙ) + 10⁻ⁿ:
         // complementing digit by digit avoids the cancellation of the subtraction.
-        let complement: String = rest.bytes().map(|c| char::from(b'9' - (c - b'0'))).collect();
+        let complement: String = rest
+            .bytes()
+            .map(|c| char::from(b'9' - (c - b'0')))
+            .collect();
         if let Ok(v) = format!("0.{complement}").parse::<f64>() {
             let last = 10f64.powi(-(rest.len() as i32));
             return -(v + last) / 10.0;

@@ -51,7 +51,11 @@ pub fn ellipsoid_form(axes: [f64; 3], q: [f64; 4]) -> [f64; 6] {
 pub fn ellipse_form(axes: [f64; 2], theta: f64) -> [f64; 3] {
     let (s, c) = theta.sin_cos();
     let (a2, b2) = (axes[0] * axes[0], axes[1] * axes[1]);
-    [c * c * a2 + s * s * b2, c * s * (a2 - b2), s * s * a2 + c * c * b2]
+    [
+        c * c * a2 + s * s * b2,
+        c * s * (a2 - b2),
+        s * s * a2 + c * c * b2,
+    ]
 }
 
 /// The upper triangle of a symmetric 3 × 3 matrix, row by row (the storage of the forms).

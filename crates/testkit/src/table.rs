@@ -268,7 +268,10 @@ mod tests {
         assert_eq!(e.to_string(), "t.csv: line 2: 1 fields, the header has 2");
         let e = Table::parse("t.csv", "a,b\n\"1,2\",3\n").unwrap_err();
         assert!(e.to_string().starts_with("t.csv: line 2: quoted"), "{e}");
-        assert!(matches!(Table::parse("t.csv", ""), Err(Error::Empty { .. })));
+        assert!(matches!(
+            Table::parse("t.csv", ""),
+            Err(Error::Empty { .. })
+        ));
         let e = Table::read("/no/such/file.csv").unwrap_err();
         assert!(matches!(e, Error::Io { .. }), "{e}");
     }
