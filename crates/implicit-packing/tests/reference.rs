@@ -56,35 +56,28 @@ struct Expected<'a, const N: usize> {
     x: Option<[f64; N]>,
 }
 
-impl<'a> From<&'a Blm3Case> for Expected<'a, 3> {
-    fn from(c: &'a Blm3Case) -> Self {
-        Expected {
-            id: &c.id,
-            category: &c.category,
-            u: c.u,
-            d2: c.d2,
-            eps: c.eps,
-            f: c.f,
-            mu2: c.mu2,
-            x: c.x,
+/// The same fields of both files' rows.
+macro_rules! expected_from {
+    ($case:ty, $n:literal) => {
+        impl<'a> From<&'a $case> for Expected<'a, $n> {
+            fn from(c: &'a $case) -> Self {
+                Expected {
+                    id: &c.id,
+                    category: &c.category,
+                    u: c.u,
+                    d2: c.d2,
+                    eps: c.eps,
+                    f: c.f,
+                    mu2: c.mu2,
+                    x: c.x,
+                }
+            }
         }
-    }
+    };
 }
 
-impl<'a> From<&'a Blm2Case> for Expected<'a, 2> {
-    fn from(c: &'a Blm2Case) -> Self {
-        Expected {
-            id: &c.id,
-            category: &c.category,
-            u: c.u,
-            d2: c.d2,
-            eps: c.eps,
-            f: c.f,
-            mu2: c.mu2,
-            x: c.x,
-        }
-    }
-}
+expected_from!(Blm3Case, 3);
+expected_from!(Blm2Case, 2);
 
 fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packing::PairTerm<N>)>) {
     let mut worst: BTreeMap<String, Worst> = BTreeMap::new();
