@@ -47,6 +47,11 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A reference file could not be read (its error names the file, line and column).
+    ReferenceFile {
+        /// The test kit's reason.
+        source: testkit::table::Error,
+    },
     /// pw85 refused an input the harness built (a bug in the harness or a bad scene shape).
     Pw85 {
         /// What was being evaluated.
@@ -108,6 +113,7 @@ impl fmt::Display for Error {
                 line,
                 message,
             } => write!(f, "{}:{line}: {message}", path.display()),
+            Error::ReferenceFile { source } => write!(f, "reference data: {source}"),
             Error::Pw85 { context, source } => write!(f, "pw85 refused {context}: {source}"),
             Error::Implicit { context, message } => {
                 write!(f, "implicit-packing refused {context}: {message}")
@@ -125,8 +131,15 @@ impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Error::Io { source, .. } => Some(source),
+            Error::ReferenceFile { source } => Some(source),
             _ => None,
         }
+    }
+}
+
+impl From<testkit::table::Error> for Error {
+    fn from(source: testkit::table::Error) -> Self {
+        Error::ReferenceFile { source }
     }
 }
 

@@ -192,7 +192,7 @@ fn theory_study(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         pw85: s.uses(scene::Criterion::Pw85),
         implicit: s.uses(scene::Criterion::Implicit),
     };
-    let checks = theory::all(&run.root, n, s.scene.seed, groups, &say)?;
+    let checks = theory::all(n, s.scene.seed, groups, &say)?;
     for c in &checks {
         println!("{}", c.line());
         if !c.passed() {

@@ -83,7 +83,7 @@ pub fn theory_section(s: &LoadedScene, checks: &[Check], n: usize, quick: bool) 
          inputs are rounded again (rotated or translated copies) within 1e-13; the \
          implicit-variable quantities U and d² within 1e-12 (that crate's stated accuracy); \
          verdict checks count disagreements and allow none. The reference rows compare with \
-         the independent 36- and 100-digit values in `../shared/reference/`.",
+         the independent 36- and 100-digit values in `validation/reference/`.",
         checks.len(),
         failed,
         n,

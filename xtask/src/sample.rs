@@ -3,84 +3,24 @@
 //! The generator is SplitMix64, and the pairs are built with +, −, ×, / and √ only (all
 //! correctly rounded in IEEE arithmetic): `exp`, `ln` and `sin` differ by an ulp between libm
 //! implementations, which would make the snapshots machine-dependent. Values spread over
-//! decades come from [`Rng::spread`] (a reciprocal-uniform law) rather than a log-uniform one
+//! decades come from [`Spread::spread`] (a reciprocal-uniform law) rather than a log-uniform one
 //! for that reason; only the 2D sampler uses `sin` and `cos`.
 
 use crate::error::{self, Error};
 use pw85::{Sym2, Sym3};
 
-/// SplitMix64 (Steele, Lea, Flood 2014): tiny, and good enough for sampling test inputs.
-#[derive(Debug, Clone)]
-pub struct Rng(u64);
+pub use testkit::Rng;
 
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1), 53 random bits.
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-
+/// The one law the harness needs beyond the test kit's.
+pub trait Spread {
     /// In [lo, hi] with 1/x uniform: spread over decades like a log-uniform law (denser near
     /// `lo`), from rational operations only.
-    pub fn spread(&mut self, lo: f64, hi: f64) -> f64 {
-        1.0 / self.uniform(1.0 / hi, 1.0 / lo)
-    }
+    fn spread(&mut self, lo: f64, hi: f64) -> f64;
+}
 
-    /// A point uniform in the unit ball (rejection), as a direction when normalised.
-    pub fn in_ball(&mut self) -> [f64; 3] {
-        loop {
-            let v = [
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-            ];
-            let n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if (1e-4..=1.0).contains(&n2) {
-                return v;
-            }
-        }
-    }
-
-    /// A random unit direction.
-    pub fn direction(&mut self) -> [f64; 3] {
-        let v = self.in_ball();
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        v.map(|x| x / n)
-    }
-
-    /// A uniformly distributed rotation as a unit quaternion (w, x, y, z): a point uniform in
-    /// the 4-ball, normalised.
-    pub fn quaternion(&mut self) -> [f64; 4] {
-        loop {
-            let q = [
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-            ];
-            let n2: f64 = q.iter().map(|x| x * x).sum();
-            if (1e-2..=1.0).contains(&n2) {
-                let n = n2.sqrt();
-                return q.map(|x| x / n);
-            }
-        }
+impl Spread for Rng {
+    fn spread(&mut self, lo: f64, hi: f64) -> f64 {
+        1.0 / self.range(1.0 / hi, 1.0 / lo)
     }
 }
 
@@ -168,7 +108,7 @@ impl Pair2 {
 pub fn axes(rng: &mut Rng, aspect: f64) -> [f64; 3] {
     let mut l = [1.0, rng.spread(1.0 / aspect, 1.0), 1.0 / aspect];
     // Shuffle so that the long axis is not always the first column of the rotation.
-    let k = (rng.unit() * 3.0) as usize % 3;
+    let k = (rng.uniform() * 3.0) as usize % 3;
     l.swap(0, k);
     l
 }
@@ -176,11 +116,11 @@ pub fn axes(rng: &mut Rng, aspect: f64) -> [f64; 3] {
 /// A pair with uniform axes in [0.3, 2], uniform rotations and j's centre uniform in the
 /// cube [−3, 3]³ about i's (about half overlap): built from rational operations and √ only.
 pub fn stable_pair(rng: &mut Rng) -> Pair3 {
-    let li = [0; 3].map(|_| rng.uniform(0.3, 2.0));
-    let qi = rng.quaternion();
-    let lj = [0; 3].map(|_| rng.uniform(0.3, 2.0));
-    let qj = rng.quaternion();
-    let cj = [0; 3].map(|_| rng.uniform(-3.0, 3.0));
+    let li = [0; 3].map(|_| rng.range(0.3, 2.0));
+    let qi = rng.unit_quaternion();
+    let lj = [0; 3].map(|_| rng.range(0.3, 2.0));
+    let qj = rng.unit_quaternion();
+    let cj = [0; 3].map(|_| rng.range(-3.0, 3.0));
     Pair3 {
         ci: [0.0; 3],
         li,
@@ -197,10 +137,10 @@ pub fn stable_pair(rng: &mut Rng) -> Pair3 {
 pub fn pair_near_contact(rng: &mut Rng, aspect: f64, s_lo: f64, s_hi: f64) -> Result<Pair3, Error> {
     let li = axes(rng, aspect);
     let lj = axes(rng, aspect);
-    let qi = rng.quaternion();
-    let qj = rng.quaternion();
+    let qi = rng.unit_quaternion();
+    let qj = rng.unit_quaternion();
     let d = rng.direction();
-    let ci = [0; 3].map(|_| rng.uniform(-2.0, 2.0));
+    let ci = [0; 3].map(|_| rng.range(-2.0, 2.0));
     let unit = Pair3 {
         ci,
         li,
@@ -216,7 +156,7 @@ pub fn pair_near_contact(rng: &mut Rng, aspect: f64, s_lo: f64, s_hi: f64) -> Re
         .map_err(error::pw85("a random pair"))?
         .mu2
         .sqrt();
-    let s = rng.uniform(s_lo, s_hi);
+    let s = rng.range(s_lo, s_hi);
     Ok(unit.at_distance_factor(s / mu))
 }
 
@@ -229,9 +169,9 @@ pub fn pair_near_contact_2d(
 ) -> Result<Pair2, Error> {
     let li = [1.0, rng.spread(1.0 / aspect, 1.0)];
     let lj = [rng.spread(1.0 / aspect, 1.0), 1.0];
-    let ti = rng.uniform(0.0, std::f64::consts::PI);
-    let tj = rng.uniform(0.0, std::f64::consts::PI);
-    let a = rng.uniform(0.0, 2.0 * std::f64::consts::PI);
+    let ti = rng.range(0.0, std::f64::consts::PI);
+    let tj = rng.range(0.0, std::f64::consts::PI);
+    let a = rng.range(0.0, 2.0 * std::f64::consts::PI);
     let d = [a.cos(), a.sin()];
     let unit = Pair2 {
         ci: [0.0; 2],
@@ -246,7 +186,7 @@ pub fn pair_near_contact_2d(
         .map_err(error::pw85("a random pair of ellipses"))?
         .mu2
         .sqrt();
-    let s = rng.uniform(s_lo, s_hi) / mu;
+    let s = rng.range(s_lo, s_hi) / mu;
     Ok(Pair2 {
         cj: [s * d[0], s * d[1]],
         ..unit

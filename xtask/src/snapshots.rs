@@ -123,7 +123,7 @@ fn theory_table_from(root: &Path, scenes: &[LoadedScene]) -> Result<String, Erro
         pw85: s.uses(scene::Criterion::Pw85),
         implicit: s.uses(scene::Criterion::Implicit),
     };
-    let checks = theory::all(root, n, s.scene.seed, groups, &|_| {})?;
+    let checks = theory::all(n, s.scene.seed, groups, &|_| {})?;
     Ok(theory::table(&checks))
 }
 

@@ -60,7 +60,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
 
     // (a) Reference categories.
     run.say("  reference categories");
-    let cases = reference::contact_cases(&run.root)?;
+    let cases = reference::contact_cases()?;
     let mut by_cat: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut wrong_verdicts = vec![0usize; methods.len() + 1];
     // The largest |μ² − 1| at which each method gave a wrong verdict.
@@ -72,16 +72,16 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         for (k, &m) in methods.iter().enumerate() {
             let mu2 = solve(m, tol, &c.pair);
             worst(&mut e[k], relative_error(mu2, c.mu2));
-            if c.mu2_minus_one != 0.0 && (mu2 < 1.0) != (c.mu2_minus_one < 0.0) {
+            if c.mu2_minus_one() != 0.0 && (mu2 < 1.0) != (c.mu2_minus_one() < 0.0) {
                 wrong_verdicts[k] += 1;
-                wrong_gap[k] = wrong_gap[k].max(c.mu2_minus_one.abs());
+                wrong_gap[k] = wrong_gap[k].max(c.mu2_minus_one().abs());
             }
         }
         let v = pw85::overlap(&c.pair.r12, &c.pair.q1, &c.pair.q2)
             .map_err(error::pw85(format!("reference case {}", c.id)))?;
-        if c.mu2_minus_one != 0.0 && v != (c.mu2_minus_one < 0.0) {
+        if c.mu2_minus_one() != 0.0 && v != (c.mu2_minus_one() < 0.0) {
             wrong_verdicts[methods.len()] += 1;
-            wrong_gap[methods.len()] = wrong_gap[methods.len()].max(c.mu2_minus_one.abs());
+            wrong_gap[methods.len()] = wrong_gap[methods.len()].max(c.mu2_minus_one().abs());
         }
     }
     let cats: Vec<String> = by_cat.keys().cloned().collect();
@@ -113,7 +113,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     // The implicit criterion on its own reference file.
     let mut blm_cats: BTreeMap<String, (f64, f64)> = BTreeMap::new();
     if with_implicit {
-        for c in reference::blm_3d(&run.root)? {
+        for c in reference::blm_3d()? {
             let t = implicit::term(&c.pair)?;
             let e = blm_cats.entry(c.category.clone()).or_default();
             worst(
@@ -121,7 +121,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 scaled_error(t.u, c.u).max(scaled_error(t.d2, c.d2)),
             );
         }
-        for c in reference::blm_2d(&run.root)? {
+        for c in reference::blm_2d()? {
             let (i, j) = implicit::ellipses(&c.pair)?;
             let t = implicit::term_of(&i, &j);
             let e = blm_cats.entry(c.category.clone()).or_default();

@@ -11,13 +11,12 @@
 use crate::error::{self, Error};
 use crate::implicit;
 use crate::reference::{self, relative_error, scaled_error};
-use crate::sample::{self, Pair3, Rng};
+use crate::sample::{self, Pair3, Rng, Spread};
 use pw85::poly::{
     a_coefficients, b_coefficients, c_coefficients, eq13_forms, f_direct, pencil, polyval,
 };
 use pw85::sym::{det_sym, xt_adj_x};
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
 
 /// One check: its worst residual against its tolerance.
 #[derive(Debug, Clone)]
@@ -269,7 +268,7 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
         let (pair, p) = pw85_moderate(&mut rng)?;
         let base = contact(&p)?.mu2;
 
-        let rot = rng.quaternion();
+        let rot = rng.unit_quaternion();
         let rotated = Pair3 {
             ci: rotate(&rot, &pair.ci),
             cj: rotate(&rot, &pair.cj),
@@ -552,10 +551,10 @@ pub fn grid_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let side3 = (m as f64 * 4.0 * std::f64::consts::FRAC_PI_3 / 10.0).cbrt();
     let side2 = (m as f64 * std::f64::consts::PI / 10.0).sqrt();
     let p3: Vec<[f64; 3]> = (0..m)
-        .map(|_| [0; 3].map(|_| rng.uniform(0.0, side3)))
+        .map(|_| [0; 3].map(|_| rng.range(0.0, side3)))
         .collect();
     let p2: Vec<[f64; 2]> = (0..m)
-        .map(|_| [0; 2].map(|_| rng.uniform(0.0, side2)))
+        .map(|_| [0; 2].map(|_| rng.range(0.0, side2)))
         .collect();
     let grid_err = |e: cell_grid::Error| Error::Grid {
         message: e.to_string(),
@@ -613,19 +612,19 @@ pub fn grid_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
 /// The reference files against the accuracy bounds of the crates' issues: μ² to 1e-13
 /// relative in every category and the verdict outside 2e-13 of tangency (pw85); U, d², X to
 /// 1e-12, ε to 1e-15 and every verdict (implicit-packing).
-pub fn reference_checks(root: &Path, groups: Groups) -> Result<Vec<Check>, Error> {
+pub fn reference_checks(groups: Groups) -> Result<Vec<Check>, Error> {
     let mut checks = Vec::new();
     if groups.pw85 {
-        checks.extend(pw85_reference_checks(root)?);
+        checks.extend(pw85_reference_checks()?);
     }
     if groups.implicit {
-        checks.extend(blm_reference_checks(root)?);
+        checks.extend(blm_reference_checks()?);
     }
     Ok(checks)
 }
 
-fn pw85_reference_checks(root: &Path) -> Result<Vec<Check>, Error> {
-    let cases = reference::contact_cases(root)?;
+fn pw85_reference_checks() -> Result<Vec<Check>, Error> {
+    let cases = reference::contact_cases()?;
     let mut mu2 = Worst::default();
     let mut by_category: BTreeMap<&str, f64> = BTreeMap::new();
     let mut verdicts = Worst::default();
@@ -636,11 +635,11 @@ fn pw85_reference_checks(root: &Path) -> Result<Vec<Check>, Error> {
         mu2.add(e, || format!("case {} ({})", c.id, c.category));
         let w = by_category.entry(&c.category).or_default();
         *w = w.max(e);
-        if c.mu2_minus_one.abs() > 2e-13 {
+        if c.mu2_minus_one().abs() > 2e-13 {
             let v = pw85::overlap(&c.pair.r12, &c.pair.q1, &c.pair.q2)
                 .map_err(error::pw85(format!("reference case {}", c.id)))?;
             verdicts.n += 1;
-            if v != (c.mu2_minus_one < 0.0) {
+            if v != (c.mu2_minus_one() < 0.0) {
                 wrong += 1;
                 verdicts.at = format!("case {}", c.id);
             }
@@ -661,9 +660,9 @@ fn pw85_reference_checks(root: &Path) -> Result<Vec<Check>, Error> {
     ])
 }
 
-fn blm_reference_checks(root: &Path) -> Result<Vec<Check>, Error> {
+fn blm_reference_checks() -> Result<Vec<Check>, Error> {
     let mut checks = Vec::new();
-    let blm3 = reference::blm_3d(root)?;
+    let blm3 = reference::blm_3d()?;
     let (mut ud, mut x, mut eps, mut verdict) = blm_worst();
     for c in &blm3 {
         let t = implicit::term(&c.pair)?;
@@ -677,7 +676,7 @@ fn blm_reference_checks(root: &Path) -> Result<Vec<Check>, Error> {
         );
     }
     checks.extend(blm_checks("blm_3d.csv", ud, x, eps, verdict));
-    let blm2 = reference::blm_2d(root)?;
+    let blm2 = reference::blm_2d()?;
     let (mut ud, mut x, mut eps, mut verdict) = blm_worst();
     for c in &blm2 {
         let (i, j) = implicit::ellipses(&c.pair)?;
@@ -763,7 +762,6 @@ pub struct Groups {
 /// Every selected theory check with `n` random pairs per check. The cross-criterion checks
 /// (eq. 14 with d², Lemma 4.3 against μ²) call both crates whichever group they belong to.
 pub fn all(
-    root: &Path,
     n: usize,
     seed: u64,
     groups: Groups,
@@ -782,7 +780,7 @@ pub fn all(
         checks.extend(grid_checks(n, seed ^ 0x9d)?);
     }
     progress("theory: reference files");
-    checks.extend(reference_checks(root, groups)?);
+    checks.extend(reference_checks(groups)?);
     Ok(checks)
 }
 

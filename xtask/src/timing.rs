@@ -33,13 +33,13 @@ const ORDINARY_CATEGORIES: [&str; 3] = ["random_moderate", "identical_orientatio
 pub fn error_time(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     let tols = s.tolerances()?.to_vec();
     let repeats = s.require_workload(run.quick, "repeats", s.workload(run.quick).repeats)?;
-    let cases: Vec<_> = reference::contact_cases(&run.root)?
+    let cases: Vec<_> = reference::contact_cases()?
         .into_iter()
         .filter(|c| ORDINARY_CATEGORIES.contains(&c.category.as_str()))
         .collect();
     if cases.is_empty() {
         return Err(Error::Reference {
-            path: reference::dir(&run.root).join("pw85_contact.csv"),
+            path: reference::path("pw85_contact.csv"),
             line: 0,
             message: format!(
                 "no case in the categories {}",
@@ -61,14 +61,14 @@ pub fn error_time(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         let mut pts = Vec::new();
         for tol in points_for {
             let (err, median, ns) = if method == Method::Projection {
-                let blm = reference::blm_3d(&run.root)?;
+                let blm = reference::blm_3d()?;
                 let picked: Vec<_> = blm
                     .iter()
                     .filter(|c| c.category == "random_moderate" || c.category == "paper_shape")
                     .collect();
                 if picked.is_empty() {
                     return Err(Error::Reference {
-                        path: reference::dir(&run.root).join("blm_3d.csv"),
+                        path: reference::path("blm_3d.csv"),
                         line: 0,
                         message: "no case in the categories random_moderate, paper_shape".into(),
                     });

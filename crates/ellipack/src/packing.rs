@@ -1,7 +1,7 @@
 //! A packing as `ellipack pack` writes it and `ellipack verify` reads it: the container, the
 //! items (centre, semi-axes, orientation) and a summary with the certificate.
 //!
-//! Conventions (`shared/reference/README.md`, packing paper eqs. 1–2): semi-axis k lies along
+//! Conventions (`validation/reference/README.md`, packing paper eqs. 1–2): semi-axis k lies along
 //! column k of the rotation R, so the item is {x : (x − c)ᵀ M⁻¹ (x − c) ≤ 1} with
 //! M = R diag(l²) Rᵀ. In 2D, R = [[cos θ, −sin θ], [sin θ, cos θ]] (eq. 1): θ is the angle of
 //! the first semi-axis `a` with the x axis, in radians. In 3D the orientation is a quaternion

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
+use testkit::table::Table;
 
 fn ellipack() -> Command {
     Command::new(env!("CARGO_BIN_EXE_ellipack"))
@@ -15,8 +16,8 @@ fn temp_dir(name: &str) -> PathBuf {
 
 #[test]
 fn contact_accepts_the_reference_file_as_it_is() {
-    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/reference/pw85_contact.csv");
+    let reference = testkit::reference::path("pw85_contact.csv");
+    let cases = testkit::reference::contact_cases().unwrap_or_else(|e| panic!("{e}"));
     let dir = temp_dir("reference");
     let out = dir.join("results.csv");
     let status = ellipack()
@@ -27,29 +28,25 @@ fn contact_accepts_the_reference_file_as_it_is() {
         .status()
         .unwrap();
     assert!(status.success());
-    let results = std::fs::read_to_string(&out).unwrap();
-    let reference = std::fs::read_to_string(&reference).unwrap();
-    let mut lines = results.lines();
-    assert_eq!(lines.next(), Some("case_id,mu2,lambda,overlap,error"));
-    let header: Vec<&str> = reference.lines().next().unwrap().split(',').collect();
-    let mu2_col = header.iter().position(|h| *h == "mu2_ref").unwrap();
-    let mut n = 0;
-    for (ours, theirs) in lines.zip(reference.lines().skip(1)) {
-        let ours: Vec<&str> = ours.split(',').collect();
-        let theirs: Vec<&str> = theirs.split(',').collect();
-        assert_eq!(ours[0], theirs[0], "case_id copied through");
-        let (mu2, reference): (f64, f64) =
-            (ours[1].parse().unwrap(), theirs[mu2_col].parse().unwrap());
-        let err = if reference == 0.0 {
+    let results = Table::read(&out).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        results.header().join(","),
+        "case_id,mu2,lambda,overlap,error"
+    );
+    assert_eq!(results.len(), 305);
+    assert_eq!(cases.len(), 305);
+    for (ours, case) in results.rows().zip(&cases) {
+        let cell = |name: &str| ours.text(name).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(cell("case_id"), case.id, "case_id copied through");
+        let mu2 = ours.num("mu2").unwrap_or_else(|e| panic!("{e}"));
+        let err = if case.mu2 == 0.0 {
             mu2.abs()
         } else {
-            ((mu2 - reference) / reference).abs()
+            ((mu2 - case.mu2) / case.mu2).abs()
         };
-        assert!(err < 1e-13, "case {}: {mu2} vs {reference}", ours[0]);
-        assert_eq!(ours[4], "", "no error");
-        n += 1;
+        assert!(err < 1e-13, "case {}: {mu2} vs {}", case.id, case.mu2);
+        assert_eq!(cell("error"), "", "no error");
     }
-    assert_eq!(n, 305);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -110,13 +107,22 @@ fn within(value: f64, reference: f64) -> bool {
 
 #[test]
 fn measure_accepts_both_reference_files_as_they_are() {
-    for (file, x_columns) in [("blm_3d.csv", 3), ("blm_2d.csv", 2)] {
-        let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/reference")
-            .join(file);
+    let or_panic = |e: testkit::table::Error| -> ! { panic!("{e}") };
+    // (case_id, U, d2, f) of each reference case.
+    let blm_3d: Vec<_> = testkit::reference::blm_3d()
+        .unwrap_or_else(|e| or_panic(e))
+        .into_iter()
+        .map(|c| (c.id, c.u, c.d2, c.f))
+        .collect();
+    let blm_2d: Vec<_> = testkit::reference::blm_2d()
+        .unwrap_or_else(|e| or_panic(e))
+        .into_iter()
+        .map(|c| (c.id, c.u, c.d2, c.f))
+        .collect();
+    for (file, x_columns, expected) in [("blm_3d.csv", 3, blm_3d), ("blm_2d.csv", 2, blm_2d)] {
         let output = ellipack()
             .args(["measure", "--input"])
-            .arg(&reference)
+            .arg(testkit::reference::path(file))
             .output()
             .unwrap();
         assert!(
@@ -124,46 +130,27 @@ fn measure_accepts_both_reference_files_as_they_are() {
             "{file}: {}",
             String::from_utf8_lossy(&output.stderr)
         );
-        let results = String::from_utf8(output.stdout).unwrap();
-        let reference = std::fs::read_to_string(&reference).unwrap();
-        let mut lines = results.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        assert_eq!(header.len(), 7 + x_columns, "{header:?}");
-        let ref_header: Vec<&str> = reference.lines().next().unwrap().split(',').collect();
-        let col = |name: &str| ref_header.iter().position(|h| *h == name).unwrap();
-        let (u, d2, f) = (col("U"), col("d2"), col("f"));
-        let mut n = 0;
-        for (ours, theirs) in lines.zip(reference.lines().skip(1)) {
-            let ours: Vec<&str> = ours.split(',').collect();
-            let theirs: Vec<&str> = theirs.split(',').collect();
-            assert_eq!(ours[0], theirs[0], "{file}: case_id copied through");
-            let num = |s: &str| s.parse::<f64>().unwrap();
-            assert!(
-                within(num(ours[1]), num(theirs[u])),
-                "{file} case {}: U",
-                ours[0]
-            );
-            assert!(
-                within(num(ours[2]), num(theirs[d2])),
-                "{file} case {}: d2",
-                ours[0]
-            );
-            assert_eq!(
-                num(ours[4]) > 0.0,
-                num(theirs[f]) > 0.0,
-                "{file} case {}: verdict",
-                ours[0]
-            );
-            assert_eq!(ours[5], (num(theirs[f]) > 0.0).to_string());
-            assert_eq!(
-                *ours.last().unwrap(),
-                "",
-                "{file} case {}: no error",
-                ours[0]
-            );
-            n += 1;
+        let text = String::from_utf8(output.stdout).unwrap();
+        let results =
+            Table::parse(format!("measure {file}"), &text).unwrap_or_else(|e| or_panic(e));
+        assert_eq!(
+            results.header().len(),
+            7 + x_columns,
+            "{:?}",
+            results.header()
+        );
+        assert_eq!(results.len(), expected.len(), "{file}: one row per case");
+        for (ours, (id, u, d2, f)) in results.rows().zip(&expected) {
+            let num = |name: &str| ours.num(name).unwrap_or_else(|e| or_panic(e));
+            let cell = |name: &str| ours.text(name).unwrap_or_else(|e| or_panic(e));
+            assert_eq!(cell("case_id"), id, "{file}: case_id copied through");
+            assert!(within(num("U"), *u), "{file} case {id}: U");
+            assert!(within(num("d2"), *d2), "{file} case {id}: d2");
+            assert_eq!(num("f") > 0.0, *f > 0.0, "{file} case {id}: verdict");
+            assert_eq!(cell("overlap"), (*f > 0.0).to_string());
+            assert_eq!(cell("error"), "", "{file} case {id}: no error");
         }
-        assert!(n > 100, "{file}: {n} rows");
+        assert!(expected.len() > 100, "{file}: {} rows", expected.len());
     }
 }
 

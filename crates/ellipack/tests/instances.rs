@@ -3,50 +3,38 @@
 
 use ellipack::instances::{self, INSTANCES, InstanceShapes};
 use ellipack::packing::ContainerKind;
-use std::path::PathBuf;
+use testkit::table::{Error, Table};
 
-fn paper() -> String {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/papers/birgin-lobato-martinez-implicit-variables-packing.md");
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+/// The paper's Tables 6.1–6.4 and the radius of Section 6.1.2, as transcribed in
+/// `validation/reference/paper_instances.csv`.
+fn paper() -> Table {
+    Table::read(testkit::reference::path("paper_instances.csv")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The rows (m, area or volume, density) of the table whose caption starts "Table {id}:";
-/// in the paper file each table's rows come just before its caption.
-fn paper_table(text: &str, id: &str) -> Vec<(usize, f64, f64)> {
-    let lines: Vec<&str> = text.lines().collect();
-    let caption = lines
-        .iter()
-        .position(|l| l.starts_with(&format!("Table {id}:")))
-        .unwrap_or_else(|| panic!("no Table {id} in the paper"));
+/// The rows (m, area or volume, density) of the paper's table `id` (e.g. "6.1").
+fn paper_table(table: &Table, id: &str) -> Result<Vec<(usize, f64, f64)>, Error> {
+    let source = format!("Table {id}");
     let mut rows = Vec::new();
-    for line in lines[..caption]
-        .iter()
-        .rev()
-        .skip_while(|l| l.trim().is_empty())
-    {
-        let cells: Vec<&str> = line.split('\t').collect();
-        match (cells.first().and_then(|c| c.parse().ok()), cells.len() >= 3) {
-            (Some(m), true) => {
-                rows.push((m, cells[1].parse().unwrap(), cells[2].parse().unwrap()));
-            }
-            _ => break,
+    for r in table.rows() {
+        if r.text("source")? == source {
+            let m = r.num("m")?;
+            assert_eq!(m.fract(), 0.0, "line {}: m = {m}", r.line());
+            rows.push((m as usize, r.num("measure")?, r.num("density")?));
         }
     }
-    rows.reverse();
-    rows
+    Ok(rows)
 }
 
 #[test]
 fn the_table_matches_the_papers_tables() {
-    let text = paper();
+    let paper = paper();
     for (id, kind) in [
         ("6.1", ContainerKind::Ellipse),
         ("6.2", ContainerKind::Rectangle),
         ("6.3", ContainerKind::Ball),
         ("6.4", ContainerKind::Cuboid),
     ] {
-        let rows = paper_table(&text, id);
+        let rows = paper_table(&paper, id).unwrap_or_else(|e| panic!("{e}"));
         assert!(rows.len() >= 5, "Table {id}: {rows:?}");
         let ours: Vec<_> = INSTANCES
             .iter()
@@ -62,10 +50,14 @@ fn the_table_matches_the_papers_tables() {
         }
     }
     // The radius of Section 6.1.2 is in the text, not in a table.
-    assert!(text.contains("the container has radius 49.39860"));
+    let radius = paper
+        .rows()
+        .find(|r| r.text("source").is_ok_and(|s| s == "Section 6.1.2"))
+        .map(|r| r.num("radius").unwrap_or_else(|e| panic!("{e}")));
+    assert_eq!(radius, Some(49.39860));
     assert_eq!(
         instances::by_name("circle-231").unwrap().paper_radius,
-        Some(49.39860)
+        radius
     );
 }
 

@@ -437,7 +437,7 @@ fn packings_refuse_impossible_items() {
 /// Mangled files give an error or a packing, never a panic.
 #[test]
 fn mangled_files_never_panic() {
-    let mut rng = common::Rng::new(5);
+    let mut rng = testkit::Rng::new(5);
     let pieces = [",", "\"", "\n", "é", " ", "-", "e", "0", "=", "nan", "\t"];
     let p2 = &every_kind()[1];
     let p3 = &every_kind()[5];
@@ -451,10 +451,10 @@ fn mangled_files_never_panic() {
     for _ in 0..400 {
         for (which, original) in texts.iter().enumerate() {
             let mut text: Vec<char> = original.chars().collect();
-            for _ in 0..1 + (rng.next() * 3.0) as usize {
-                let at = (rng.next() * text.len() as f64) as usize;
-                let piece = pieces[(rng.next() * pieces.len() as f64) as usize];
-                if rng.next() < 0.5 {
+            for _ in 0..1 + (rng.uniform() * 3.0) as usize {
+                let at = (rng.uniform() * text.len() as f64) as usize;
+                let piece = pieces[(rng.uniform() * pieces.len() as f64) as usize];
+                if rng.uniform() < 0.5 {
                     text.remove(at);
                 } else {
                     text.splice(at..at, piece.chars());

@@ -416,19 +416,19 @@ fn titles_describe_the_scene() {
 /// error or a scene, never a panic, and errors point inside the text.
 #[test]
 fn mangled_scenes_never_panic() {
-    let mut rng = common::Rng::new(99);
+    let mut rng = testkit::Rng::new(99);
     let pieces = [
         "=", "[", "]", "\"", "\n", "é", "{", "}", ",", "-", "0", "#", "[[", " ", "x",
     ];
     let chars: Vec<char> = GOOD_3D.chars().collect();
     for _ in 0..3000 {
         let mut text = chars.clone();
-        for _ in 0..1 + (rng.next() * 3.0) as usize {
-            let at = (rng.next() * text.len() as f64) as usize;
-            let piece: Vec<char> = pieces[(rng.next() * pieces.len() as f64) as usize]
+        for _ in 0..1 + (rng.uniform() * 3.0) as usize {
+            let at = (rng.uniform() * text.len() as f64) as usize;
+            let piece: Vec<char> = pieces[(rng.uniform() * pieces.len() as f64) as usize]
                 .chars()
                 .collect();
-            match (rng.next() * 3.0) as usize {
+            match (rng.uniform() * 3.0) as usize {
                 0 => {
                     text.remove(at);
                 }

@@ -2,8 +2,6 @@
 //! against central finite differences.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::containment::{
     Container, ContainerKind, containment_gradient, containment_residual, farthest_point,
 };

@@ -2,8 +2,6 @@
 //! gradient of d² against the implicit-function system of Appendix A.1.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::derivatives::{a1_reference, angle_gradient_3d, pair_derivatives};
 use implicit_packing::pair::pair_term;
 use implicit_packing::shape::angular_velocities_3d;

@@ -2,8 +2,6 @@
 //! value-only calls agree with gradient calls, bad variables are named.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::Error;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::{ModelGradient, Problem};

@@ -2,11 +2,10 @@
 //! separated pairs, no panic and finite output on extreme inputs.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::{Body, Ellipse, Ellipsoid, overlap_measure, pair_term};
 use proptest::prelude::*;
 use testkit::Rng;
+use testkit::reference::scaled_error;
 
 /// `x` rounded to 20 significant bits.
 fn short(x: f64) -> f64 {
@@ -95,8 +94,8 @@ fn lemma_4_4_scaling_invariance() {
         let p = pair_term(&i, &j);
         for nu in [0.125, 1024.0, short(3.0f64.powi(-7)), 1e5, short(0.37), 3.0] {
             let q = pair_term(&i.scaled(nu).unwrap(), &j.scaled(nu).unwrap());
-            let eu = common::scaled_err(q.u, p.u);
-            let ed = common::scaled_err(q.d2, p.d2);
+            let eu = scaled_error(q.u, p.u);
+            let ed = scaled_error(q.d2, p.d2);
             let ef = (q.f - p.f).abs() / p.f.abs().max(1.0);
             if nu.log2().fract() == 0.0 {
                 assert!(
@@ -192,7 +191,7 @@ fn direct_and_svd_routes_agree() {
         if b.centre_inside {
             continue;
         }
-        let e = common::scaled_err(a.u, b.u).max(common::scaled_err(a.d2, b.d2));
+        let e = scaled_error(a.u, b.u).max(scaled_error(a.d2, b.d2));
         let ex = (0..3).map(|k| (a.x[k] - b.x[k]).abs()).fold(0.0, f64::max)
             / b.x.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(e <= 1e-13 && ex <= 1e-13, "pair {n}: {a:?}\n{b:?}");
@@ -243,7 +242,7 @@ fn direct_and_svd_routes_agree() {
         if b.centre_inside {
             continue;
         }
-        let e = common::scaled_err(a.u, b.u).max(common::scaled_err(a.d2, b.d2));
+        let e = scaled_error(a.u, b.u).max(scaled_error(a.d2, b.d2));
         assert!(e <= 1e-13, "pair {n2}: {a:?}\n{b:?}");
         worst = worst.max(e);
         n2 += 1;
@@ -344,13 +343,13 @@ fn aligned_pairs_match_the_closed_form() {
         let d22_exact = ((dist2 - lj[k2]) / li[k2]).powi(2);
         for route in [Route::Auto, Route::Svd] {
             let t = pair_term_by(&i, &j, route);
-            let e = common::scaled_err(t.u, u_exact).max(common::scaled_err(t.d2, d2_exact));
+            let e = scaled_error(t.u, u_exact).max(scaled_error(t.d2, d2_exact));
             assert!(
                 e <= 1e-13,
                 "3D {route:?} pair {n}: {t:?}, U {u_exact}, d² {d2_exact}"
             );
             let t2 = pair_term_by(&i2, &j2, route);
-            let e2 = common::scaled_err(t2.u, u2_exact).max(common::scaled_err(t2.d2, d22_exact));
+            let e2 = scaled_error(t2.u, u2_exact).max(scaled_error(t2.d2, d22_exact));
             assert!(
                 e2 <= 1e-13,
                 "2D {route:?} pair {n}: {t2:?}, U {u2_exact}, d² {d22_exact}"

@@ -4,8 +4,6 @@
 //! pw85_verdicts`.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::derivatives::pair_derivatives;
 use implicit_packing::{Body, Ellipsoid, overlap_measure};
 use testkit::Rng;

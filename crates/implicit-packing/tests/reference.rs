@@ -2,12 +2,25 @@
 //! (`validation/reference/blm_3d.csv`, `blm_2d.csv`).
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
-use common::*;
-use implicit_packing::{Route, pair_term_by};
+use implicit_packing::{Body, Ellipse, Ellipsoid, Route, pair_term_by};
 use std::collections::BTreeMap;
-use testkit::reference;
+use testkit::reference::{self, Blm2Case, Blm3Case, scaled_error};
+
+fn bodies_3d(r: &Blm3Case) -> (Ellipsoid, Ellipsoid) {
+    let i = Body::from_quaternion(r.ci, r.li, r.qi)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
+    let j = Body::from_quaternion(r.cj, r.lj, r.qj)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
+    (i, j)
+}
+
+fn bodies_2d(r: &Blm2Case) -> (Ellipse, Ellipse) {
+    let i = Body::ellipse(r.ci, r.li, r.theta_i)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
+    let j = Body::ellipse(r.cj, r.lj, r.theta_j)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
+    (i, j)
+}
 
 #[derive(Default, Debug)]
 struct Worst {
@@ -43,35 +56,28 @@ struct Expected<'a, const N: usize> {
     x: Option<[f64; N]>,
 }
 
-impl<'a> From<&'a reference::Blm3Case> for Expected<'a, 3> {
-    fn from(c: &'a reference::Blm3Case) -> Self {
-        Expected {
-            id: &c.id,
-            category: &c.category,
-            u: c.u,
-            d2: c.d2,
-            eps: c.eps,
-            f: c.f,
-            mu2: c.mu2,
-            x: c.x,
+/// The same fields of both files' rows.
+macro_rules! expected_from {
+    ($case:ty, $n:literal) => {
+        impl<'a> From<&'a $case> for Expected<'a, $n> {
+            fn from(c: &'a $case) -> Self {
+                Expected {
+                    id: &c.id,
+                    category: &c.category,
+                    u: c.u,
+                    d2: c.d2,
+                    eps: c.eps,
+                    f: c.f,
+                    mu2: c.mu2,
+                    x: c.x,
+                }
+            }
         }
-    }
+    };
 }
 
-impl<'a> From<&'a reference::Blm2Case> for Expected<'a, 2> {
-    fn from(c: &'a reference::Blm2Case) -> Self {
-        Expected {
-            id: &c.id,
-            category: &c.category,
-            u: c.u,
-            d2: c.d2,
-            eps: c.eps,
-            f: c.f,
-            mu2: c.mu2,
-            x: c.x,
-        }
-    }
-}
+expected_from!(Blm3Case, 3);
+expected_from!(Blm2Case, 2);
 
 fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packing::PairTerm<N>)>) {
     let mut worst: BTreeMap<String, Worst> = BTreeMap::new();
@@ -80,8 +86,8 @@ fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packin
         let cat = r.category.to_string();
         let w = worst.entry(cat.clone()).or_default();
         w.n += 1;
-        let eu = scaled_err(p.u, r.u);
-        let ed = scaled_err(p.d2, r.d2);
+        let eu = scaled_error(p.u, r.u);
+        let ed = scaled_error(p.d2, r.d2);
         let eps_ref = r.eps;
         let ee = (p.eps - eps_ref).abs() / eps_ref;
         w.u = w.u.max(eu);
@@ -132,32 +138,34 @@ fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packin
     );
 }
 
+/// Every case of a file through both routes of the pair term (automatic and SVD).
+fn check_both_routes<'a, const N: usize, C>(
+    name: &str,
+    cases: &'a [C],
+    term: impl Fn(&C, Route) -> implicit_packing::PairTerm<N>,
+) where
+    &'a C: Into<Expected<'a, N>>,
+{
+    for (suffix, route) in [("", Route::Auto), ("-svd", Route::Svd)] {
+        let rows = cases.iter().map(|c| (c.into(), term(c, route))).collect();
+        check::<N>(&format!("{name}{suffix}"), rows);
+    }
+}
+
 #[test]
 fn blm_3d_reference() {
     let cases = reference::blm_3d().unwrap_or_else(|e| panic!("{e}"));
-    for (name, route) in [("3d", Route::Auto), ("3d-svd", Route::Svd)] {
-        let rows = cases
-            .iter()
-            .map(|c| {
-                let (i, j) = bodies_3d(c);
-                (c.into(), pair_term_by(&i, &j, route))
-            })
-            .collect();
-        check::<3>(name, rows);
-    }
+    check_both_routes("3d", &cases, |c, route| {
+        let (i, j) = bodies_3d(c);
+        pair_term_by(&i, &j, route)
+    });
 }
 
 #[test]
 fn blm_2d_reference() {
     let cases = reference::blm_2d().unwrap_or_else(|e| panic!("{e}"));
-    for (name, route) in [("2d", Route::Auto), ("2d-svd", Route::Svd)] {
-        let rows = cases
-            .iter()
-            .map(|c| {
-                let (i, j) = bodies_2d(c);
-                (c.into(), pair_term_by(&i, &j, route))
-            })
-            .collect();
-        check::<2>(name, rows);
-    }
+    check_both_routes("2d", &cases, |c, route| {
+        let (i, j) = bodies_2d(c);
+        pair_term_by(&i, &j, route)
+    });
 }

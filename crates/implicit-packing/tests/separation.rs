@@ -9,8 +9,6 @@
 //! size ratios up to 1e3.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
 use implicit_packing::derivatives::{PairGradient, pair_derivatives, pair_gradient};
 use implicit_packing::pair::separated_along_centre_line;
 use implicit_packing::{Body, Ellipse, Ellipsoid, pair_term};

@@ -1,7 +1,7 @@
 //! Quadratic forms Q = Σₖ lₖ² vₖ vₖᵀ (theory eq. 2) from semi-axis lengths lₖ and their
 //! directions vₖ, the columns of a rotation.
 //!
-//! Conventions (shared with `shared/reference/README.md` and the packing paper): semi-axis k
+//! Conventions (shared with `validation/reference/README.md` and the packing paper): semi-axis k
 //! lies along column k of the rotation matrix R, so Q = R diag(l²) Rᵀ; a quaternion
 //! (w, x, y, z) is the Hamilton active rotation v ↦ q v q*, normalised by w² + x² + y² + z²;
 //! in 2D, R = [[cos θ, −sin θ], [sin θ, cos θ]] (packing paper eq. 1).

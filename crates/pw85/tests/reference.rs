@@ -2,18 +2,10 @@
 //! (305 cases in 12 categories; see that folder's README).
 
 use std::collections::BTreeMap;
-use testkit::reference::{self, ContactCase};
+use testkit::reference::{self, ContactCase, relative_error};
 
 fn cases() -> Vec<ContactCase> {
     reference::contact_cases().unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn relative_error(value: f64, reference: f64) -> f64 {
-    if reference == 0.0 {
-        value.abs()
-    } else {
-        ((value - reference) / reference).abs()
-    }
 }
 
 #[test]

@@ -2,16 +2,33 @@
 //! there for what each column is and how it was computed), as typed rows.
 
 use crate::table::{Error, Row, Table};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The folder of the reference files: `$ELLIPACK_REFERENCE_DIR` when set, otherwise the
-/// repository's `validation/reference/` (located from this crate's source folder, so a test
-/// finds it from any working directory).
+/// repository's `validation/reference/`.
+///
+/// The repository is found from the package cargo is testing or running
+/// (`CARGO_MANIFEST_DIR` at run time), and only without cargo from this crate's folder as it
+/// was at build time: a test binary that cargo reuses from a build in another copy of the
+/// repository (CI builds a second clone into the same target folder) then still reads this
+/// copy's files, not those of a copy that may be gone.
 pub fn dir() -> PathBuf {
-    match std::env::var_os("ELLIPACK_REFERENCE_DIR") {
-        Some(d) => PathBuf::from(d),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../validation/reference"),
+    if let Some(d) = std::env::var_os("ELLIPACK_REFERENCE_DIR") {
+        return PathBuf::from(d);
     }
+    let built = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::env::var_os("CARGO_MANIFEST_DIR")
+        .and_then(|running| find_from(Path::new(&running)))
+        .or_else(|| find_from(built))
+        .unwrap_or_else(|| built.join("../../validation/reference"))
+}
+
+/// The first `validation/reference` folder in `start` or above it.
+fn find_from(start: &Path) -> Option<PathBuf> {
+    start
+        .ancestors()
+        .map(|a| a.join("validation").join("reference"))
+        .find(|d| d.is_dir())
 }
 
 /// The path of the reference file `name` (e.g. `"pw85_contact.csv"`).
@@ -73,6 +90,28 @@ fn minus_one(digits: &str, rounded: f64) -> f64 {
         }
     }
     rounded - 1.0
+}
+
+/// Relative error, with 0 against a reference of 0 counting as exact (and any other value
+/// against 0 as its absolute size).
+pub fn relative_error(value: f64, reference: f64) -> f64 {
+    if reference == 0.0 {
+        value.abs()
+    } else {
+        ((value - reference) / reference).abs()
+    }
+}
+
+/// The error measure of the implicit-variable values (U, d², which cross zero): relative where
+/// the reference is at least 1e-2 in magnitude, and 100 × absolute below, so that one bound
+/// of 1e-12 means 1e-12 relative or 1e-14 absolute.
+pub fn scaled_error(value: f64, reference: f64) -> f64 {
+    let e = (value - reference).abs();
+    if reference.abs() < 1e-2 {
+        e * 1e2
+    } else {
+        e / reference.abs()
+    }
 }
 
 /// One row of `blm_3d.csv`: a pair of ellipsoids (centre, semi-axes, quaternion) and the
@@ -235,6 +274,31 @@ mod tests {
         let v = minus_one("9.99999999999999999e-1", 1.0);
         assert!((v + 1e-18).abs() < 1e-30, "{v}");
         assert_eq!(minus_one("2.5", 2.5), 1.5);
+    }
+
+    #[test]
+    fn the_folder_is_found_from_any_package_of_the_repository() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let here = root.join("validation/reference").canonicalize().unwrap();
+        for package in ["crates/testkit", "crates/pw85", "xtask", "."] {
+            let found = find_from(&root.join(package)).unwrap();
+            assert_eq!(found.canonicalize().unwrap(), here, "{package}");
+        }
+        // Another copy of the repository is read from its own folder.
+        let other = std::env::temp_dir().join(format!("testkit-copy-{}", std::process::id()));
+        std::fs::create_dir_all(other.join("validation/reference")).unwrap();
+        std::fs::create_dir_all(other.join("crates/pw85")).unwrap();
+        let found = find_from(&other.join("crates/pw85"));
+        std::fs::remove_dir_all(&other).unwrap();
+        assert_eq!(found, Some(other.join("validation").join("reference")));
+    }
+
+    #[test]
+    fn error_measures() {
+        assert_eq!(relative_error(3.0, 2.0), 0.5);
+        assert_eq!(relative_error(-1e-3, 0.0), 1e-3);
+        assert_eq!(scaled_error(1.5, 1.0), 0.5);
+        assert_eq!(scaled_error(2e-3, 1e-3), 1e-3 * 1e2);
     }
 
     #[test]

@@ -40,18 +40,23 @@ impl Rng {
         std::array::from_fn(|_| self.range(lo, hi))
     }
 
-    /// A uniformly distributed unit vector: a point uniform in the unit ball, normalised.
-    /// Points within 1e-2 of the centre are drawn again (their direction would be mostly
-    /// rounding).
-    pub fn direction(&mut self) -> [f64; 3] {
+    /// A point uniform in the unit ball, drawn again while within 1e-2 of the centre (so that
+    /// its direction is not mostly rounding).
+    pub fn in_ball(&mut self) -> [f64; 3] {
         loop {
             let v: [f64; 3] = self.point(-1.0, 1.0);
             let n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
             if n2 > 1e-4 && n2 <= 1.0 {
-                let n = n2.sqrt();
-                return v.map(|x| x / n);
+                return v;
             }
         }
+    }
+
+    /// A uniformly distributed unit vector: [`Rng::in_ball`], normalised.
+    pub fn direction(&mut self) -> [f64; 3] {
+        let v = self.in_ball();
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|x| x / n)
     }
 
     /// A uniformly distributed rotation as a unit quaternion (w, x, y, z): a point uniform in

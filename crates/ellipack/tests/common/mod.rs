@@ -5,28 +5,7 @@
 
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
 use std::path::PathBuf;
-
-/// A deterministic generator in [0, 1) (SplitMix64), so that tests need no dependency.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-
-    pub fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+use testkit::Rng;
 
 /// Ellipses (2, 1) (or of varied sizes when `mixed`) on a lattice of 4.2 × 4.2 cells, each
 /// rotated freely (a (2, 1) ellipse fits in its cell whatever its angle), inside an ellipse
