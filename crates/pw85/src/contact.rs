@@ -38,8 +38,8 @@ use crate::sym::{Sym2, Sym3, mat_vec};
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
 ///
-/// The bound is a worst case, so the threshold trades refinements (several times the cost of
-/// an ordinary call) against the error left unrefined: the `calibration` test prints, on
+/// The bound is a worst case, so the threshold trades refinements (each costs more than an
+/// ordinary call) against the error left unrefined: the `calibration` test prints, on
 /// 20 000 pairs of the bench's distribution, how many pairs each threshold refines and the
 /// worst actual error it leaves, and asserts that the actual error never exceeds the bound.
 pub const REFINE_ABOVE: f64 = 1e-13;
