@@ -214,8 +214,8 @@ mod tests {
     }
 
     /// Every pair of finite bodies is measured in any units: the same pair with positions and
-    /// semi-axes scaled by 2^k, k across the double range, gives the same bits (before, rows
-    /// beyond 1e30 or below 1e-30 were refused).
+    /// semi-axes scaled by 2^k, k across the double range, gives the same bits (rows beyond
+    /// 1e30 or below 1e-30 included).
     #[test]
     fn the_measure_does_not_depend_on_units() {
         let scaled = |row: &[f64], k: i32, lengths: &[usize]| -> String {

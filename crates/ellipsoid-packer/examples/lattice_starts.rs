@@ -1,5 +1,5 @@
 //! One local minimisation from each of the first K dense lattice starts, against the paper's
-//! start: `cargo run --release -p implicit-packing --example lattice_starts -- 3 box 100 8`.
+//! start: `cargo run --release -p ellipsoid-packer --example lattice_starts -- 3 box 100 8`.
 
 use ellipsoid_packer::local::{LocalSettings, item_measure, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;

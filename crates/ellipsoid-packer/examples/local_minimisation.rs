@@ -1,6 +1,6 @@
 //! One local minimisation from the paper's lattice start (or, with a fourth argument `dense`,
 //! the face-centred cubic / hexagonal start of `ellipsoid_packer::starts`), certified and
-//! repaired: `cargo run --release -p implicit-packing --example local_minimisation -- 3 ball 100`.
+//! repaired: `cargo run --release -p ellipsoid-packer --example local_minimisation -- 3 ball 100`.
 
 use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;

@@ -1,5 +1,5 @@
 //! A multi-start run on one of the paper's instances:
-//! `cargo run --release -p implicit-packing --example multistart -- 3 ball 100 60 2`
+//! `cargo run --release -p ellipsoid-packer --example multistart -- 3 ball 100 60 2`
 //! (dimension, container, items, seconds, threads), then optionally: local minimisations
 //! (0: no cap), lattice starts, from best (0/1), perturbation levels, a fresh lattice start
 //! every n perturbations (0: never), a new chain after n starts without improvement (0:

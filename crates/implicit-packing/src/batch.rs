@@ -104,9 +104,9 @@ fn has_lanes() -> bool {
 /// emitted results adds them in the same order as a loop of scalar calls.
 ///
 /// Why wait for so many: whether a candidate needs the kernel is a coin toss (about a third
-/// do, at random), and so is whether it is the fourth. Branches on either were mispredicted
-/// on a large share of the candidates; now the certificate's verdict only advances a count,
-/// and the one branch left, on a full queue, is taken once per [`CAPACITY`] pairs.
+/// do, at random), and so is whether it is the fourth. Branches on either would be
+/// mispredicted on a large share of the candidates, so the certificate's verdict only advances
+/// a count, and the one branch left, on a full queue, is taken once per [`CAPACITY`] pairs.
 ///
 /// The pairs are held in a fixed array, not a `Vec`: the model allocates nothing per
 /// evaluation.

@@ -126,11 +126,11 @@ pub struct Problem<const N: usize> {
 ///
 /// Relative to the smallest radius so that, with mixed sizes, the skin adds at most a tenth
 /// of `2 r_min` to any pair's reach (16 % more listed than close pairs in the `model` bench, 3D
-/// at density 0.6). In a local minimisation of 1 000 ellipsoids from the paper's start (the
-/// `local_minimisation` example) the list was built 394 times in 97 588 evaluations and as many
-/// Hessian–vector products; a build costs about one evaluation, so its upkeep is amortised to
-/// below 0.5 %. (Counted on the same run with other skins, relative to the largest radius: a
-/// twentieth would have been outrun twice as often, a fifth half as often.)
+/// at density 0.6). In a local minimisation the list is rebuilt once every few hundred
+/// evaluations (the `local_minimisation` example prints the count), and a build costs about
+/// one evaluation (the `model` bench prints both), so its upkeep is amortised. (Counted on one
+/// run with other skins, relative to the largest radius: a twentieth was outrun twice as
+/// often, a fifth half as often.)
 pub const PAIR_LIST_SKIN: f64 = 0.1;
 
 /// Number of rotation angles in dimension `n` (1 in 2D, 3 in 3D).

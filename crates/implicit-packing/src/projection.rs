@@ -223,9 +223,9 @@ pub const DIRECT_B2_LIMIT: f64 = 1e16;
 /// `r = (adj S a)ᵀ S (adj S a) = zᵀ S z det⁴` give `δ_N = 2φ(√φ − 1)/(−φ') = (p/q) e`,
 /// `e = √p − det`, `h''/h' = (3/det)(q/p − r/q)`, and Halley's step over one denominator,
 /// `2 det p q e / (2 det q² + 3 e (q² − r p))`: one square root and one division, which run
-/// side by side, and no division by `det`. Against the Newton iteration this replaced (same
-/// start), one solve more per iteration and about one iteration fewer per pair: the same
-/// instructions, 3 % less time per overlapping pair (`pair` and `model` benches).
+/// side by side, and no division by `det`. Against Newton's method from the same start: one
+/// solve more per iteration and about one iteration fewer per pair, so about the same
+/// instructions in a shorter dependency chain (compare with the `pair` and `model` benches).
 ///
 /// The last step is not followed by another solve: `x(U + δ) = x − δ z + δ² M S z + O(δ³)`
 /// (`x'' = 2 M S z`), and `|δ| ≤ 2e-6 U` (after a Halley step, whose error is then of order

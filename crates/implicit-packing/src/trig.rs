@@ -2,7 +2,7 @@
 //!
 //! Every evaluation of the model turns `3 m` angles into rotations (eq. 2). The C library's
 //! `sincos` is accurate for every argument, which costs it a general range reduction and
-//! branches: about 120 instructions a call, a tenth of the model's instructions. The angles of
+//! branches, a sizeable share of a model evaluation's instructions. The angles of
 //! a packing are moderate, so the reduction by `π/2` needs only three fused multiply–adds, and
 //! the three angles of an ellipsoid share one register.
 //!

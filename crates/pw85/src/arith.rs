@@ -81,7 +81,7 @@ pub(crate) fn mul_add<const FMA: bool, T: Fused>(a: T, b: T, c: T) -> T {
 /// a blend of SSE registers. Left to itself the compiler turns a select of doubles into a
 /// branch, and where the condition is a coin toss (which end of the pencil the maximiser is
 /// near, which side of the root an iterate fell) the mispredictions cost more than the rest of
-/// the step: 132 → 120 ns per contact function on the bench pairs.
+/// the step (measured with the bench `contact`).
 #[inline(always)]
 pub(crate) fn select_gt<const FMA: bool>(x: f64, y: f64, a: f64, b: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]

@@ -38,12 +38,10 @@ use crate::sym::{Sym2, Sym3, mat_vec};
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
 ///
-/// The bound is a worst case: on 20 000 pairs of the bench's distribution (aspect ratios up to
-/// 10) the actual error never exceeded 0.33 × the bound, and stayed below 4.5e-15 wherever the
-/// bound was below this threshold, while 0.49 % of the pairs were refined (at 1e-14, 25 % would
-/// be). With one common rounding factor 10 u for all coefficients instead of their own depths
-/// (5 to 8 roundings) it was 1.5 %, each refinement costing about 590 ns. See
-/// the `calibration` test.
+/// The bound is a worst case, so the threshold trades refinements (each costs more than an
+/// ordinary call) against the error left unrefined: the `calibration` test prints, on
+/// 20 000 pairs of the bench's distribution, how many pairs each threshold refines and the
+/// worst actual error it leaves, and asserts that the actual error never exceeds the bound.
 pub const REFINE_ABOVE: f64 = 1e-13;
 
 /// Rounding-error factor γ of the coefficient formulas: their expression trees are at most
@@ -255,8 +253,8 @@ impl Prepared {
     /// without the division: u x / d + EVAL > REFINE_ABOVE ⇔ u x > (REFINE_ABOVE − EVAL) d
     /// for d > 0. The division that gives the estimate itself is then off the path to the
     /// decision: at the end of every call, where the divisions of μ², λ and the estimate
-    /// queue for the one divider (contact_function 114 -> 108 ns with one division less). A
-    /// NaN fails the test, so it refines, as before.
+    /// queue for the one divider (one division fewer there shows in the bench `contact`). A
+    /// NaN fails the test, so it refines.
     #[inline(always)]
     pub(crate) fn needs_refinement((x, d): (f64, f64)) -> bool {
         use core::cmp::Ordering::{Equal, Less};
@@ -623,8 +621,8 @@ impl Side {
     /// [`oriented`] by this side. Written out rather than as `oriented` with a closure: a
     /// closure is compiled without the AVX2 target feature of the function it appears in,
     /// and when the optimiser did not inline it, each pick became a call into a closure
-    /// that itself called the blend intrinsic out of line (six calls per contact function;
-    /// 101 -> 85 ns written out).
+    /// that itself called the blend intrinsic out of line (six calls per contact function,
+    /// a loss the bench `contact` shows).
     #[inline(always)]
     pub(crate) fn orient<const FMA: bool>(
         self,

@@ -3,7 +3,7 @@
 //! The kernels are compiled twice: for the baseline x86-64 (SSE2), and with AVX2 and FMA
 //! enabled, chosen at run time when the processor has them. The code is the same; the AVX
 //! encoding's three-operand instructions remove the register copies that SSE2's two-operand
-//! form needs (measured: about 40 % of the instructions of `contact_function`), and the lanes
+//! form needs (a large share of the instructions of `contact_function`), and the lanes
 //! of the batched path fit one 256-bit register. Other architectures get the portable build.
 
 /// Defines `$name` as a dispatcher to `$body`, compiled with AVX2 + FMA when the processor
@@ -74,10 +74,10 @@ pub(crate) fn has_avx2_fma() -> bool {
 /// The AVX2 builds spill 256-bit registers; with the ABI's 16-byte stack alignment the
 /// compiler places those spills at 16-byte offsets with unaligned moves, and where the
 /// caller's stack pointer put one across a page boundary every call paid for split loads and
-/// stores. Measured on the bench pairs with the stack shifted 32 bytes at a time: the
-/// contact function took 84–105 ns depending on the shift (and so on where address-space
-/// randomisation put the stack: 2 runs in 12 were slow), 84.3–84.6 ns at every shift with
-/// the frame realigned; the batch 49.9–55.8 ns, then 49.2–51.0 ns.
+/// stores. With the stack shifted 32 bytes at a time before the bench `contact`'s loops, the
+/// contact function and the batch ran markedly slower at some shifts (and so in some runs,
+/// wherever address-space randomisation put the stack); with the frame realigned every
+/// shift runs at the same speed.
 #[repr(align(32))]
 struct Aligned(#[allow(dead_code)] [u8; 32]); // Only its alignment is used.
 

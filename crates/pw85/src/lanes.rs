@@ -176,7 +176,7 @@ impl EndsLanes for Ends4 {
         // Left to itself the optimiser splits the four-lane expressions into one scalar chain
         // per lane read (more instructions than the vector form); materialising the result
         // keeps each operation one vector instruction. ([`Ends4Avx`] is a vector type and
-        // needs no such help: there this barrier cost 8 instructions per call.)
+        // needs no such help: there this barrier would only add instructions.)
         core::hint::black_box(self).0.0
     }
 }
@@ -197,8 +197,8 @@ mod avx {
 
     /// [`super::Ends4`] as one AVX register, lanes [x(Q1), Σ|terms|(Q1), x(Q2), Σ|terms|(Q2)]:
     /// written with `[f64; 4]` the optimiser splits the lanes into scalars and re-packs them
-    /// into 128-bit halves with shuffles and stack spills (callgrind: 340 instructions per
-    /// call in the coefficients); as a vector type every operation is one instruction. In this
+    /// into 128-bit halves with shuffles and stack spills; as a vector type every operation
+    /// is one instruction. In this
     /// layout a − b is ADDSUBPD, which subtracts in the even (value) lanes and adds in the odd
     /// (magnitude) ones: the subtraction of the `f64` formula and the addition of the `Mag`
     /// one, each with its own rounding, so the results are the same bits as [`super::Ends4`].
@@ -288,7 +288,7 @@ mod avx4 {
 
     /// [`super::V4`] as one AVX register, for the four-lane solve of the AVX2 + FMA build:
     /// written with `[f64; 4]` the optimiser keeps much of the lane-wise code in scalars
-    /// (callgrind: 875 instructions per pair in the batch against 970 in the scalar call).
+    /// (callgrind counts almost as many instructions per pair as the scalar call).
     /// Every operation is the IEEE operation of `f64` lane by lane (FMA: one rounding, as
     /// `f64::mul_add`; comparisons ordered, false for NaN), so the results are the same bits.
     ///

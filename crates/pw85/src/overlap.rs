@@ -116,8 +116,8 @@ out_of_line! {
     ///
     /// Out of line, and recomputing the little it shares with the axis test: inlined, the
     /// values it needs stayed live across the axis test, and the common path (three pairs
-    /// in four) paid for spilling them to the stack: 30.4 ns per axis-decided pair with the
-    /// contact-point test inline, 27.1 ns out of line.
+    /// in four) paid for spilling them to the stack (see the `overlap` line of the bench
+    /// `contact`).
     fn undecided(
         r12: &[f64; 3],
         q1: &Sym3,
