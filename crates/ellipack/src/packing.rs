@@ -302,7 +302,7 @@ impl Container {
                 half_sides: [size[0], size[1], size[2]],
             },
         };
-        match container.problem() {
+        match container.defect() {
             None => Ok(container),
             Some((_, message)) => Err(PackingError::Inconsistent {
                 source_name: "container".to_string(),
@@ -394,7 +394,7 @@ impl Container {
 
     /// `None` when the container is usable, else what is wrong (a size that is not positive
     /// and finite, a centre that is not finite) and the name of the offending field.
-    pub fn problem(&self) -> Option<(&'static str, String)> {
+    pub fn defect(&self) -> Option<(&'static str, String)> {
         if let Some(x) = self.center().iter().find(|x| !x.is_finite()) {
             return Some((
                 "center",
@@ -550,7 +550,7 @@ impl Packing {
             source_name: "packing".to_string(),
             message,
         };
-        if let Some((_, message)) = container.problem() {
+        if let Some((_, message)) = container.defect() {
             return Err(inconsistent(format!("container: {message}")));
         }
         if container.dimension() != items.dimension() {
@@ -980,7 +980,7 @@ pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingErr
         line: e.line() as u64,
         message: format!("column {}: {e}", e.column()),
     })?;
-    if let Some((field, message)) = summary.container.problem() {
+    if let Some((field, message)) = summary.container.defect() {
         return Err(PackingError::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),
@@ -1072,7 +1072,7 @@ pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummar
             line: e.line() as u64,
             message: format!("column {}: {e}", e.column()),
         })?;
-    if let Some((field, message)) = summary.container.problem() {
+    if let Some((field, message)) = summary.container.defect() {
         return Err(PackingError::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),

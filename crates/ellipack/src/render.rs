@@ -377,7 +377,7 @@ fn world_box(packing: &Packing) -> ([f64; 3], [f64; 3]) {
             }
         }
     };
-    if packing.container.problem().is_none() {
+    if packing.container.defect().is_none() {
         include(
             packing.container.center(),
             &packing.container.half_extents(),
@@ -630,7 +630,7 @@ fn determinant(m: &[[f64; 3]; 3]) -> f64 {
 /// The container's outline in a panel: a circle or axis-aligned ellipse (192 vertices: it is
 /// the largest thing on the page), or a rectangle.
 fn container_outline(container: &Container, panel: &Panel, scale: f64) -> Option<Vec<(i32, i32)>> {
-    if container.problem().is_some() {
+    if container.defect().is_some() {
         return None;
     }
     let c = container.center();
