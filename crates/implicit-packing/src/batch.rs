@@ -15,6 +15,7 @@
 //! Without AVX2 and FMA the queue solves each pair with [`pair_gradient`].
 
 use crate::derivatives::{PairGradient, pair_gradient};
+#[cfg(any(test, feature = "internals"))]
 use crate::error::Error;
 use crate::pair::{
     CentreLine, bounding_spheres_apart, centre_line, certified_separated, overlap_measure,
@@ -461,6 +462,7 @@ mod avx {
 /// assert_eq!(out[2], pair_gradient(&bodies[2], &bodies[3]));
 /// # Ok::<(), implicit_packing::Error>(())
 /// ```
+#[cfg(any(test, feature = "internals"))]
 pub fn pair_gradients<const N: usize>(
     bodies: &[Body<N>],
     pairs: &[(usize, usize)],

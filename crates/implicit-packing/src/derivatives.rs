@@ -429,6 +429,7 @@ fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGra
 /// ```
 ///
 /// and returns `(d d²/dp, dU/dp)` with `d d²/dp = 2 (X − c)ᵀ (dX − ∂c)`.
+#[cfg(any(test, feature = "internals"))]
 pub fn a1_reference<const N: usize>(
     i: &Body<N>,
     j: &Body<N>,

@@ -31,7 +31,10 @@
 // several arrays are indexed together; iterator chains would hide the mathematics.
 #![allow(clippy::needless_range_loop)]
 
+#[cfg(feature = "internals")]
 pub mod batch;
+#[cfg(not(feature = "internals"))]
+mod batch;
 pub mod certificate;
 pub mod containment;
 pub mod derivatives;
@@ -40,7 +43,10 @@ pub(crate) mod lanes;
 pub(crate) mod linalg;
 pub mod model;
 pub mod pair;
+#[cfg(feature = "internals")]
 pub mod projection;
+#[cfg(not(feature = "internals"))]
+mod projection;
 pub mod shape;
 pub(crate) mod trig;
 
