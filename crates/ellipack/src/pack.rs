@@ -293,36 +293,31 @@ fn run_n<const N: usize>(
         0 => std::thread::available_parallelism().map_or(1, usize::from),
         n => n,
     };
-    let settings = MultiStartSettings {
-        local: LocalSettings {
-            feasibility_tolerance: scene.solver.feasibility_tolerance,
-            optimality_tolerance: scene.solver.optimality_tolerance,
-            inner_solver: match scene.solver.inner_solver {
-                crate::scene::InnerSolver::Spg => auglag::InnerSolver::Spg,
-                crate::scene::InnerSolver::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
-            },
-            ..LocalSettings::default()
-        },
-        perturbation: scene.solver.perturbation,
-        seed: options.seed.unwrap_or(scene.seed),
-        // A resumed run continues from its packing; its lattice starts were tried before.
-        lattice_starts: if options.resume_from.is_some() {
-            0
-        } else {
-            usize::try_from(scene.solver.lattice_starts).unwrap_or(usize::MAX)
-        },
-        from_best: scene.solver.from_best,
-        perturbation_levels: scene.solver.perturbation_levels,
-        fresh_lattice_every: usize::try_from(scene.solver.fresh_lattice_every)
-            .unwrap_or(usize::MAX),
-        restart_after: usize::try_from(scene.solver.restart_after).unwrap_or(usize::MAX),
-        threads,
-        max_local_minimisations: scene
-            .solver
-            .local_minimisations
-            .map_or(usize::MAX, |n| usize::try_from(n).unwrap_or(usize::MAX)),
-        time_limit: Some(options.time_limit.unwrap_or(scene.solver.time_limit)),
+    // The scene's solver settings, mapped once onto the packer's.
+    let mut local = LocalSettings::default();
+    local.feasibility_tolerance = scene.solver.feasibility_tolerance;
+    local.optimality_tolerance = scene.solver.optimality_tolerance;
+    local.inner_solver = match scene.solver.inner_solver {
+        crate::scene::InnerSolver::Spg => auglag::InnerSolver::Spg,
+        crate::scene::InnerSolver::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
     };
+    let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
+    let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
+    settings.local = local;
+    settings.perturbation = scene.solver.perturbation;
+    // A resumed run continues from its packing; its lattice starts were tried before.
+    settings.lattice_starts = if options.resume_from.is_some() {
+        0
+    } else {
+        count(scene.solver.lattice_starts)
+    };
+    settings.from_best = scene.solver.from_best;
+    settings.perturbation_levels = scene.solver.perturbation_levels;
+    settings.fresh_lattice_every = count(scene.solver.fresh_lattice_every);
+    settings.restart_after = count(scene.solver.restart_after);
+    settings.threads = threads;
+    settings.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
+    settings.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
     let result = multistart(axes, kind, &x0, &settings, observer)?;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(&result.best.certificate);

@@ -31,6 +31,7 @@ use std::cell::RefCell;
 
 /// Settings of one local minimisation.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct LocalSettings {
     /// Feasibility tolerance on the two constraints (the paper's 1e-4).
     pub feasibility_tolerance: f64,

@@ -36,6 +36,7 @@ use std::time::{Duration, Instant};
 
 /// Settings of a multi-start run.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct MultiStartSettings {
     /// Settings of each local minimisation.
     pub local: LocalSettings,
