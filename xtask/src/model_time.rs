@@ -12,7 +12,7 @@ use crate::report::Section;
 use crate::scene::LoadedScene;
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::{ModelGradient, Problem};
+use implicit_packing::model::{Model, ModelGradient};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -70,7 +70,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     let mut worst_sum = 0.0f64;
     for &m in &counts {
         run.say(&format!("  m = {m}"));
-        let mut problem = Problem::<3>::new(vec![l; m], ContainerKind::Ball).map_err(refused)?;
+        let mut problem = Model::<3>::new(vec![l; m], ContainerKind::Ball).map_err(refused)?;
         let mut x = lattice_start(&problem);
         // The lattice start touches nowhere; pulling the centres in by 15 % makes neighbours
         // overlap, as during a solve, so that the pair terms are really evaluated.
@@ -187,9 +187,9 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         "m copies of the ellipsoid with semi-axes ({}, {}, {}) in a ball, at the paper's \
          lattice start with the centres pulled in by 15 % so that neighbours overlap as they do \
          during a solve. Time of one evaluation of the model (overlap sum of eq. 19, \
-         containment, objective) by `implicit_packing::model::Problem::evaluate`, with and \
+         containment, objective) by `implicit_packing::model::Model::evaluate`, with and \
          without gradients, against the same sum over all pairs \
-         (`Problem::overlap_all_pairs`, up to m = {}). Log–log slopes between the smallest and \
+         (`Model::overlap_all_pairs`, up to m = {}). Log–log slopes between the smallest and \
          the largest m: {:.2} with the grid, {:.2} over all pairs (1 is linear, 2 quadratic). \
          The two sums agree to {:.1e} relative (tolerance {SUM_ORDER:.0e}: the same terms in \
          another order), so the grid misses no overlapping pair.",

@@ -17,7 +17,7 @@ use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::Body;
 use implicit_packing::containment::{Container as ContainerShape, ContainerKind as ModelContainer};
-use implicit_packing::model::Problem;
+use implicit_packing::model::Model;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -267,7 +267,7 @@ fn run_n<const N: usize>(
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     let kind = model_container(scene.container);
-    let problem = Problem::<N>::new(axes.to_vec(), kind)?;
+    let problem = Model::<N>::new(axes.to_vec(), kind)?;
     let x0 = match &options.resume_from {
         Some(packing) => {
             if packing.container.kind() != scene.container {
@@ -431,7 +431,7 @@ fn verify_n<const N: usize>(
     axes: &[[f64; N]],
 ) -> Result<Verification, PackError> {
     let kind = model_container(packing.container.kind());
-    let mut problem = Problem::<N>::new(axes.to_vec(), kind)?;
+    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
     let x = variables_of::<N>(packing, axes, kind)?;
     let model = problem.certify(&x)?;
     let certificate = certificate_of(&model);
@@ -486,7 +486,7 @@ pub fn model_container(kind: ContainerKind) -> ModelContainer {
 
 /// The packing of the model's variables `x`.
 fn packing_of<const N: usize>(
-    problem: &mut Problem<N>,
+    problem: &mut Model<N>,
     x: &[f64],
     kind: ContainerKind,
 ) -> Result<Packing, PackError> {
@@ -608,7 +608,7 @@ fn variables_of<const N: usize>(
                 bodies.push(Body::ellipse(c, l, e.theta)?);
             }
             let axes: Vec<[f64; 2]> = bodies.iter().map(Body::semi_axes).collect();
-            Ok(Problem::<2>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
+            Ok(Model::<2>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
         }
         Items::Ellipsoids(v) if N == 3 => {
             let mut bodies = Vec::with_capacity(v.len());
@@ -625,7 +625,7 @@ fn variables_of<const N: usize>(
                 bodies.push(Body::from_quaternion(c, l, e.quaternion)?);
             }
             let axes: Vec<[f64; 3]> = bodies.iter().map(Body::semi_axes).collect();
-            Ok(Problem::<3>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
+            Ok(Model::<3>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
         }
         _ => Err(PackError::Mismatch(
             "the packing has the other dimension".into(),

@@ -5,7 +5,7 @@ use ellipsoid_packer::local::{LocalSettings, item_measure, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
 use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::Problem;
+use implicit_packing::model::Model;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -31,23 +31,21 @@ fn run<const N: usize>(
     kind: ContainerKind,
     k: usize,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let mut p = Problem::<N>::new(axes, kind)?;
+    let mut p = Model::<N>::new(axes, kind)?;
     let settings = LocalSettings::default();
     let measure = item_measure(&p);
-    let one = |p: &mut Problem<N>,
-               label: String,
-               x0: Vec<f64>|
-     -> Result<(), Box<dyn std::error::Error>> {
-        let d0 = measure / p.evaluate(&x0, None)?.objective;
-        let t = Instant::now();
-        let r = local_minimisation(p, &x0, &settings, &mut |_| false)?;
-        println!(
-            "{label}: start {d0:.4} -> {:.5} in {:.1} s",
-            r.density,
-            t.elapsed().as_secs_f64()
-        );
-        Ok(())
-    };
+    let one =
+        |p: &mut Model<N>, label: String, x0: Vec<f64>| -> Result<(), Box<dyn std::error::Error>> {
+            let d0 = measure / p.evaluate(&x0, None)?.objective;
+            let t = Instant::now();
+            let r = local_minimisation(p, &x0, &settings, &mut |_| false)?;
+            println!(
+                "{label}: start {d0:.4} -> {:.5} in {:.1} s",
+                r.density,
+                t.elapsed().as_secs_f64()
+            );
+            Ok(())
+        };
     let x0 = lattice_start(&p);
     one(&mut p, "paper".into(), x0)?;
     for i in 0..k {

@@ -6,7 +6,7 @@ use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
 use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::Problem;
+use implicit_packing::model::Model;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         false
     };
     let (density, before, factor, report, check, builds) = if dim == 2 {
-        let mut p = Problem::<2>::new(vec![[2.0, 1.0]; m], kind)?;
+        let mut p = Model::<2>::new(vec![[2.0, 1.0]; m], kind)?;
         let x0 = if dense {
             lattice_start_of(&p, &LatticeStart::centred())
         } else {
@@ -63,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             p.pair_list_builds(),
         )
     } else {
-        let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
+        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
         let x0 = if dense {
             lattice_start_of(&p, &LatticeStart::centred())
         } else {
@@ -98,11 +98,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// and containment by sampling points of every item's surface against the container's
 /// implicit equation.
 fn independent_check<const N: usize>(
-    p: &mut Problem<N>,
+    p: &mut Model<N>,
     x: &[f64],
 ) -> Result<String, Box<dyn std::error::Error>> {
     let kind = p.container_kind();
-    let dims = x[p.len() * Problem::<N>::vars_per_body()..].to_vec();
+    let dims = x[p.len() * Model::<N>::vars_per_body()..].to_vec();
     let bodies = p.bodies_at(x)?.to_vec();
     let mut overlapping = 0;
     let mut min_mu2 = f64::INFINITY;

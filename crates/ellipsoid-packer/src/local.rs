@@ -12,7 +12,7 @@
 //! the model: the objective, both constraints and their gradients in one pass over the grid.
 //!
 //! The model satisfies its constraints only to a tolerance, so every result is certified with
-//! PW85 verdicts and exact containment ([`Problem::certify`]) and, if anything still overlaps
+//! PW85 verdicts and exact containment ([`Model::certify`]) and, if anything still overlaps
 //! or sticks out, repaired by the least uniform dilation of the centres and the container:
 //! scaling every centre and the container by s leaves the shapes as they are and multiplies
 //! every pair's contact function by s², so the overlapping pairs need s ≥ 1/μ_ij exactly, and
@@ -26,7 +26,7 @@
 
 use crate::Error;
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
-use implicit_packing::model::{Certificate, ModelGradient, Problem};
+use implicit_packing::model::{Certificate, Model, ModelGradient};
 use std::cell::RefCell;
 
 /// Settings of one local minimisation.
@@ -83,7 +83,7 @@ pub struct LocalResult {
 }
 
 /// Item area (2D) or volume (3D) of all the problem's items.
-pub fn item_measure<const N: usize>(problem: &Problem<N>) -> f64 {
+pub fn item_measure<const N: usize>(problem: &Model<N>) -> f64 {
     let unit = if N == 2 {
         std::f64::consts::PI
     } else {
@@ -105,7 +105,7 @@ pub fn item_measure<const N: usize>(problem: &Problem<N>) -> f64 {
 /// [`Error::LengthMismatch`] when `x0` does not fit the problem; errors of the model on
 /// non-finite variables at the start.
 pub fn local_minimisation<const N: usize>(
-    problem: &mut Problem<N>,
+    problem: &mut Model<N>,
     x0: &[f64],
     settings: &LocalSettings,
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
@@ -120,7 +120,7 @@ pub fn local_minimisation<const N: usize>(
     }
     problem.evaluate(x0, None)?;
     let mut interrupted = false;
-    let mut solve = |problem: &mut Problem<N>, x: &[f64], feasibility: f64| {
+    let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
         let options = Options {
             feasibility_tolerance: feasibility,
             optimality_tolerance: settings.optimality_tolerance,
@@ -170,7 +170,7 @@ pub fn local_minimisation<const N: usize>(
 /// [`Error::LengthMismatch`] when `x` does not fit the problem; errors of the model on
 /// non-finite variables.
 pub fn certified_start<const N: usize>(
-    problem: &mut Problem<N>,
+    problem: &mut Model<N>,
     x: &[f64],
 ) -> Result<Result<LocalResult, Certificate>, Error> {
     if x.len() != problem.var_count() {
@@ -230,7 +230,7 @@ struct Certified {
 }
 
 fn certified<const N: usize>(
-    problem: &mut Problem<N>,
+    problem: &mut Model<N>,
     solution: auglag::Solution,
 ) -> Result<Certified, Error> {
     let items = item_measure(problem);
@@ -254,12 +254,12 @@ fn certified<const N: usize>(
 }
 
 /// The least uniform dilation s ≥ 1 of the centres and the container after which the packing
-/// passes [`Problem::certify`]; returns the dilated variables, s and the certificate.
+/// passes [`Model::certify`]; returns the dilated variables, s and the certificate.
 ///
 /// # Errors
 /// Errors of the model (non-finite variables).
 pub fn repair<const N: usize>(
-    problem: &mut Problem<N>,
+    problem: &mut Model<N>,
     x: &[f64],
 ) -> Result<(Vec<f64>, f64, Certificate), Error> {
     let certificate = problem.certify(x)?;
@@ -317,8 +317,8 @@ pub fn repair<const N: usize>(
 }
 
 /// Centres and container dimensions multiplied by `s`; angles unchanged.
-fn dilate<const N: usize>(problem: &Problem<N>, x: &[f64], s: f64) -> Vec<f64> {
-    let stride = Problem::<N>::vars_per_body();
+fn dilate<const N: usize>(problem: &Model<N>, x: &[f64], s: f64) -> Vec<f64> {
+    let stride = Model::<N>::vars_per_body();
     let bodies_end = problem.len() * stride;
     x.iter()
         .enumerate()
@@ -335,14 +335,14 @@ fn dilate<const N: usize>(problem: &Problem<N>, x: &[f64], s: f64) -> Vec<f64> {
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality
 /// constraints h₁ = overlap, h₂ = containment, evaluated together.
 struct Adapter<'a, const N: usize> {
-    model: RefCell<&'a mut Problem<N>>,
+    model: RefCell<&'a mut Model<N>>,
     gradient: RefCell<ModelGradient>,
     lower: f64,
     centre_bound: f64,
 }
 
 impl<'a, const N: usize> Adapter<'a, N> {
-    fn new(model: &'a mut Problem<N>, centre_bound: f64) -> Self {
+    fn new(model: &'a mut Model<N>, centre_bound: f64) -> Self {
         // Every item contains a ball of its smallest semi-axis, so no container dimension can
         // be smaller than the largest of those: a safe lower bound that keeps the container
         // from collapsing through zero during early iterations.
@@ -360,7 +360,7 @@ impl<'a, const N: usize> Adapter<'a, N> {
     }
 
     fn body_variables(&self) -> usize {
-        self.model.borrow().len() * Problem::<N>::vars_per_body()
+        self.model.borrow().len() * Model::<N>::vars_per_body()
     }
 }
 
@@ -375,7 +375,7 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         // Centres stay within a box far larger than any packing the start leads to: without
         // it a quasi-Newton step from a badly overlapping start could throw an item out to
         // 1e30, where the model refuses the point and the start is lost.
-        let stride = Problem::<N>::vars_per_body();
+        let stride = Model::<N>::vars_per_body();
         for k in (0..start).filter(|k| k % stride < N) {
             lower[k] = -self.centre_bound;
             upper[k] = self.centre_bound;
@@ -470,10 +470,10 @@ mod tests {
 
     #[test]
     fn lattice_start_is_certified_feasible() {
-        let mut p2 = Problem::<2>::new(vec![[2.0, 1.0]; 30], ContainerKind::Ellipsoid).unwrap();
+        let mut p2 = Model::<2>::new(vec![[2.0, 1.0]; 30], ContainerKind::Ellipsoid).unwrap();
         let x = lattice_start(&p2);
         assert!(p2.certify(&x).unwrap().is_feasible());
-        let mut p3 = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; 27], ContainerKind::Box).unwrap();
+        let mut p3 = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 27], ContainerKind::Box).unwrap();
         let x = lattice_start(&p3);
         assert!(p3.certify(&x).unwrap().is_feasible());
     }
@@ -482,7 +482,7 @@ mod tests {
     fn two_and_three_unit_circles_in_the_smallest_circle() {
         // Known optima: R = 2 for two unit circles, 1 + 2/√3 for three.
         for (m, optimum) in [(2, 2.0), (3, 1.0 + 2.0 / 3f64.sqrt())] {
-            let mut p = Problem::<2>::new(vec![[1.0, 1.0]; m], ContainerKind::Ball).unwrap();
+            let mut p = Model::<2>::new(vec![[1.0, 1.0]; m], ContainerKind::Ball).unwrap();
             let mut x = lattice_start(&p);
             // Break the symmetry of the lattice start a little.
             x[2] += 0.1;
@@ -505,7 +505,7 @@ mod tests {
 
     #[test]
     fn ellipses_in_an_ellipse_end_certified_and_denser_than_the_start() {
-        let mut p = Problem::<2>::new(vec![[2.0, 1.0]; 12], ContainerKind::Ellipsoid).unwrap();
+        let mut p = Model::<2>::new(vec![[2.0, 1.0]; 12], ContainerKind::Ellipsoid).unwrap();
         let x0 = lattice_start(&p);
         let start_density = item_measure(&p) / p.evaluate(&x0, None).unwrap().objective;
         let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
@@ -520,7 +520,7 @@ mod tests {
 
     #[test]
     fn repair_separates_overlapping_items_by_the_least_dilation() {
-        let mut p = Problem::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerKind::Ball).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerKind::Ball).unwrap();
         // Two unit spheres 1.5 apart in a ball of radius 3: μ = 0.75, s = 4/3.
         let x = vec![
             -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
@@ -533,7 +533,7 @@ mod tests {
 
     #[test]
     fn interrupt_still_returns_a_certified_packing() {
-        let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerKind::Ball).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerKind::Ball).unwrap();
         let x0 = lattice_start(&p);
         let mut calls = 0;
         let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| {

@@ -31,7 +31,7 @@ use crate::Error;
 use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
 use crate::starts::{LatticeStart, lattice_start_of, perturb};
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::Problem;
+use implicit_packing::model::Model;
 use std::time::{Duration, Instant};
 
 /// Settings of a multi-start run.
@@ -209,7 +209,7 @@ pub fn multistart<const N: usize>(
 ) -> Result<MultiStartResult, Error> {
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
-    let mut problem = Problem::<N>::new(semi_axes.to_vec(), kind)?;
+    let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
     // A certified start is the first best packing: whatever happens to the first local
     // minimisation (cut off by the time limit at a point no dilation repairs, or ending worse
     // than a packing it resumes from), the run has a certified packing at every moment.
@@ -312,7 +312,7 @@ pub fn multistart<const N: usize>(
                     };
                     let local = &settings.local;
                     scope.spawn(move || {
-                        let mut p = Problem::<N>::new(semi_axes.to_vec(), kind)?;
+                        let mut p = Model::<N>::new(semi_axes.to_vec(), kind)?;
                         local_minimisation(&mut p, &x, local, &mut |progress| {
                             shared.iteration(progress);
                             shared.should_stop() || out_of_time()
@@ -587,7 +587,7 @@ mod tests {
         let result = |density: f64| {
             let axes = vec![[2.0, 1.0]; 2];
             let x0 = paper_start(&axes, ContainerKind::Box).unwrap();
-            let mut p = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+            let mut p = Model::<2>::new(axes, ContainerKind::Box).unwrap();
             let mut r =
                 local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
             r.density = density;

@@ -35,7 +35,7 @@
 
 use crate::Error;
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::Problem;
+use implicit_packing::model::Model;
 
 /// One dense lattice start: which lattice orientation, shifted by how much, cut to which
 /// container aspect.
@@ -145,7 +145,7 @@ impl<const N: usize> LatticeStart<N> {
 /// The variables of a [`LatticeStart`] for `problem`: items unrotated on the lattice, and the
 /// smallest container of the start's aspect holding every item's enclosing ball (a ball or an
 /// ellipsoid) or box (a box), so the start is feasible.
-pub fn lattice_start_of<const N: usize>(problem: &Problem<N>, start: &LatticeStart<N>) -> Vec<f64> {
+pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart<N>) -> Vec<f64> {
     let m = problem.len();
     let kind = problem.container_kind();
     let l = lattice_semi_axes(problem);
@@ -168,7 +168,7 @@ pub fn lattice_start_of<const N: usize>(problem: &Problem<N>, start: &LatticeSta
             .fold(0.0, f64::max),
     };
     let points = deepest_points(m, &start.basis(), &start.shift, &l, &aspect, gauge);
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let mut x = vec![0.0; problem.var_count()];
     for (i, p) in points.iter().enumerate() {
         x[i * stride..i * stride + N].copy_from_slice(p);
@@ -282,11 +282,11 @@ fn container_holding<const N: usize>(
 /// `√3 b` in y, alternate rows shifted by `a`), the points `(2δ₁ l₁, 2δ₂ l₂, 2δ₃ l₃)`, δ ∈ ℤ³,
 /// in 3D (`l` the largest semi-axis of each direction over all items, so nothing overlaps) —
 /// and the smallest container of the problem's kind that holds every item's enclosing ball.
-pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
+pub fn lattice_start<const N: usize>(problem: &Model<N>) -> Vec<f64> {
     let m = problem.len();
     let spacing = lattice_semi_axes(problem);
     let points = lattice_points::<N>(m, &spacing);
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let mut x = vec![0.0; problem.var_count()];
     let mut reach = [0.0_f64; N];
     let mut radius = 0.0_f64;
@@ -313,7 +313,7 @@ pub fn lattice_start<const N: usize>(problem: &Problem<N>) -> Vec<f64> {
 /// The largest semi-axis of each direction over all items, which unrotated items on a lattice
 /// scaled by it never exceed. Lattice neighbours are then exactly tangent; a relative gap of
 /// 1e-9 keeps lattice starts certified under rounding.
-pub(crate) fn lattice_semi_axes<const N: usize>(problem: &Problem<N>) -> [f64; N] {
+pub(crate) fn lattice_semi_axes<const N: usize>(problem: &Model<N>) -> [f64; N] {
     let mut l = [0.0_f64; N];
     for axes in problem.semi_axes() {
         for k in 0..N {
@@ -374,7 +374,7 @@ pub fn perturb<const N: usize>(
     seed: u64,
     index: u64,
 ) -> Vec<f64> {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let dims = &x[items * stride..];
     let extent = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(1.0);
@@ -415,12 +415,12 @@ impl SplitMix64 {
 /// The paper's first initial solution for these items ([`lattice_start`]).
 ///
 /// # Errors
-/// Errors of [`Problem::new`] (no items, invalid semi-axes).
+/// Errors of [`Model::new`] (no items, invalid semi-axes).
 pub fn paper_start<const N: usize>(
     semi_axes: &[[f64; N]],
     kind: ContainerKind,
 ) -> Result<Vec<f64>, Error> {
-    Ok(lattice_start(&Problem::<N>::new(semi_axes.to_vec(), kind)?))
+    Ok(lattice_start(&Model::<N>::new(semi_axes.to_vec(), kind)?))
 }
 
 #[cfg(test)]
@@ -428,7 +428,7 @@ mod tests {
     use super::*;
 
     fn certified<const N: usize>(axes: [f64; N], m: usize, kind: ContainerKind, k: usize) -> f64 {
-        let mut p = Problem::<N>::new(vec![axes; m], kind).unwrap();
+        let mut p = Model::<N>::new(vec![axes; m], kind).unwrap();
         let x = lattice_start_of(&p, &LatticeStart::sequence(k));
         let c = p.certify(&x).unwrap();
         assert!(c.is_feasible(), "start {k} of {kind:?}: {c:?}");
@@ -452,7 +452,7 @@ mod tests {
     #[test]
     fn fcc_starts_are_denser_than_the_papers_cubic_start_in_a_box() {
         let m = 100;
-        let mut p = Problem::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerKind::Box).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerKind::Box).unwrap();
         let paper = crate::starts::lattice_start(&p);
         let paper = crate::local::item_measure(&p) / p.evaluate(&paper, None).unwrap().objective;
         let best = (0..16)

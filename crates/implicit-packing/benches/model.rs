@@ -13,7 +13,7 @@
 use implicit_packing::batch::pair_gradients;
 use implicit_packing::containment::ContainerKind;
 use implicit_packing::derivatives::{PairGradient, pair_gradient};
-use implicit_packing::model::{ModelGradient, PAIR_LIST_SKIN, Problem};
+use implicit_packing::model::{Model, ModelGradient, PAIR_LIST_SKIN};
 use implicit_packing::pair::separated_along_centre_line;
 use std::hint::black_box;
 use std::time::Instant;
@@ -66,7 +66,7 @@ fn interleaved(sizes: &[usize]) -> Vec<f64> {
         .iter()
         .map(|&m| {
             let (axes, x) = configuration(m, 0.6);
-            let p = Problem::<3>::new(axes, ContainerKind::Box).expect("valid problem");
+            let p = Model::<3>::new(axes, ContainerKind::Box).expect("valid problem");
             (m, p, x, ModelGradient::default(), f64::INFINITY)
         })
         .collect();
@@ -86,7 +86,7 @@ fn interleaved(sizes: &[usize]) -> Vec<f64> {
 fn main() {
     for &m in &[1_000usize, 10_000, 100_000] {
         let (axes, x) = configuration(m, 0.6);
-        let mut p = Problem::<3>::new(axes, ContainerKind::Box).expect("valid problem");
+        let mut p = Model::<3>::new(axes, ContainerKind::Box).expect("valid problem");
         let mut g = ModelGradient::default();
         let ev = p.evaluate(&x, Some(&mut g)).expect("evaluates");
         let passes = if m >= 100_000 { 5 } else { 20 };

@@ -1,7 +1,7 @@
 //! A user's own optimiser on the model: plain gradient descent with a backtracking line search
 //! on `overlap + containment`, the container held fixed, until a few overlapping ellipses
 //! are pulled apart inside a circle. The model supplies the value and the gradient
-//! ([`Problem::evaluate`]) and, at the end, the PW85 certificate ([`Problem::certify`]).
+//! ([`Model::evaluate`]) and, at the end, the PW85 certificate ([`Model::certify`]).
 //!
 //! Gradient descent approaches a feasible point from outside and ends with items touching to
 //! within rounding, which a strict certificate may call overlapping. So the descent runs on
@@ -10,7 +10,7 @@
 //! Run with `cargo run --release -p implicit-packing --example gradient_descent`.
 
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::{ModelGradient, Problem};
+use implicit_packing::model::{Model, ModelGradient};
 
 /// Ellipses of semi-axes (1, 0.5) in a circle of radius 2.3: density 0.57.
 const ELLIPSES: usize = 6;
@@ -21,7 +21,7 @@ const MAX_ITERATIONS: usize = 5000;
 
 fn main() -> Result<(), implicit_packing::Error> {
     let inflated = SEMI_AXES.map(|l| INFLATION * l);
-    let mut problem = Problem::<2>::new(vec![inflated; ELLIPSES], ContainerKind::Ball)?;
+    let mut problem = Model::<2>::new(vec![inflated; ELLIPSES], ContainerKind::Ball)?;
     // Variables: [c_x, c_y, θ] per ellipse, then the container's radius. The start crowds the
     // ellipses near the centre, every one overlapping its neighbours.
     let mut x = Vec::with_capacity(problem.var_count());
@@ -75,7 +75,7 @@ fn main() -> Result<(), implicit_packing::Error> {
     }
     println!("stopped after {iterations} iterations at {value:.3e}");
 
-    let mut exact = Problem::<2>::new(vec![SEMI_AXES; ELLIPSES], ContainerKind::Ball)?;
+    let mut exact = Model::<2>::new(vec![SEMI_AXES; ELLIPSES], ContainerKind::Ball)?;
     let certificate = exact.certify(&x)?;
     println!(
         "PW85 certificate: {} overlapping pairs, {} ellipses outside ({} pairs checked)",

@@ -443,7 +443,7 @@ mod avx {
 /// `f` and `∇f` for each pair `(i, j)` of `bodies`, the same bits as [`pair_gradient`] on
 /// each, computed four pairs at a time where the processor allows (about twice as fast per
 /// pair in a packing; see the crate's `model` bench). For callers with their own neighbour
-/// lists (a DEM or MD code); [`crate::model::Problem`] uses the same kernel.
+/// lists (a DEM or MD code); [`crate::model::Model`] uses the same kernel.
 ///
 /// # Errors
 /// [`Error::PairIndex`] naming the first pair with an index out of range (nothing is

@@ -26,7 +26,7 @@
 //! the same as a fresh grid's and are summed in ascending `(i, j)` order, so the model's values
 //! are a function of `x` alone, whatever the history of the list.
 //!
-//! Evaluation reuses the workspace of the [`Problem`] (the bodies and the pair list): after the
+//! Evaluation reuses the workspace of the [`Model`] (the bodies and the pair list): after the
 //! first call no memory is allocated unless `m` grows or a rebuild of the list finds more pairs
 //! than any before (serial path; with the `rayon` feature each task collects its pair gradients in
 //! a vector of its own, scattered serially afterwards). A value-only call does no gradient work.
@@ -102,7 +102,7 @@ pub use crate::certificate::Certificate;
 /// A packing problem: the semi-axes of the `m` ellipsoids and the kind of container, with the
 /// workspace reused by every evaluation.
 #[derive(Debug)]
-pub struct Problem<const N: usize> {
+pub struct Model<const N: usize> {
     semi_axes: Vec<[f64; N]>,
     kind: ContainerKind,
     bodies: Vec<Body<N>>,
@@ -138,7 +138,7 @@ pub const fn angle_count(n: usize) -> usize {
     n * (n - 1) / 2
 }
 
-impl<const N: usize> Problem<N> {
+impl<const N: usize> Model<N> {
     /// A problem with the given semi-axes (one `[l_1, …, l_N]` per ellipsoid) and container kind.
     ///
     /// # Errors
@@ -161,7 +161,7 @@ impl<const N: usize> Problem<N> {
             PAIR_LIST_SKIN * r_min,
         )
         .map_err(grid_error)?;
-        Ok(Problem {
+        Ok(Model {
             semi_axes,
             kind,
             bodies: Vec::new(),
@@ -317,7 +317,7 @@ impl<const N: usize> Problem<N> {
     /// Serial (also with the `rayon` feature); no allocation once `out` is sized.
     ///
     /// # Errors
-    /// Those of [`Problem::evaluate`], and [`Error::LengthMismatch`] or
+    /// Those of [`Model::evaluate`], and [`Error::LengthMismatch`] or
     /// [`Error::NonFiniteVariable`] for a bad direction `v`.
     pub fn hessian_vector_product(
         &mut self,
@@ -496,7 +496,7 @@ impl<const N: usize> Problem<N> {
     /// on the bodies and the container that `x` stands for).
     ///
     /// # Errors
-    /// Those of [`Problem::evaluate`], and those of [`crate::certificate::certify`].
+    /// Those of [`Model::evaluate`], and those of [`crate::certificate::certify`].
     pub fn certify(&mut self, x: &[f64]) -> Result<Certificate, Error> {
         let container = self.load(x)?;
         crate::certificate::certify(&self.bodies, &container)
@@ -529,7 +529,7 @@ impl<const N: usize> Problem<N> {
     /// The container that the variables `x` stand for (centred at the origin).
     ///
     /// # Errors
-    /// As [`Problem::evaluate`].
+    /// As [`Model::evaluate`].
     pub fn container_at(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
         self.load(x)
     }
@@ -537,7 +537,7 @@ impl<const N: usize> Problem<N> {
     /// The bodies (centres and rotations) that the variables `x` stand for.
     ///
     /// # Errors
-    /// As [`Problem::evaluate`].
+    /// As [`Model::evaluate`].
     pub fn bodies_at(&mut self, x: &[f64]) -> Result<&[Body<N>], Error> {
         self.load(x)?;
         Ok(&self.bodies)
@@ -669,7 +669,7 @@ fn scatter_force_torque<const N: usize>(
     torque: &[f64; 3],
     spin: &[[f64; 3]; 3],
 ) {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let base = b * stride;
     for k in 0..N {
         out[base + k] += force[k];
@@ -681,7 +681,7 @@ fn scatter_force_torque<const N: usize>(
 }
 
 /// Adds a pair gradient to `out` (centres) and `torques` (per body, turned into angle
-/// derivatives once all pairs are summed, see [`Problem::evaluate`]).
+/// derivatives once all pairs are summed, see [`Model::evaluate`]).
 #[inline(always)]
 fn add_pair<const N: usize>(
     out: &mut [f64],
@@ -690,7 +690,7 @@ fn add_pair<const N: usize>(
     j: usize,
     g: &PairGradient<N>,
 ) {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     for k in 0..N {
         out[i * stride + k] += g.centre_i[k];
         out[j * stride + k] += g.centre_j[k];
@@ -833,7 +833,7 @@ fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, 
 /// The pair direction of `v` for the bodies `i`, `j`: centre velocities and world angular
 /// velocities `w = Σ_α ω_α v_α` (2D: `w = v_θ e_z`).
 fn direction<const N: usize>(x: &[f64], v: &[f64], i: usize, j: usize) -> PairDirection<N> {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let spin = |b: usize| -> [f64; 3] {
         let base = b * stride;
         if N == 2 {
@@ -872,7 +872,7 @@ fn scatter_second<const N: usize>(
     dtorque: &[f64; 3],
     torque: &[f64; 3],
 ) {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let base = b * stride;
     for k in 0..N {
         out[base + k] += dforce[k];
@@ -919,7 +919,7 @@ fn body_gradient_into<const N: usize>(
     torque: &[f64; 3],
     out: &mut [f64],
 ) {
-    let stride = Problem::<N>::vars_per_body();
+    let stride = Model::<N>::vars_per_body();
     let base = b * stride;
     out[..N].copy_from_slice(force);
     if N == 2 {

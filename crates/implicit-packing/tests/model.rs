@@ -4,7 +4,7 @@
 
 use implicit_packing::Error;
 use implicit_packing::containment::ContainerKind;
-use implicit_packing::model::{ModelGradient, Problem};
+use implicit_packing::model::{Model, ModelGradient};
 use testkit::Rng;
 
 /// m ellipsoids on a jittered cubic lattice at about the given volume fraction, random angles;
@@ -75,7 +75,7 @@ fn grid_sum_equals_all_pairs_sum() {
     let mut rng = Rng::new(21);
     for &(m, density) in &[(200usize, 0.6), (343, 0.3), (50, 0.7)] {
         let (axes, x) = config3(&mut rng, m, density, ContainerKind::Box);
-        let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
+        let mut p = Model::<3>::new(axes, ContainerKind::Box).unwrap();
         let ev = p.evaluate(&x, None).unwrap();
         let all = p.overlap_all_pairs(&x).unwrap();
         assert!(ev.overlap > 0.0);
@@ -91,7 +91,7 @@ fn grid_sum_equals_all_pairs_sum() {
         assert!(ev.pairs < m * (m - 1) / 2);
     }
     let (axes, x) = config2(&mut rng, 400, 0.6);
-    let mut p = Problem::<2>::new(axes, ContainerKind::Ellipsoid).unwrap();
+    let mut p = Model::<2>::new(axes, ContainerKind::Ellipsoid).unwrap();
     let ev = p.evaluate(&x, None).unwrap();
     let all = p.overlap_all_pairs(&x).unwrap();
     assert_eq!(
@@ -157,17 +157,17 @@ fn model_gradient_matches_finite_differences() {
         ContainerKind::Box,
     ] {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
-        let mut p = Problem::<3>::new(axes, kind).unwrap();
+        let mut p = Model::<3>::new(axes, kind).unwrap();
         fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    let mut p = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+    let mut p = Model::<2>::new(axes, ContainerKind::Box).unwrap();
     fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
 }
 
 #[test]
 fn bad_variables_are_reported_by_index() {
-    let mut p = Problem::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerKind::Ball).unwrap();
     let mut x = vec![0.0; p.var_count()];
     x[0] = 3.0;
     x[6] = -3.0;
@@ -189,7 +189,7 @@ fn bad_variables_are_reported_by_index() {
         Err(Error::LengthMismatch { .. })
     ));
     assert!(matches!(
-        Problem::<2>::new(vec![[1.0, 1.0], [1.0, 0.0]], ContainerKind::Box),
+        Model::<2>::new(vec![[1.0, 1.0], [1.0, 0.0]], ContainerKind::Box),
         Err(Error::InvalidSemiAxis {
             item: Some(1),
             axis: 1,
@@ -257,8 +257,8 @@ fn hessian_vector_products_match_finite_differences() {
         ContainerKind::Box,
     ] {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
-        let mut p = Problem::<3>::new(axes.clone(), kind).unwrap();
-        let mut q = Problem::<3>::new(axes, kind).unwrap();
+        let mut p = Model::<3>::new(axes.clone(), kind).unwrap();
+        let mut q = Model::<3>::new(axes, kind).unwrap();
         check(
             &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
             &mut |x, g| {
@@ -269,8 +269,8 @@ fn hessian_vector_products_match_finite_differences() {
         );
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    let mut p = Problem::<2>::new(axes.clone(), ContainerKind::Box).unwrap();
-    let mut q = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+    let mut p = Model::<2>::new(axes.clone(), ContainerKind::Box).unwrap();
+    let mut q = Model::<2>::new(axes, ContainerKind::Box).unwrap();
     check(
         &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
         &mut |x, g| {
@@ -288,7 +288,7 @@ fn certification_agrees_with_the_model() {
     let mut rng = Rng::new(66);
     for &density in &[0.3, 0.6] {
         let (axes, x) = config3(&mut rng, 125, density, ContainerKind::Box);
-        let mut p = Problem::<3>::new(axes, ContainerKind::Box).unwrap();
+        let mut p = Model::<3>::new(axes, ContainerKind::Box).unwrap();
         let cert = p.certify(&x).unwrap();
         let b = p.bodies().to_vec();
         let mut expect = Vec::new();
@@ -321,7 +321,7 @@ fn certification_agrees_with_the_model() {
         assert!(!cert.is_feasible());
     }
     // Two separated ellipses well inside a disc: feasible.
-    let mut p = Problem::<2>::new(vec![[1.0, 0.5], [1.0, 0.5]], ContainerKind::Ball).unwrap();
+    let mut p = Model::<2>::new(vec![[1.0, 0.5], [1.0, 0.5]], ContainerKind::Ball).unwrap();
     let cert = p.certify(&[-1.5, 0.0, 0.0, 1.5, 0.0, 0.3, 4.0]).unwrap();
     assert!(cert.is_feasible(), "{cert:?}");
     let cert = p.certify(&[-0.5, 0.0, 0.0, 0.5, 0.0, 0.3, 1.2]).unwrap();
@@ -335,7 +335,7 @@ fn certification_agrees_with_the_model() {
 #[test]
 fn hessian_vector_product_in_the_hard_case_is_finite() {
     let mut p =
-        Problem::<3>::new(vec![[1.0, 0.5, 0.25], [0.8, 0.6, 0.3]], ContainerKind::Ball).unwrap();
+        Model::<3>::new(vec![[1.0, 0.5, 0.25], [0.8, 0.6, 0.3]], ContainerKind::Ball).unwrap();
     let x = [
         0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0, -0.3, 0.1, 0.2, 3.0,
     ];
@@ -357,7 +357,7 @@ fn hessian_vector_product_in_the_hard_case_is_finite() {
 fn pack_variables_round_trips() {
     let mut rng = Rng::new(77);
     let (axes, x) = config3(&mut rng, 8, 0.4, ContainerKind::Ball);
-    let mut p = Problem::<3>::new(axes, ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(axes, ContainerKind::Ball).unwrap();
     let bodies = p.bodies_at(&x).unwrap().to_vec();
     let y = p.pack_variables(&bodies, &x[x.len() - 1..]).unwrap();
     let again = p.bodies_at(&y).unwrap().to_vec();
@@ -370,7 +370,7 @@ fn pack_variables_round_trips() {
             }
         }
     }
-    let q = Problem::<2>::new(vec![[1.0, 0.5]], ContainerKind::Box).unwrap();
+    let q = Model::<2>::new(vec![[1.0, 0.5]], ContainerKind::Box).unwrap();
     let e = implicit_packing::Ellipse::ellipse([0.3, -0.2], [1.0, 0.5], 2.5).unwrap();
     let y = q.pack_variables(&[e], &[2.0, 3.0]).unwrap();
     assert_eq!((y[0], y[1], y[3], y[4]), (0.3, -0.2, 2.0, 3.0));
@@ -391,7 +391,7 @@ fn pack_variables_round_trips() {
 /// gradients and stays finite.
 #[test]
 fn containment_hessian_in_the_hard_case_is_finite() {
-    let mut p = Problem::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerKind::Ball).unwrap();
     let x = [0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.8];
     let v = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6, 0.7];
     let mut out = ModelGradient::default();
