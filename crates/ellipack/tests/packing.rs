@@ -211,6 +211,18 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
     }
 }
 
+/// The numbers of the first item's line of the XYZ file, after its species.
+fn first_xyz_row(p: &Packing) -> Vec<f64> {
+    packing::xyz_string(p)
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split_whitespace()
+        .skip(1)
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
 #[test]
 fn xyz_orientation_is_in_ovito_order() {
     // A quarter turn about z: Hamilton (w, x, y, z) = (cos π/4, 0, 0, sin π/4); OVITO wants
@@ -228,15 +240,7 @@ fn xyz_orientation_is_in_ovito_order() {
         }]),
     )
     .unwrap();
-    let text = packing::xyz_string(&p);
-    let row: Vec<f64> = text
-        .lines()
-        .nth(2)
-        .unwrap()
-        .split_whitespace()
-        .skip(1)
-        .map(|t| t.parse().unwrap())
-        .collect();
+    let row = first_xyz_row(&p);
     assert_eq!(row, vec![1.0, 2.0, 3.0, 1.0, 0.75, 0.5, 0.0, 0.0, s, c]);
     // The same rotation as an ellipse angle: θ = π/2.
     let p2 = Packing::new(
@@ -251,15 +255,7 @@ fn xyz_orientation_is_in_ovito_order() {
         }]),
     )
     .unwrap();
-    let text = packing::xyz_string(&p2);
-    let row: Vec<f64> = text
-        .lines()
-        .nth(2)
-        .unwrap()
-        .split_whitespace()
-        .skip(1)
-        .map(|t| t.parse().unwrap())
-        .collect();
+    let row = first_xyz_row(&p2);
     assert!(
         (row[8] - s).abs() < 1e-16 && (row[9] - c).abs() < 1e-16,
         "{row:?}"
