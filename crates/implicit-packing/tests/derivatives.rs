@@ -2,7 +2,9 @@
 //! gradient of d² against the implicit-function system of Appendix A.1.
 #![allow(clippy::needless_range_loop)]
 
-use implicit_packing::derivatives::{a1_reference, angle_gradient_3d, pair_derivatives};
+use implicit_packing::derivatives::{
+    PairGradient, a1_reference, angle_gradient_3d, pair_derivatives,
+};
 use implicit_packing::pair::pair_term;
 use implicit_packing::shape::angular_velocities_3d;
 use implicit_packing::{Body, Ellipse, Ellipsoid};
@@ -22,16 +24,8 @@ fn bodies2(v: &[f64; 6], li: [f64; 2], lj: [f64; 2]) -> (Ellipse, Ellipse) {
 }
 
 fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
-    let li = [
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-    ];
-    let lj = [
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-    ];
+    let li = rng.point::<3>(0.3, 2.0);
+    let lj = rng.point::<3>(0.3, 2.0);
     let ri = li.iter().cloned().fold(0.0, f64::max);
     let rj = lj.iter().cloned().fold(0.0, f64::max);
     let dir = rng.direction();
@@ -62,6 +56,50 @@ fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     if scale == 0.0 { worst } else { worst / scale }
 }
 
+/// A 3D pair gradient in the variables of [`bodies3`]: torques become derivatives with
+/// respect to the angles `v[3..6]` and `v[9..12]`.
+fn in_angles_3d(v: &[f64; 12], g: &PairGradient<3>) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    out[0..3].copy_from_slice(&g.centre_i);
+    out[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &g.torque_i));
+    out[6..9].copy_from_slice(&g.centre_j);
+    out[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &g.torque_j));
+    out
+}
+
+/// A 2D pair gradient in the variables of [`bodies2`]: the torque about z is the derivative
+/// with respect to the angle.
+fn in_angles_2d(g: &PairGradient<2>) -> [f64; 6] {
+    [
+        g.centre_i[0],
+        g.centre_i[1],
+        g.torque_i[2],
+        g.centre_j[0],
+        g.centre_j[1],
+        g.torque_j[2],
+    ]
+}
+
+/// Two ellipses with semi-axes in [0.3, 2), centres up to 1.1 times the sum of their largest
+/// semi-axes apart, as variables of [`bodies2`].
+fn random_pair2(rng: &mut Rng) -> ([f64; 6], [f64; 2], [f64; 2]) {
+    let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+    let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+    let r = li[0].max(li[1]) + lj[0].max(lj[1]);
+    let ang = rng.range(0.0, std::f64::consts::TAU);
+    let dist = rng.range(0.0, 1.1) * r;
+    let c = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+    let v = [
+        c[0],
+        c[1],
+        rng.range(-3.0, 3.0),
+        c[0] + dist * ang.cos(),
+        c[1] + dist * ang.sin(),
+        rng.range(-3.0, 3.0),
+    ];
+    (v, li, lj)
+}
+
 #[test]
 fn gradient_of_f_matches_finite_differences_3d() {
     let mut rng = Rng::new(7);
@@ -79,16 +117,8 @@ fn gradient_of_f_matches_finite_differences_3d() {
             continue;
         }
         let d = pair_derivatives(&i, &j);
-        let mut g = [0.0; 12];
-        g[0..3].copy_from_slice(&d.grad_f.centre_i);
-        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
-        g[6..9].copy_from_slice(&d.grad_f.centre_j);
-        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
-        let mut gu = [0.0; 12];
-        gu[0..3].copy_from_slice(&d.grad_u.centre_i);
-        gu[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.torque_i));
-        gu[6..9].copy_from_slice(&d.grad_u.centre_j);
-        gu[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.torque_j));
+        let g = in_angles_3d(&v, &d.grad_f);
+        let gu = in_angles_3d(&v, &d.grad_u);
         let mut fd = [0.0; 12];
         let mut fdu = [0.0; 12];
         let h = 1e-6;
@@ -134,41 +164,14 @@ fn gradient_of_f_matches_finite_differences_2d() {
     let mut checked = 0;
     let mut worst = 0.0f64;
     while checked < 1000 {
-        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
-        let a = rng.range(0.0, std::f64::consts::TAU);
-        let dist = rng.range(0.0, 1.1) * r;
-        let v = [
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-3.0, 3.0),
-            0.0,
-            0.0,
-            rng.range(-3.0, 3.0),
-        ];
-        let v = [
-            v[0],
-            v[1],
-            v[2],
-            v[0] + dist * a.cos(),
-            v[1] + dist * a.sin(),
-            v[5],
-        ];
+        let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
         if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
             continue;
         }
         let d = pair_derivatives(&i, &j);
-        let g = [
-            d.grad_f.centre_i[0],
-            d.grad_f.centre_i[1],
-            d.grad_f.torque_i[2],
-            d.grad_f.centre_j[0],
-            d.grad_f.centre_j[1],
-            d.grad_f.torque_j[2],
-        ];
+        let g = in_angles_2d(&d.grad_f);
         let h = 1e-6;
         let mut fd = [0.0; 6];
         for k in 0..6 {
@@ -259,13 +262,7 @@ fn hessian_vector_products_match_finite_differences() {
     };
     let grad12 = |v: &[f64; 12], li: [f64; 3], lj: [f64; 3]| -> [f64; 12] {
         let (i, j) = bodies3(v, li, lj);
-        let d = pair_derivatives(&i, &j);
-        let mut g = [0.0; 12];
-        g[0..3].copy_from_slice(&d.grad_f.centre_i);
-        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
-        g[6..9].copy_from_slice(&d.grad_f.centre_j);
-        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
-        g
+        in_angles_3d(v, &pair_derivatives(&i, &j).grad_f)
     };
     let mut rng = Rng::new(99);
     let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
@@ -332,32 +329,11 @@ fn hessian_vector_products_match_finite_differences() {
 
     let grad6 = |v: &[f64; 6], li: [f64; 2], lj: [f64; 2]| -> [f64; 6] {
         let (i, j) = bodies2(v, li, lj);
-        let d = pair_derivatives(&i, &j);
-        [
-            d.grad_f.centre_i[0],
-            d.grad_f.centre_i[1],
-            d.grad_f.torque_i[2],
-            d.grad_f.centre_j[0],
-            d.grad_f.centre_j[1],
-            d.grad_f.torque_j[2],
-        ]
+        in_angles_2d(&pair_derivatives(&i, &j).grad_f)
     };
     let (mut checked, mut worst) = (0, 0.0f64);
     while checked < 1000 {
-        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
-        let ang = rng.range(0.0, std::f64::consts::TAU);
-        let dist = rng.range(0.0, 1.1) * r;
-        let c = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
-        let v = [
-            c[0],
-            c[1],
-            rng.range(-3.0, 3.0),
-            c[0] + dist * ang.cos(),
-            c[1] + dist * ang.sin(),
-            rng.range(-3.0, 3.0),
-        ];
+        let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
         if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
@@ -371,14 +347,7 @@ fn hessian_vector_products_match_finite_differences() {
             spin_j: [0.0, 0.0, dv[5]],
         };
         let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
-        let exact = [
-            hv.centre_i[0],
-            hv.centre_i[1],
-            hv.torque_i[2],
-            hv.centre_j[0],
-            hv.centre_j[1],
-            hv.torque_j[2],
-        ];
+        let exact = in_angles_2d(&hv);
         let h = 1e-6;
         let vp: [f64; 6] = std::array::from_fn(|k| v[k] + h * dv[k]);
         let vm: [f64; 6] = std::array::from_fn(|k| v[k] - h * dv[k]);

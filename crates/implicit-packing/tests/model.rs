@@ -70,6 +70,13 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
     (axes, x)
 }
 
+/// Every kind of container.
+const KINDS: [ContainerKind; 3] = [
+    ContainerKind::Ball,
+    ContainerKind::Ellipsoid,
+    ContainerKind::Box,
+];
+
 #[test]
 fn grid_sum_equals_all_pairs_sum() {
     let mut rng = Rng::new(21);
@@ -151,11 +158,7 @@ fn fd_check(
 #[test]
 fn model_gradient_matches_finite_differences() {
     let mut rng = Rng::new(33);
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
         let mut p = Problem::<3>::new(axes, kind).unwrap();
         fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
@@ -251,11 +254,7 @@ fn hessian_vector_products_match_finite_differences() {
             "{worst:?} {worst_sym}"
         );
     };
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
         let mut p = Problem::<3>::new(axes.clone(), kind).unwrap();
         let mut q = Problem::<3>::new(axes, kind).unwrap();
