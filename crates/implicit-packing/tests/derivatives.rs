@@ -56,6 +56,19 @@ fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     if scale == 0.0 { worst } else { worst / scale }
 }
 
+/// The central difference of `grad` from `v` along `dv`, with step 1e-6.
+fn along<const M: usize>(
+    v: &[f64; M],
+    dv: &[f64; M],
+    grad: impl Fn(&[f64; M]) -> [f64; M],
+) -> [f64; M] {
+    let h = 1e-6;
+    let vp: [f64; M] = std::array::from_fn(|k| v[k] + h * dv[k]);
+    let vm: [f64; M] = std::array::from_fn(|k| v[k] - h * dv[k]);
+    let (gp, gm) = (grad(&vp), grad(&vm));
+    std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h))
+}
+
 /// A 3D pair gradient in the variables of [`bodies3`]: torques become derivatives with
 /// respect to the angles `v[3..6]` and `v[9..12]`.
 fn in_angles_3d(v: &[f64; 12], g: &PairGradient<3>) -> [f64; 12] {
@@ -306,11 +319,7 @@ fn hessian_vector_products_match_finite_differences() {
             exact[3 + a] = e_i;
             exact[9 + a] = e_j;
         }
-        let h = 1e-6;
-        let vp: [f64; 12] = std::array::from_fn(|k| v[k] + h * dv[k]);
-        let vm: [f64; 12] = std::array::from_fn(|k| v[k] - h * dv[k]);
-        let (gp, gm) = (grad12(&vp, li, lj), grad12(&vm, li, lj));
-        let fd: [f64; 12] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
+        let fd = along(&v, &dv, |x| grad12(x, li, lj));
         let e = rel_err(&exact, &fd);
         assert!(
             e <= 1e-6,
@@ -348,11 +357,7 @@ fn hessian_vector_products_match_finite_differences() {
         };
         let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
         let exact = in_angles_2d(&hv);
-        let h = 1e-6;
-        let vp: [f64; 6] = std::array::from_fn(|k| v[k] + h * dv[k]);
-        let vm: [f64; 6] = std::array::from_fn(|k| v[k] - h * dv[k]);
-        let (gp, gm) = (grad6(&vp, li, lj), grad6(&vm, li, lj));
-        let fd: [f64; 6] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
+        let fd = along(&v, &dv, |x| grad6(x, li, lj));
         let e = rel_err(&exact, &fd);
         assert!(
             e <= 1e-6,
