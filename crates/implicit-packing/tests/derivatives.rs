@@ -56,6 +56,18 @@ fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     if scale == 0.0 { worst } else { worst / scale }
 }
 
+/// The relative error of the finite differences `fd` against `exact`, which must be at most
+/// 1e-6; `case` names the case in the failure message.
+fn assert_close(exact: &[f64], fd: &[f64], case: impl FnOnce() -> String) -> f64 {
+    let e = rel_err(exact, fd);
+    assert!(
+        e <= 1e-6,
+        "{}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}",
+        case()
+    );
+    e
+}
+
 /// The central difference of `grad` from `v` along `dv`, with step 1e-6.
 fn along<const M: usize>(
     v: &[f64; M],
@@ -147,20 +159,15 @@ fn gradient_of_f_matches_finite_differences_3d() {
             fd[k] = (pp.f - pm.f) / (2.0 * h);
             fdu[k] = (pp.u - pm.u) / (2.0 * h);
         }
-        let e = rel_err(&g, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}\n v = {v:?} li {li:?} lj {lj:?} d2 {} u {}",
-            p.d2,
-            p.u
-        );
+        let e = assert_close(&g, &fd, || {
+            format!(
+                "pair {checked} (v = {v:?} li {li:?} lj {lj:?} d2 {} u {})",
+                p.d2, p.u
+            )
+        });
         worst = worst.max(e);
         if p.centre_inside || p.u < 1.0 {
-            let eu = rel_err(&gu, &fdu);
-            assert!(
-                eu <= 1e-6,
-                "pair {checked}: ∇U rel err {eu:e}\n g = {gu:?}\nfd = {fdu:?}"
-            );
+            let eu = assert_close(&gu, &fdu, || format!("pair {checked}, ∇U"));
             worst_u = worst_u.max(eu);
             n_u += 1;
         }
@@ -196,12 +203,7 @@ fn gradient_of_f_matches_finite_differences_2d() {
             let (im, jm) = bodies2(&vm, li, lj);
             fd[k] = (pair_term(&ip, &jp).f - pair_term(&im, &jm).f) / (2.0 * h);
         }
-        let e = rel_err(&g, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}"
-        );
-        worst = worst.max(e);
+        worst = worst.max(assert_close(&g, &fd, || format!("pair {checked}")));
         checked += 1;
     }
     println!("2D: {checked} pairs, worst relative error of ∇f {worst:.2e}");
@@ -320,14 +322,9 @@ fn hessian_vector_products_match_finite_differences() {
             exact[9 + a] = e_j;
         }
         let fd = along(&v, &dv, |x| grad12(x, li, lj));
-        let e = rel_err(&exact, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}\n u {} eps {} d2 {}",
-            p.u,
-            p.eps,
-            p.d2
-        );
+        let e = assert_close(&exact, &fd, || {
+            format!("pair {checked} (u {} eps {} d2 {})", p.u, p.eps, p.d2)
+        });
         worst = worst.max(e);
         with_u += usize::from(p.u < p.eps);
         checked += 1;
@@ -358,12 +355,7 @@ fn hessian_vector_products_match_finite_differences() {
         let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
         let exact = in_angles_2d(&hv);
         let fd = along(&v, &dv, |x| grad6(x, li, lj));
-        let e = rel_err(&exact, &fd);
-        assert!(
-            e <= 1e-6,
-            "2D pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}"
-        );
-        worst = worst.max(e);
+        worst = worst.max(assert_close(&exact, &fd, || format!("2D pair {checked}")));
         checked += 1;
     }
     println!("2D Hessian-vector products: {checked} pairs, worst relative error {worst:.2e}");

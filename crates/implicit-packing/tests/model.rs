@@ -256,27 +256,30 @@ fn hessian_vector_products_match_finite_differences() {
     };
     for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
-        let mut p = Problem::<3>::new(axes.clone(), kind).unwrap();
-        let mut q = Problem::<3>::new(axes, kind).unwrap();
-        check(
-            &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
-            &mut |x, g| {
-                q.evaluate(x, Some(g)).unwrap();
-            },
-            &x,
-            &mut rng,
-        );
+        on_two_copies(axes, kind, &x, &mut rng, check);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    let mut p = Problem::<2>::new(axes.clone(), ContainerKind::Box).unwrap();
-    let mut q = Problem::<2>::new(axes, ContainerKind::Box).unwrap();
+    on_two_copies(axes, ContainerKind::Box, &x, &mut rng, check);
+}
+
+/// Runs `check` with the Hessian–vector products of one model of `axes` in a container of
+/// `kind` and the gradients of another (two models, as each closure borrows its own mutably).
+fn on_two_copies<const N: usize>(
+    axes: Vec<[f64; N]>,
+    kind: ContainerKind,
+    x: &[f64],
+    rng: &mut Rng,
+    check: impl Fn(Hvp<'_>, Grad<'_>, &[f64], &mut Rng),
+) {
+    let mut p = Problem::<N>::new(axes.clone(), kind).unwrap();
+    let mut q = Problem::<N>::new(axes, kind).unwrap();
     check(
         &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
         &mut |x, g| {
             q.evaluate(x, Some(g)).unwrap();
         },
-        &x,
-        &mut rng,
+        x,
+        rng,
     );
 }
 
