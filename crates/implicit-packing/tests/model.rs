@@ -34,9 +34,8 @@ fn config3(
     let mut x = Vec::new();
     for i in 0..m {
         let (a, b, c) = (i % per, (i / per) % per, i / (per * per));
-        for (k, idx) in [a, b, c].into_iter().enumerate() {
-            let _ = k;
-            x.push((idx as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        for idx in [a, b, c] {
+            x.push(jittered(idx, h, side, rng));
         }
         x.push(rng.range(-3.0, 3.0));
         x.push(rng.range(-1.4, 1.4));
@@ -47,6 +46,12 @@ fn config3(
         _ => x.extend_from_slice(&[0.45 * side, 0.5 * side, 0.55 * side]),
     }
     (axes, x)
+}
+
+/// Coordinate of lattice index `idx` (spacing `h`, the lattice centred on a square or cube of
+/// `side`), moved at random by up to a fifth of the spacing.
+fn jittered(idx: usize, h: f64, side: f64, rng: &mut Rng) -> f64 {
+    (idx as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h
 }
 
 fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
@@ -62,8 +67,8 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
     let h = side / per as f64;
     let mut x = Vec::new();
     for i in 0..m {
-        x.push(((i % per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
-        x.push(((i / per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        x.push(jittered(i % per, h, side, rng));
+        x.push(jittered(i / per, h, side, rng));
         x.push(rng.range(-3.0, 3.0));
     }
     x.extend_from_slice(&[0.45 * side, 0.48 * side]);
