@@ -91,13 +91,7 @@ impl<const N: usize> Container<N> {
     /// A container of the given kind from its variables (`[r]` or `N` semi-axes / half-sides).
     pub fn from_dimensions(kind: ContainerKind, dims: &[f64]) -> Result<Self, Error> {
         let expected = kind.dimension_count(N);
-        if dims.len() != expected {
-            return Err(Error::LengthMismatch {
-                what: "container dimensions",
-                expected,
-                found: dims.len(),
-            });
-        }
+        Error::check_length("container dimensions", expected, dims.len())?;
         for (dimension, &value) in dims.iter().enumerate() {
             if !(value.is_finite() && value > 0.0) {
                 return Err(Error::InvalidContainer { dimension, value });
