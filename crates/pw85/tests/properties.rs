@@ -151,6 +151,15 @@ fn overlap_agrees_with_mu2_including_near_tangency() {
     assert!(decided > 19_000);
 }
 
+/// The central difference of `f` at `x` along coordinate `k`, with step 1e-6.
+fn central_difference<const K: usize>(x: [f64; K], k: usize, f: impl Fn(&[f64; K]) -> f64) -> f64 {
+    let h = 1e-6;
+    let (mut p, mut m) = (x, x);
+    p[k] += h;
+    m[k] -= h;
+    (f(&p) - f(&m)) / (2.0 * h)
+}
+
 #[test]
 fn gradients_match_central_differences() {
     let mut rng = Rng::new(4);
@@ -159,30 +168,20 @@ fn gradients_match_central_differences() {
         let r = direction(&mut rng).map(|x| x * rng.range(0.3, 3.0));
         let d = contact_details(&r, &q1, &q2).unwrap();
         let mu2 = |r: &[f64; 3], q1: &Sym3, q2: &Sym3| contact_function(r, q1, q2).unwrap().mu2;
-        let h = 1e-6;
         for k in 0..3 {
-            let (mut p, mut m) = (r, r);
-            p[k] += h;
-            m[k] -= h;
-            let fd = (mu2(&p, &q1, &q2) - mu2(&m, &q1, &q2)) / (2.0 * h);
+            let fd = central_difference(r, k, |p| mu2(p, &q1, &q2));
             assert!(
                 (fd - d.grad_r12[k]).abs() < 1e-6 * (1.0 + fd.abs()),
                 "∂/∂r[{k}]"
             );
         }
         for k in 0..6 {
-            let (mut p, mut m) = (q1, q1);
-            p[k] += h;
-            m[k] -= h;
-            let fd = (mu2(&r, &p, &q2) - mu2(&r, &m, &q2)) / (2.0 * h);
+            let fd = central_difference(q1, k, |p| mu2(&r, p, &q2));
             assert!(
                 (fd - d.grad_q1[k]).abs() < 1e-6 * (1.0 + fd.abs()),
                 "∂/∂q1[{k}]"
             );
-            let (mut p, mut m) = (q2, q2);
-            p[k] += h;
-            m[k] -= h;
-            let fd = (mu2(&r, &q1, &p) - mu2(&r, &q1, &m)) / (2.0 * h);
+            let fd = central_difference(q2, k, |p| mu2(&r, &q1, p));
             assert!(
                 (fd - d.grad_q2[k]).abs() < 1e-6 * (1.0 + fd.abs()),
                 "∂/∂q2[{k}]"
