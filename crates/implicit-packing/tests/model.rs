@@ -28,9 +28,7 @@ fn config3(
         .iter()
         .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
         .sum();
-    let side = (vol / density).cbrt();
-    let per = (m as f64).cbrt().ceil() as usize;
-    let h = side / per as f64;
+    let (side, per, h) = lattice::<3>(vol, density, m);
     let mut x = Vec::new();
     for i in 0..m {
         let (a, b, c) = (i % per, (i / per) % per, i / (per * per));
@@ -48,6 +46,15 @@ fn config3(
     (axes, x)
 }
 
+/// For `m` items of total area or volume `measure` at `density`: the side of their square or
+/// cube, the lattice cells per side and the cell size.
+fn lattice<const D: usize>(measure: f64, density: f64, m: usize) -> (f64, usize, f64) {
+    let root = |v: f64| if D == 3 { v.cbrt() } else { v.sqrt() };
+    let side = root(measure / density);
+    let per = root(m as f64).ceil() as usize;
+    (side, per, side / per as f64)
+}
+
 /// Coordinate of lattice index `idx` (spacing `h`, the lattice centred on a square or cube of
 /// `side`), moved at random by up to a fifth of the spacing.
 fn jittered(idx: usize, h: f64, side: f64, rng: &mut Rng) -> f64 {
@@ -62,9 +69,7 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
         .iter()
         .map(|l| std::f64::consts::PI * l[0] * l[1])
         .sum();
-    let side = (area / density).sqrt();
-    let per = (m as f64).sqrt().ceil() as usize;
-    let h = side / per as f64;
+    let (side, per, h) = lattice::<2>(area, density, m);
     let mut x = Vec::new();
     for i in 0..m {
         x.push(jittered(i % per, h, side, rng));
