@@ -5,7 +5,7 @@
 use implicit_packing::derivatives::{
     PairGradient, a1_reference, angle_gradient_3d, pair_derivatives,
 };
-use implicit_packing::pair::pair_term;
+use implicit_packing::pair::{PairTerm, pair_term};
 use implicit_packing::shape::angular_velocities_3d;
 use implicit_packing::{Body, Ellipse, Ellipsoid};
 use testkit::Rng;
@@ -42,9 +42,11 @@ fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
     (v, li, lj)
 }
 
-/// Away from the kinks of max{0, ·}² and from the hard case, where f is smooth.
-fn smooth(a: f64, b: f64, inside_t: bool) -> bool {
-    a.abs() > 1e-3 && b.abs() > 1e-3 && inside_t
+/// Whether f is positive and smooth at `p`: away from the kinks of max{0, ·}² and from the
+/// hard case (X not unique), the one non-smooth point of U and d² besides those kinks; random
+/// pairs never hit it exactly, but are skipped if they do.
+fn positive_and_smooth<const N: usize>(p: &PairTerm<N>) -> bool {
+    p.f != 0.0 && (1.0 - p.d2).abs() > 1e-3 && (p.eps - p.u).abs() > 1e-3 && p.x_unique
 }
 
 fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
@@ -135,10 +137,7 @@ fn gradient_of_f_matches_finite_differences_3d() {
         let (v, li, lj) = random_pair3(&mut rng);
         let (i, j) = bodies3(&v, li, lj);
         let p = pair_term(&i, &j);
-        // The hard case (X not unique) is the one non-smooth point of U and d² besides the
-        // kinks of max{0, ·}²; random pairs never hit it exactly, but skip it if they do.
-        let far_from_hard = p.x_unique;
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, far_from_hard) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let d = pair_derivatives(&i, &j);
@@ -187,7 +186,7 @@ fn gradient_of_f_matches_finite_differences_2d() {
         let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let d = pair_derivatives(&i, &j);
@@ -285,7 +284,7 @@ fn hessian_vector_products_match_finite_differences() {
         let (v, li, lj) = random_pair3(&mut rng);
         let (i, j) = bodies3(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let dv: [f64; 12] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
@@ -342,7 +341,7 @@ fn hessian_vector_products_match_finite_differences() {
         let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let dv: [f64; 6] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
