@@ -28,13 +28,7 @@ fn mu2_of(p: &Pair3) -> Result<f64, Error> {
 /// Figure 1: along the line from the first centre in the scene's direction, μ² − 1 and f
 /// change sign at the same distance.
 pub fn approach(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
-    if *s.scene.dimension.get_ref() != 3 {
-        return Err(s.value_error(
-            "dimension",
-            s.scene.dimension.span(),
-            "the approach study is written for ellipsoids (3)",
-        ));
-    }
+    s.require_dimension(3, "the approach study is written for ellipsoids (3)")?;
     if s.scene.shapes.is_empty() {
         return Err(s.value_error("shapes", 0..0, "the approach study needs [[shapes]]"));
     }
@@ -136,14 +130,7 @@ pub fn approach(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     if with_f {
         header.push("f");
     }
-    if let Some(csv) = &s.scene.outputs.csv {
-        let path = run.results(csv);
-        run.outputs.write(
-            &path,
-            output::csv_text(&header, &rows).as_bytes(),
-            Stability::Stable,
-        )?;
-    }
+    run.write_csv(s, &header, &rows, Stability::Stable)?;
     if let Some(fig) = &s.scene.outputs.figure {
         render(
             &Figure {
@@ -280,22 +267,20 @@ pub fn agreement(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             output::short(ns_f),
         ]);
     }
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(
-            &[
-                "aspect_ratio",
-                "pairs",
-                "disagreements",
-                "ns_pw85_overlap",
-                "ns_implicit_measure",
-                "ns_pw85_contact_function",
-                "ns_implicit_pair_term",
-            ],
-            &rows,
-        );
-        run.outputs
-            .write(&run.results(csv), text.as_bytes(), Stability::Volatile)?;
-    }
+    run.write_csv(
+        s,
+        &[
+            "aspect_ratio",
+            "pairs",
+            "disagreements",
+            "ns_pw85_overlap",
+            "ns_implicit_measure",
+            "ns_pw85_contact_function",
+            "ns_implicit_pair_term",
+        ],
+        &rows,
+        Stability::Volatile,
+    )?;
     let mut cost = vec![
         Series {
             name: format!(

@@ -136,6 +136,22 @@ impl Run {
         self.out.join("validation/results").join(name)
     }
 
+    /// Writes `rows` under `header` to the scene's results file, if it names one.
+    pub fn write_csv(
+        &mut self,
+        s: &LoadedScene,
+        header: &[&str],
+        rows: &[Vec<String>],
+        stability: output::Stability,
+    ) -> Result<(), Error> {
+        if let Some(csv) = &s.scene.outputs.csv {
+            let path = self.results(csv);
+            let text = output::csv_text(header, rows);
+            self.outputs.write(&path, text.as_bytes(), stability)?;
+        }
+        Ok(())
+    }
+
     /// `docs/figures/`.
     pub fn figures_dir(&self) -> PathBuf {
         self.out.join("docs/figures")
@@ -212,16 +228,13 @@ fn theory_study(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             ]
         })
         .collect();
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(
-            &["group", "check", "residual", "tolerance", "cases", "result"],
-            &rows,
-        );
-        // The residuals are deterministic for a given seed and workload, but the quick and
-        // full runs use different workloads: only the full run's file is committed as stable.
-        let path = run.results(csv);
-        run.outputs
-            .write(&path, text.as_bytes(), output::Stability::Volatile)?;
-    }
+    // The residuals are deterministic for a given seed and workload, but the quick and full
+    // runs use different workloads: only the full run's file is committed as stable.
+    run.write_csv(
+        s,
+        &["group", "check", "residual", "tolerance", "cases", "result"],
+        &rows,
+        output::Stability::Volatile,
+    )?;
     Ok(report::theory_section(s, &checks, n, run.quick))
 }

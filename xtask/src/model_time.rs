@@ -46,17 +46,8 @@ const SUM_ORDER: f64 = 1e-12;
 
 /// Figure 5.
 pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
-    if *s.scene.dimension.get_ref() != 3 {
-        return Err(s.value_error(
-            "dimension",
-            s.scene.dimension.span(),
-            "the model-time study is written for ellipsoids (3)",
-        ));
-    }
-    let axes = s.scene.item_axes.get_ref();
-    if axes.len() != 3 {
-        return Err(s.value_error("item_axes", s.scene.item_axes.span(), "needs 3 semi-axes"));
-    }
+    s.require_dimension(3, "the model-time study is written for ellipsoids (3)")?;
+    let axes = s.item_axes(3)?;
     let l = [axes[0], axes[1], axes[2]];
     let w = s.workload(run.quick);
     let counts: Vec<usize> = (s.scene.item_counts.iter().copied())
@@ -121,22 +112,20 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     if worst_sum.is_nan() || worst_sum > SUM_ORDER {
         run.failures.push(check);
     }
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(
-            &[
-                "m",
-                "candidate_pairs",
-                "overlap_grid",
-                "ns_value",
-                "ns_value_gradient",
-                "overlap_all_pairs",
-                "ns_all_pairs",
-            ],
-            &rows,
-        );
-        run.outputs
-            .write(&run.results(csv), text.as_bytes(), Stability::Volatile)?;
-    }
+    run.write_csv(
+        s,
+        &[
+            "m",
+            "candidate_pairs",
+            "overlap_grid",
+            "ns_value",
+            "ns_value_gradient",
+            "overlap_all_pairs",
+            "ns_all_pairs",
+        ],
+        &rows,
+        Stability::Volatile,
+    )?;
     let slope = |v: &[(f64, f64)]| -> f64 {
         match (v.first(), v.last()) {
             (Some(a), Some(b)) if b.0 > a.0 => (b.1 / a.1).ln() / (b.0 / a.0).ln(),

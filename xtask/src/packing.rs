@@ -38,17 +38,8 @@ fn outline(c: [f64; 2], l: [f64; 2], q: [[f64; 2]; 2]) -> Vec<(f64, f64)> {
 
 /// Figure 6.
 pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
-    if *s.scene.dimension.get_ref() != 2 {
-        return Err(s.value_error(
-            "dimension",
-            s.scene.dimension.span(),
-            "the packing study draws ellipses (2)",
-        ));
-    }
-    let axes = s.scene.item_axes.get_ref();
-    if axes.len() != 2 {
-        return Err(s.value_error("item_axes", s.scene.item_axes.span(), "needs 2 semi-axes"));
-    }
+    s.require_dimension(2, "the packing study draws ellipses (2)")?;
+    let axes = s.item_axes(2)?;
     let m = match s.scene.item_counts.as_slice() {
         [m] if *m > 0 => *m,
         _ => {
@@ -112,11 +103,12 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         .zip(&last)
         .map(|(b, l)| vec![output::short(b.0), output::full(b.1), output::full(l.1)])
         .collect();
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(&["seconds", "best_density", "last_density"], &rows);
-        run.outputs
-            .write(&run.results(csv), text.as_bytes(), Stability::Volatile)?;
-    }
+    run.write_csv(
+        s,
+        &["seconds", "best_density", "last_density"],
+        &rows,
+        Stability::Volatile,
+    )?;
     if let Some(fig) = &s.scene.outputs.figure {
         let mut series: Vec<Series> = bodies
             .iter()

@@ -7,7 +7,7 @@
 //! for that reason; only the 2D sampler uses `sin` and `cos`.
 
 use crate::error::{self, Error};
-use pw85::{Sym2, Sym3};
+use pw85::Sym2;
 
 pub use testkit::Rng;
 
@@ -43,16 +43,8 @@ pub struct Pair3 {
     pub qj: [f64; 4],
 }
 
-/// The PW85 form of a pair.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pw85Pair {
-    /// c2 − c1.
-    pub r12: [f64; 3],
-    /// Q of the first ellipsoid.
-    pub q1: Sym3,
-    /// Q of the second.
-    pub q2: Sym3,
-}
+/// The PW85 form of a pair (the test kit's).
+pub use testkit::shape::Pair3 as Pw85Pair;
 
 impl Pair3 {
     /// r12, Q1, Q2.

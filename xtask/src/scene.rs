@@ -270,6 +270,25 @@ impl LoadedScene {
         Ok(loaded)
     }
 
+    /// An error naming `dimension` unless the scene is in `dimension` dimensions; `why` says
+    /// what the study is written for.
+    pub fn require_dimension(&self, dimension: u8, why: &str) -> Result<(), Error> {
+        if *self.scene.dimension.get_ref() != dimension {
+            return Err(self.value_error("dimension", self.scene.dimension.span(), why));
+        }
+        Ok(())
+    }
+
+    /// The scene's `item_axes`, which must be `n` semi-axes.
+    pub fn item_axes(&self, n: usize) -> Result<&[f64], Error> {
+        let axes = self.scene.item_axes.get_ref();
+        if axes.len() != n {
+            let message = format!("needs {n} semi-axes");
+            return Err(self.value_error("item_axes", self.scene.item_axes.span(), message));
+        }
+        Ok(axes)
+    }
+
     /// An error about the value of `key` at `span`.
     pub fn value_error(&self, key: &str, span: Range<usize>, message: impl Into<String>) -> Error {
         let line = if span.end == 0 {

@@ -278,11 +278,12 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }
     }
 
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(&["sweep", "value", "method", "worst_error"], &rows);
-        run.outputs
-            .write(&run.results(csv), text.as_bytes(), Stability::Stable)?;
-    }
+    run.write_csv(
+        s,
+        &["sweep", "value", "method", "worst_error"],
+        &rows,
+        Stability::Stable,
+    )?;
     if let Some(fig) = &s.scene.outputs.figure {
         let line_series = |errs: &[Vec<(f64, f64)>]| -> Vec<Series> {
             methods

@@ -142,20 +142,18 @@ pub fn error_time(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             color,
         });
     }
-    if let Some(csv) = &s.scene.outputs.csv {
-        let text = output::csv_text(
-            &[
-                "method",
-                "tolerance",
-                "ns_per_call",
-                "max_rel_error",
-                "median_rel_error",
-            ],
-            &rows,
-        );
-        run.outputs
-            .write(&run.results(csv), text.as_bytes(), Stability::Volatile)?;
-    }
+    run.write_csv(
+        s,
+        &[
+            "method",
+            "tolerance",
+            "ns_per_call",
+            "max_rel_error",
+            "median_rel_error",
+        ],
+        &rows,
+        Stability::Volatile,
+    )?;
     if let Some(fig) = &s.scene.outputs.figure {
         render(
             &Figure {

@@ -1,6 +1,7 @@
 //! What the two inner (bound-constrained) solvers share: the smooth-function interface they
 //! minimise, their settings, and how they report back to the outer loop.
 
+use crate::projection::all_finite;
 use crate::report::Control;
 
 /// A smooth function on the box, evaluated with its gradient.
@@ -48,6 +49,47 @@ pub(crate) struct InnerOutcome {
     pub iterations: usize,
     pub value: f64,
     pub projected_gradient: f64,
+}
+
+impl InnerOutcome {
+    /// Evaluates `f` at the starting point `x` (the gradient into `grad`). `Err` is the outcome
+    /// to return at once, with status `NonFinite`, when the value or the gradient is not finite.
+    pub(crate) fn start<S: Smooth + ?Sized>(
+        f: &mut S,
+        x: &[f64],
+        grad: &mut [f64],
+    ) -> Result<Self, Self> {
+        let value = f.value_grad(x, grad);
+        let outcome = InnerOutcome {
+            status: InnerStatus::NonFinite,
+            iterations: 0,
+            value,
+            projected_gradient: f64::INFINITY,
+        };
+        if !value.is_finite() || !all_finite(grad) {
+            Err(outcome)
+        } else {
+            Ok(outcome)
+        }
+    }
+
+    /// Records iterate `k` with its value and projected-gradient norm, then applies
+    /// [`InnerSettings::stop`]: `Some` is the outcome to return.
+    pub(crate) fn at_iteration(
+        &mut self,
+        k: usize,
+        value: f64,
+        projected_gradient: f64,
+        settings: &InnerSettings,
+        interrupt: impl FnOnce() -> Control,
+    ) -> Option<Self> {
+        self.iterations = k;
+        self.value = value;
+        self.projected_gradient = projected_gradient;
+        let status = settings.stop(k, projected_gradient, interrupt)?;
+        self.status = status;
+        Some(*self)
+    }
 }
 
 impl InnerSettings {

@@ -66,16 +66,11 @@ pub(crate) fn minimize<S: Smooth + ?Sized>(
 ) -> InnerOutcome {
     let (lower, upper) = bounds;
     let (step_min, step_max) = ws.step_bounds;
-    let mut value = f.value_grad(x, grad);
-    let mut outcome = InnerOutcome {
-        status: InnerStatus::NonFinite,
-        iterations: 0,
-        value,
-        projected_gradient: f64::INFINITY,
+    let mut outcome = match InnerOutcome::start(f, x, grad) {
+        Ok(outcome) => outcome,
+        Err(outcome) => return outcome,
     };
-    if !value.is_finite() || !all_finite(grad) {
-        return outcome;
-    }
+    let mut value = outcome.value;
     ws.history.iter_mut().for_each(|h| *h = f64::NEG_INFINITY);
     ws.history[0] = value;
     let mut pg = projected_gradient_norm(x, grad, lower, upper);
@@ -86,12 +81,9 @@ pub(crate) fn minimize<S: Smooth + ?Sized>(
     };
     let mut k = 0;
     loop {
-        outcome.iterations = k;
-        outcome.value = value;
-        outcome.projected_gradient = pg;
-        if let Some(status) = settings.stop(k, pg, || monitor(k, x, value, pg, f.evaluations())) {
-            outcome.status = status;
-            return outcome;
+        let interrupt = || monitor(k, x, value, pg, f.evaluations());
+        if let Some(done) = outcome.at_iteration(k, value, pg, settings, interrupt) {
+            return done;
         }
         for (((d, &xi), &gi), (&l, &u)) in ws
             .direction

@@ -1,18 +1,9 @@
 //! The `ellipack` binary end to end.
 
-use std::path::PathBuf;
-use std::process::Command;
 use testkit::table::Table;
 
-fn ellipack() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ellipack"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ellipack-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{assert_success, ellipack, on_input, pack_into, temp_dir, utf8};
 
 #[test]
 fn contact_accepts_the_reference_file_as_it_is() {
@@ -58,7 +49,7 @@ fn overlap_criterion_writes_only_the_verdict() {
         .unwrap();
     // One example pair is not positive definite: the documented status of failed rows.
     assert_eq!(output.status.code(), Some(3));
-    let text = String::from_utf8(output.stdout).unwrap();
+    let text = utf8(output.stdout);
     assert!(text.starts_with("case_id,overlap,error\n"));
     assert!(text.contains("\nunit-spheres-apart,false,\n"));
     assert!(text.contains("\npaper-shape-overlapping,true,\n"));
@@ -70,22 +61,14 @@ fn malformed_file_is_an_error_naming_the_line() {
     let input = dir.join("bad.csv");
     let header = ellipack::pairs::PAIR_COLUMNS.join(",");
     std::fs::write(&input, format!("{header}\n1,2\n")).unwrap();
-    let output = ellipack()
-        .args(["contact", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let output = on_input(&["contact"], &input);
     assert!(!output.status.success());
-    let stderr = String::from_utf8(output.stderr).unwrap();
+    let stderr = utf8(output.stderr);
     assert!(stderr.contains("bad.csv: line 2"), "{stderr}");
     std::fs::write(&input, "r12_x,r12_y\n1,2\n").unwrap();
-    let output = ellipack()
-        .args(["contact", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let output = on_input(&["contact"], &input);
     assert!(!output.status.success());
-    let stderr = String::from_utf8(output.stderr).unwrap();
+    let stderr = utf8(output.stderr);
     assert!(stderr.contains("missing r12_z"), "{stderr}");
     let output = ellipack()
         .args(["contact", "--input", "/no/such/file.csv"])
@@ -130,7 +113,7 @@ fn measure_accepts_both_reference_files_as_they_are() {
             "{file}: {}",
             String::from_utf8_lossy(&output.stderr)
         );
-        let text = String::from_utf8(output.stdout).unwrap();
+        let text = utf8(output.stdout);
         let results =
             Table::parse(format!("measure {file}"), &text).unwrap_or_else(|e| or_panic(e));
         assert_eq!(
@@ -166,18 +149,8 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
     )
     .unwrap();
     let out = dir.join("out");
-    let run = ellipack()
-        .arg("pack")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = pack_into(&scene, &out);
+    assert_success(&run);
     for file in [
         "packing.csv",
         "summary.json",
@@ -201,7 +174,7 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         "the repair is recorded: {summary}"
     );
     let verify = ellipack().arg("verify").arg(&out).output().unwrap();
-    let text = String::from_utf8(verify.stdout).unwrap();
+    let text = utf8(verify.stdout);
     assert!(
         verify.status.success() && text.contains("certified"),
         "{text}"
@@ -218,15 +191,9 @@ fn pack_rejects_a_bad_scene_naming_key_and_line() {
         "dimension = 2\n[container]\nkind = \"ellipse\"\n[[shapes]]\ncount = 3\nsemi_axes = [2.0, -1.0]\n",
     )
     .unwrap();
-    let run = ellipack()
-        .arg("pack")
-        .arg(&scene)
-        .arg("--out")
-        .arg(dir.join("o"))
-        .output()
-        .unwrap();
+    let run = pack_into(&scene, &dir.join("o"));
     assert!(!run.status.success());
-    let stderr = String::from_utf8(run.stderr).unwrap();
+    let stderr = utf8(run.stderr);
     assert!(
         stderr.contains("bad.toml: line 6") && stderr.contains("semi_axes"),
         "{stderr}"
@@ -267,13 +234,13 @@ fn ctrl_c_writes_the_best_packing_so_far() {
         .unwrap();
     // Long enough for the first local minimisation to be under way.
     std::thread::sleep(std::time::Duration::from_secs(3));
-    let status = Command::new("kill")
+    let status = std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
         .unwrap();
     assert!(status.success());
     let output = child.wait_with_output().unwrap();
-    let text = String::from_utf8(output.stdout).unwrap();
+    let text = utf8(output.stdout);
     assert!(output.status.success(), "{text}");
     assert!(text.contains("(interrupted)"), "{text}");
     let verify = ellipack().arg("verify").arg(&out).output().unwrap();

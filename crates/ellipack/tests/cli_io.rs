@@ -3,28 +3,11 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::os::unix::fs::{FileTypeExt, PermissionsExt};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 
-fn ellipack() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ellipack"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ellipack-cli-io-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
+mod common;
+use common::{ellipack, is_symlink, names, on_input, temp_dir, utf8};
 
 const HEADER_3D: &str =
     "case_id,r12_x,r12_y,r12_z,q1_0,q1_1,q1_2,q1_3,q1_4,q1_5,q2_0,q2_1,q2_2,q2_3,q2_4,q2_5";
@@ -38,8 +21,13 @@ fn pairs_3d(rows: usize) -> String {
 }
 
 fn contact(input: &Path, output: &Path) -> std::process::Output {
+    write_to("contact", input, output)
+}
+
+/// `ellipack <command> --input <input> --output <output>`, run to its end.
+fn write_to(command: &str, input: &Path, output: &Path) -> std::process::Output {
     ellipack()
-        .args(["contact", "--input"])
+        .args([command, "--input"])
         .arg(input)
         .arg("--output")
         .arg(output)
@@ -58,13 +46,9 @@ fn a_2d_file_goes_through_the_2d_kernel() {
          1,close,1,0.5,4,1,1,1,0,y\n",
     )
     .unwrap();
-    let output = ellipack()
-        .args(["contact", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let output = on_input(&["contact"], &input);
     assert_eq!(output.status.code(), Some(0), "{output:?}");
-    let text = String::from_utf8(output.stdout).unwrap();
+    let text = utf8(output.stdout);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "case_id,mu2,lambda,overlap,error");
     for (line, (id, r12, q1)) in lines[1..].iter().zip([
@@ -79,13 +63,9 @@ fn a_2d_file_goes_through_the_2d_kernel() {
         assert_eq!(fields[3], (c.mu2 < 1.0).to_string());
         assert_eq!(fields[4], "");
     }
-    let output = ellipack()
-        .args(["contact", "--criterion", "overlap", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let output = on_input(&["contact", "--criterion", "overlap"], &input);
     assert_eq!(
-        String::from_utf8(output.stdout).unwrap(),
+        utf8(output.stdout),
         "case_id,overlap,error\napart,false,\nclose,true,\n"
     );
     std::fs::write(
@@ -93,13 +73,9 @@ fn a_2d_file_goes_through_the_2d_kernel() {
         "r12_x,r12_y,r12_z,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n1,0,0,1,0,1,1,0,1\n",
     )
     .unwrap();
-    let output = ellipack()
-        .args(["contact", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let output = on_input(&["contact"], &input);
     assert_eq!(output.status.code(), Some(1));
-    let stderr = String::from_utf8(output.stderr).unwrap();
+    let stderr = utf8(output.stderr);
     assert!(
         stderr.contains("line 1") && stderr.contains("missing q1_3") && stderr.contains("r12_z"),
         "{stderr}"
@@ -123,20 +99,14 @@ fn the_output_may_not_be_the_input() {
         dir.join("hard.csv"),
     ] {
         for command in ["contact", "measure"] {
-            let out = ellipack()
-                .args([command, "--input"])
-                .arg(&input)
-                .arg("--output")
-                .arg(&output)
-                .output()
-                .unwrap();
+            let out = write_to(command, &input, &output);
             assert_eq!(out.status.code(), Some(1), "{command} {output:?}");
-            let stderr = String::from_utf8(out.stderr).unwrap();
+            let stderr = utf8(out.stderr);
             assert!(stderr.contains("is the input file"), "{stderr}");
             assert_eq!(std::fs::read_to_string(&input).unwrap(), text, "untouched");
         }
     }
-    assert_eq!(names_in(&dir), ["hard.csv", "link.csv", "pairs.csv"]);
+    assert_eq!(names(&dir), ["hard.csv", "link.csv", "pairs.csv"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -156,13 +126,9 @@ fn dev_stdout_is_written_through() {
     let dir = temp_dir("stdout");
     let input = dir.join("pairs.csv");
     std::fs::write(&input, pairs_3d(3)).unwrap();
-    let out = ellipack()
-        .args(["contact", "--output", "/dev/stdout", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let out = on_input(&["contact", "--output", "/dev/stdout"], &input);
     assert_eq!(out.status.code(), Some(0));
-    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 4);
+    assert_eq!(utf8(out.stdout).lines().count(), 4);
     // Standard output redirected to a file: the file receives the table, and is not replaced.
     let target = dir.join("redirected.csv");
     let file = std::fs::File::create(&target).unwrap();
@@ -175,7 +141,7 @@ fn dev_stdout_is_written_through() {
         .unwrap();
     assert!(status.success());
     assert_eq!(std::fs::read_to_string(&target).unwrap().lines().count(), 4);
-    assert_eq!(names_in(&dir), ["pairs.csv", "redirected.csv"]);
+    assert_eq!(names(&dir), ["pairs.csv", "redirected.csv"]);
     // The same for standard error, whose file also receives the messages.
     let file = std::fs::File::create(&target).unwrap();
     let status = ellipack()
@@ -190,7 +156,7 @@ fn dev_stdout_is_written_through() {
         text.starts_with("case_id,") && text.contains("wrote 3 rows to /dev/stderr"),
         "{text}"
     );
-    assert_eq!(names_in(&dir), ["pairs.csv", "redirected.csv"]);
+    assert_eq!(names(&dir), ["pairs.csv", "redirected.csv"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -227,7 +193,7 @@ fn a_fifo_is_written_into() {
     );
     assert_eq!(text.lines().count(), 6);
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
-    assert_eq!(names_in(&dir), ["pairs.csv", "results.fifo"]);
+    assert_eq!(names(&dir), ["pairs.csv", "results.fifo"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -243,26 +209,16 @@ fn a_symlink_is_kept_and_its_target_written() {
     std::os::unix::fs::symlink(&target, &link).unwrap();
     let out = contact(&input, &link);
     assert_eq!(out.status.code(), Some(0), "{out:?}");
-    assert!(
-        std::fs::symlink_metadata(&link)
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    assert!(is_symlink(&link));
     assert_eq!(std::fs::read_to_string(&target).unwrap().lines().count(), 3);
-    assert_eq!(names_in(&dir.join("store")), ["results.csv"]);
+    assert_eq!(names(&dir.join("store")), ["results.csv"]);
     // A link to a file not written yet: the file appears where the link points.
     let fresh = dir.join("store").join("fresh.csv");
     let dangling = dir.join("dangling.csv");
     std::os::unix::fs::symlink("store/fresh.csv", &dangling).unwrap();
     let out = contact(&input, &dangling);
     assert_eq!(out.status.code(), Some(0), "{out:?}");
-    assert!(
-        std::fs::symlink_metadata(&dangling)
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    assert!(is_symlink(&dangling));
     assert_eq!(std::fs::read_to_string(&fresh).unwrap().lines().count(), 3);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -295,10 +251,10 @@ fn a_failure_midway_leaves_no_temporary_file_and_the_old_output() {
     std::fs::write(&output, "old").unwrap();
     let out = contact(&input, &output);
     assert_eq!(out.status.code(), Some(1));
-    let stderr = String::from_utf8(out.stderr).unwrap();
+    let stderr = utf8(out.stderr);
     assert!(stderr.contains("line 20002"), "{stderr}");
     assert_eq!(std::fs::read_to_string(&output).unwrap(), "old");
-    assert_eq!(names_in(&dir), ["pairs.csv", "results.csv"]);
+    assert_eq!(names(&dir), ["pairs.csv", "results.csv"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -322,7 +278,7 @@ fn a_closed_pipe_ends_quietly() {
         // The reader and the pipe's read end are dropped here.
         assert!(first.starts_with("case_id,"), "{first}");
         let out = child.wait_with_output().unwrap();
-        let stderr = String::from_utf8(out.stderr).unwrap();
+        let stderr = utf8(out.stderr);
         assert_eq!(out.status.code(), Some(0), "{stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
@@ -338,26 +294,18 @@ fn duplicate_columns_are_errors_naming_the_column() {
         format!("{HEADER_3D},q1_4\n0,3,0,0,1,0,0,1,0,1,1,0,0,1,0,1,7\n"),
     )
     .unwrap();
-    let out = ellipack()
-        .args(["contact", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let out = on_input(&["contact"], &input);
     assert_eq!(out.status.code(), Some(1));
-    let stderr = String::from_utf8(out.stderr).unwrap();
+    let stderr = utf8(out.stderr);
     assert!(
         stderr.contains("column `q1_4` appears twice in the header (columns 9 and 17)"),
         "{stderr}"
     );
     let header = ellipack::measure::COLUMNS_2D.join(",");
     std::fs::write(&input, format!("{header},theta_j\n0,0,1,1,0,3,0,1,1,0,1\n")).unwrap();
-    let out = ellipack()
-        .args(["measure", "--input"])
-        .arg(&input)
-        .output()
-        .unwrap();
+    let out = on_input(&["measure"], &input);
     assert_eq!(out.status.code(), Some(1));
-    let stderr = String::from_utf8(out.stderr).unwrap();
+    let stderr = utf8(out.stderr);
     assert!(
         stderr.contains("column `theta_j` appears twice"),
         "{stderr}"
@@ -370,15 +318,7 @@ fn the_exit_status_says_whether_rows_failed() {
     let dir = temp_dir("status");
     let input = dir.join("pairs.csv");
     std::fs::write(&input, pairs_3d(3)).unwrap();
-    let status = |command: &str| {
-        ellipack()
-            .args([command, "--input"])
-            .arg(&input)
-            .output()
-            .unwrap()
-            .status
-            .code()
-    };
+    let status = |command: &str| on_input(&[command], &input).status.code();
     assert_eq!(status("contact"), Some(0), "every row fine");
     std::fs::write(
         &input,
@@ -404,7 +344,7 @@ fn the_exit_status_says_whether_rows_failed() {
     std::fs::write(&input, "nothing,here\n1,2\n").unwrap();
     assert_eq!(status("measure"), Some(1));
     let help = ellipack().args(["contact", "--help"]).output().unwrap();
-    let help = String::from_utf8(help.stdout).unwrap();
+    let help = utf8(help.stdout);
     assert!(help.contains("Exit status") && help.contains("3"), "{help}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

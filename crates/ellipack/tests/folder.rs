@@ -5,27 +5,9 @@
 use ellipack::folder::Staging;
 use ellipack::packing::{Certificate, Summary, read_packing_dir, write_files};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn ellipack() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ellipack"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ellipack-folder-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
+mod common;
+use common::{assert_success, ellipack, is_symlink, names, pack_into, temp_dir};
 
 /// A small 2D scene: five ellipses, two local minimisations.
 fn scene(pictures: bool, xyz: bool) -> String {
@@ -37,18 +19,28 @@ fn scene(pictures: bool, xyz: bool) -> String {
 }
 
 fn pack(scene_path: &Path, out: &Path) {
-    let run = ellipack()
-        .arg("pack")
-        .arg(scene_path)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert_success(&pack_into(scene_path, out));
+}
+
+/// A test folder holding `out/` and `scene.toml` (the scene of [`scene`]).
+fn out_and_scene(name: &str, pictures: bool, xyz: bool) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = temp_dir(name);
+    let out = dir.join("out");
+    std::fs::create_dir(&out).unwrap();
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, scene(pictures, xyz)).unwrap();
+    (dir, out, scene_path)
+}
+
+/// Every file of `out` with its bytes.
+fn contents(out: &Path) -> Vec<(String, Vec<u8>)> {
+    names(out)
+        .into_iter()
+        .map(|n| {
+            let bytes = std::fs::read(out.join(&n)).unwrap();
+            (n, bytes)
+        })
+        .collect()
 }
 
 /// `ellipack verify` accepts the folder, and its summary agrees with its packing.
@@ -112,19 +104,9 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
 
 #[test]
 fn a_failure_while_writing_leaves_the_previous_run_whole() {
-    let dir = temp_dir("crash");
-    let out = dir.join("out");
-    std::fs::create_dir(&out).unwrap();
-    let scene_path = dir.join("scene.toml");
-    std::fs::write(&scene_path, scene(false, true)).unwrap();
+    let (dir, out, scene_path) = out_and_scene("crash", false, true);
     pack(&scene_path, &out);
-    let before: Vec<(String, Vec<u8>)> = names(&out)
-        .into_iter()
-        .map(|n| {
-            let bytes = std::fs::read(out.join(&n)).unwrap();
-            (n, bytes)
-        })
-        .collect();
+    let before: Vec<(String, Vec<u8>)> = contents(&out);
 
     // Another packing (the container shrunk, so that its items stick out) written into the
     // staging folder; the write fails after the first file.
@@ -152,13 +134,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
         let staging = Staging::begin(&out).unwrap();
         assert!(write_set(staging.path()).is_err());
     }
-    let after: Vec<(String, Vec<u8>)> = names(&out)
-        .into_iter()
-        .map(|n| {
-            let bytes = std::fs::read(out.join(&n)).unwrap();
-            (n, bytes)
-        })
-        .collect();
+    let after: Vec<(String, Vec<u8>)> = contents(&out);
     assert!(before == after, "the folder changed");
     assert_whole_run(&out);
 
@@ -180,11 +156,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
 
 #[test]
 fn temporary_files_of_killed_runs_are_removed() {
-    let dir = temp_dir("temp");
-    let out = dir.join("out");
-    std::fs::create_dir(&out).unwrap();
-    let scene_path = dir.join("scene.toml");
-    std::fs::write(&scene_path, scene(false, false)).unwrap();
+    let (dir, out, scene_path) = out_and_scene("temp", false, false);
     for file in ["packing.csv", "summary.json", "packing.png"] {
         std::fs::write(out.join(format!(".{file}.tmp-999999999")), "half written").unwrap();
     }
@@ -214,12 +186,7 @@ fn a_symbolic_link_to_the_output_folder_stays_a_link() {
     let scene_path = dir.join("scene.toml");
     std::fs::write(&scene_path, scene(false, false)).unwrap();
     pack(&scene_path, &link);
-    assert!(
-        std::fs::symlink_metadata(&link)
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    assert!(is_symlink(&link));
     assert!(real.join("packing.csv").exists());
     assert_whole_run(&link);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -227,11 +194,7 @@ fn a_symbolic_link_to_the_output_folder_stays_a_link() {
 
 #[test]
 fn a_run_killed_at_any_moment_leaves_one_whole_run() {
-    let dir = temp_dir("kill");
-    let out = dir.join("out");
-    std::fs::create_dir(&out).unwrap();
-    let scene_path = dir.join("scene.toml");
-    std::fs::write(&scene_path, scene(true, true)).unwrap();
+    let (dir, out, scene_path) = out_and_scene("kill", true, true);
     let started = std::time::Instant::now();
     pack(&scene_path, &out);
     let full = started.elapsed();

@@ -225,28 +225,39 @@ fn check_measure(bytes: &[u8]) {
     }
 }
 
-fn check_scene(bytes: &[u8]) {
-    if let Err(e) = Scene::from_toml_str(&String::from_utf8_lossy(bytes), "fuzz.toml") {
+/// An input refused is refused in words.
+fn errors_say_something<T, E: std::error::Error>(result: Result<T, E>) {
+    if let Err(e) = result {
         says_something(&e);
     }
+}
+
+fn check_scene(bytes: &[u8]) {
+    errors_say_something(Scene::from_toml_str(
+        &String::from_utf8_lossy(bytes),
+        "fuzz.toml",
+    ));
 }
 
 fn check_packing_csv(bytes: &[u8]) {
-    if let Err(e) = packing::read_csv(&String::from_utf8_lossy(bytes), "packing.csv") {
-        says_something(&e);
-    }
+    errors_say_something(packing::read_csv(
+        &String::from_utf8_lossy(bytes),
+        "packing.csv",
+    ));
 }
 
 fn check_summary(bytes: &[u8]) {
-    if let Err(e) = packing::read_summary(&String::from_utf8_lossy(bytes), "summary.json") {
-        says_something(&e);
-    }
+    errors_say_something(packing::read_summary(
+        &String::from_utf8_lossy(bytes),
+        "summary.json",
+    ));
 }
 
 fn check_xyz(bytes: &[u8]) {
-    if let Err(e) = packing::read_xyz(&String::from_utf8_lossy(bytes), "packing.xyz") {
-        says_something(&e);
-    }
+    errors_say_something(packing::read_xyz(
+        &String::from_utf8_lossy(bytes),
+        "packing.xyz",
+    ));
 }
 
 const PAIRS_2D: &str = "case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n\

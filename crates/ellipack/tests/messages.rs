@@ -8,6 +8,13 @@ fn scene_error(text: &str) -> String {
         .to_string()
 }
 
+/// The message of reading `text` as `packing.csv`, which must fail.
+fn packing_error(text: &str) -> String {
+    ellipack::packing::read_csv(text, "packing.csv")
+        .unwrap_err()
+        .to_string()
+}
+
 const SHAPES: &str = "[[shapes]]\ncount = 2\nsemi_axes = [1.0, 1.0]\n";
 
 #[test]
@@ -31,11 +38,15 @@ fn semi_axes_out_of_range_name_the_line_the_key_and_the_range() {
     }
 }
 
+/// A valid scene but for its `seed = <seed>` on line 2.
+fn with_seed(seed: &str) -> String {
+    format!("dimension = 2\nseed = {seed}\n[container]\nkind = \"circle\"\n{SHAPES}")
+}
+
 #[test]
 fn a_seed_beyond_i64_is_accepted_as_an_integer_or_a_string() {
     for seed in ["18446744073709551615", "\"18446744073709551615\""] {
-        let text =
-            format!("dimension = 2\nseed = {seed}\n[container]\nkind = \"circle\"\n{SHAPES}");
+        let text = with_seed(seed);
         let scene = Scene::from_toml_str(&text, "s.toml").unwrap();
         assert_eq!(scene.seed, u64::MAX);
         let again = Scene::from_toml_str(&scene.to_toml_string(), "again.toml").unwrap();
@@ -46,8 +57,7 @@ fn a_seed_beyond_i64_is_accepted_as_an_integer_or_a_string() {
         );
     }
     for seed in ["18446744073709551616", "-1", "\"twelve\""] {
-        let text =
-            format!("dimension = 2\nseed = {seed}\n[container]\nkind = \"circle\"\n{SHAPES}");
+        let text = with_seed(seed);
         let err = scene_error(&text);
         assert!(
             err.starts_with("s.toml: line 2, column 8: `seed`: must be a non-negative whole number, at most 18446744073709551615")
@@ -100,9 +110,7 @@ fn extreme_numbers_in_scene_messages_are_short() {
 
 #[test]
 fn an_empty_packing_file_says_so() {
-    let err = ellipack::packing::read_csv("", "packing.csv")
-        .unwrap_err()
-        .to_string();
+    let err = packing_error("");
     assert!(
         err.starts_with("packing.csv: line 1: the file is empty")
             && err.contains("id,x,y,a,b,theta"),
@@ -112,9 +120,7 @@ fn an_empty_packing_file_says_so() {
 
 #[test]
 fn a_packing_without_items_says_so() {
-    let err = ellipack::packing::read_csv("id,x,y,a,b,theta\n", "packing.csv")
-        .unwrap_err()
-        .to_string();
+    let err = packing_error("id,x,y,a,b,theta\n");
     assert!(
         err.starts_with("packing.csv: line 2: no items") && !err.contains("ellipsoid"),
         "{err}"
@@ -124,9 +130,7 @@ fn a_packing_without_items_says_so() {
 #[test]
 fn a_duplicated_packing_column_is_an_error_naming_it() {
     let text = "id,x,x,y,a,b,theta\n0,0,9,0,1,1,0\n";
-    let err = ellipack::packing::read_csv(text, "packing.csv")
-        .unwrap_err()
-        .to_string();
+    let err = packing_error(text);
     assert!(
         err.contains(
             "packing.csv: line 1: column `x` appears twice in the header (columns 2 and 3)"

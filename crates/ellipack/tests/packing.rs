@@ -74,11 +74,7 @@ fn csv_and_json_round_trips_are_exact() {
         let (p2, s2) = packing::read_packing_dir(&dir).unwrap();
         assert_eq!(p2, p, "{}", p.container.kind());
         assert_eq!(s2, summary);
-        assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            3,
-            "only the three files"
-        );
+        assert_eq!(common::names(&dir).len(), 3, "only the three files");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
@@ -211,6 +207,18 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
     }
 }
 
+/// The numbers of the first item's line of the XYZ file, after its species.
+fn first_xyz_row(p: &Packing) -> Vec<f64> {
+    packing::xyz_string(p)
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split_whitespace()
+        .skip(1)
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
 #[test]
 fn xyz_orientation_is_in_ovito_order() {
     // A quarter turn about z: Hamilton (w, x, y, z) = (cos π/4, 0, 0, sin π/4); OVITO wants
@@ -228,15 +236,7 @@ fn xyz_orientation_is_in_ovito_order() {
         }]),
     )
     .unwrap();
-    let text = packing::xyz_string(&p);
-    let row: Vec<f64> = text
-        .lines()
-        .nth(2)
-        .unwrap()
-        .split_whitespace()
-        .skip(1)
-        .map(|t| t.parse().unwrap())
-        .collect();
+    let row = first_xyz_row(&p);
     assert_eq!(row, vec![1.0, 2.0, 3.0, 1.0, 0.75, 0.5, 0.0, 0.0, s, c]);
     // The same rotation as an ellipse angle: θ = π/2.
     let p2 = Packing::new(
@@ -251,15 +251,7 @@ fn xyz_orientation_is_in_ovito_order() {
         }]),
     )
     .unwrap();
-    let text = packing::xyz_string(&p2);
-    let row: Vec<f64> = text
-        .lines()
-        .nth(2)
-        .unwrap()
-        .split_whitespace()
-        .skip(1)
-        .map(|t| t.parse().unwrap())
-        .collect();
+    let row = first_xyz_row(&p2);
     assert!(
         (row[8] - s).abs() < 1e-16 && (row[9] - c).abs() < 1e-16,
         "{row:?}"

@@ -5,16 +5,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn ellipack() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ellipack"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ellipack-run-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{ellipack, refused, temp_dir, text};
 
 /// A 2D scene of `count` ellipses (2, 1) in a circle, one thread, no pictures.
 fn scene(dir: &Path, count: usize, time_limit: f64, extra: &str) -> PathBuf {
@@ -31,10 +23,6 @@ fn scene(dir: &Path, count: usize, time_limit: f64, extra: &str) -> PathBuf {
     path
 }
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
 /// `ellipack verify` on a folder: its output, and whether it certified the packing.
 fn verify(out: &Path) -> (bool, String) {
     let o = ellipack().arg("verify").arg(out).output().unwrap();
@@ -49,6 +37,19 @@ fn density(out: &Path) -> f64 {
 
 fn pack(args: &[&str]) -> Output {
     ellipack().arg("pack").args(args).output().unwrap()
+}
+
+/// `ellipack pack <scene> --out <out> --resume <extra>`.
+fn resume(scene: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![scene, "--out", out.to_str().unwrap(), "--resume"];
+    args.extend_from_slice(extra);
+    pack(&args)
+}
+
+/// Replaces `from` by `to` in the scene file `path`.
+fn edit_scene(path: &Path, from: &str, to: &str) {
+    let text_of_scene = std::fs::read_to_string(path).unwrap().replace(from, to);
+    std::fs::write(path, text_of_scene).unwrap();
 }
 
 /// Starts a run that would last a minute, sends `signal` once it is under way, and checks
@@ -156,8 +157,7 @@ fn an_unwritable_output_folder_is_refused_before_the_run() {
     // /proc exists as a folder but takes no new files, even for root.
     let started = Instant::now();
     let o = pack(&[scene.to_str().unwrap(), "--out", "/proc"]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let stderr = refused(&o);
     assert!(started.elapsed() < Duration::from_secs(20), "ran first");
     assert!(
         stderr.contains("output folder /proc is not writable"),
@@ -168,8 +168,7 @@ fn an_unwritable_output_folder_is_refused_before_the_run() {
     std::fs::write(&file, "x").unwrap();
     let under = file.join("out");
     let o = pack(&[scene.to_str().unwrap(), "--out", under.to_str().unwrap()]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let stderr = refused(&o);
     assert!(
         stderr.contains(&format!(
             "output folder {} is not writable",
@@ -238,14 +237,7 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
     let mut kept = false;
     for limit in ["1e-6", "0.02", "0.05", "0.1", "0.2", "0.4"] {
         let before = density(&out);
-        let o = pack(&[
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--resume",
-            "--time-limit",
-            limit,
-        ]);
+        let o = resume(scene.to_str().unwrap(), &out, &["--time-limit", limit]);
         let stdout = text(&o.stdout);
         assert!(o.status.success(), "{limit}: {stdout}{}", text(&o.stderr));
         let after = density(&out);
@@ -304,31 +296,15 @@ fn resume_refuses_a_start_with_overlapping_items_or_items_outside() {
     let (scene, out) = finished_run(&dir);
     let (x, y) = centre(&out, 3);
     move_item(&out, 7, x, y);
-    let o = pack(&[
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--resume",
-        "--time-limit",
-        "1",
-    ]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let o = resume(scene.to_str().unwrap(), &out, &["--time-limit", "1"]);
+    let stderr = refused(&o);
     assert!(stderr.contains("not certified"), "{stderr}");
     assert!(stderr.contains("items 3 and 7 (μ² = 0.000000)"), "{stderr}");
 
     // Item 7 far outside the container instead.
     move_item(&out, 7, 1e3, 0.0);
-    let o = pack(&[
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--resume",
-        "--time-limit",
-        "1",
-    ]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let o = resume(scene.to_str().unwrap(), &out, &["--time-limit", "1"]);
+    let stderr = refused(&o);
     assert!(
         stderr.contains("1 items outside the container: 7 (the container would have to grow by"),
         "{stderr}"
@@ -345,13 +321,13 @@ fn resume_refuses_a_folder_of_another_container_or_other_items() {
     let other = dir.join("other");
     std::fs::create_dir_all(&other).unwrap();
     let rectangle = scene(&other, 30, 60.0, "").to_str().unwrap().to_string();
-    let text_of_scene = std::fs::read_to_string(&rectangle)
-        .unwrap()
-        .replace("kind = \"circle\"", "kind = \"rectangle\"");
-    std::fs::write(&rectangle, text_of_scene).unwrap();
-    let o = pack(&[&rectangle, "--out", out.to_str().unwrap(), "--resume"]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    edit_scene(
+        Path::new(&rectangle),
+        "kind = \"circle\"",
+        "kind = \"rectangle\"",
+    );
+    let o = resume(&rectangle, &out, &[]);
+    let stderr = refused(&o);
     assert!(
         stderr.contains(&format!(
             "cannot resume from {}: its container is circle, but the scene",
@@ -362,13 +338,9 @@ fn resume_refuses_a_folder_of_another_container_or_other_items() {
     assert!(stderr.contains("has rectangle"), "{stderr}");
     // Other semi-axes.
     let bigger = scene(&other, 30, 60.0, "").to_str().unwrap().to_string();
-    let text_of_scene = std::fs::read_to_string(&bigger)
-        .unwrap()
-        .replace("[2.0, 1.0]", "[3.0, 1.0]");
-    std::fs::write(&bigger, text_of_scene).unwrap();
-    let o = pack(&[&bigger, "--out", out.to_str().unwrap(), "--resume"]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    edit_scene(Path::new(&bigger), "[2.0, 1.0]", "[3.0, 1.0]");
+    let o = resume(&bigger, &out, &[]);
+    let stderr = refused(&o);
     assert!(
         stderr.contains("item 0 has semi-axes [2.0, 1.0] in the packing, [3.0, 1.0] in the scene"),
         "{stderr}"

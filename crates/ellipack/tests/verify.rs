@@ -2,27 +2,25 @@
 //! an item sticks out, and checks a hand-made packing with only a container.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ellipack-verify-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{ellipack, temp_dir, utf8};
 
 fn verify(args: &[&str], dir: &Path) -> (bool, String, String) {
-    let out: Output = Command::new(env!("CARGO_BIN_EXE_ellipack"))
+    let out = ellipack()
         .arg("verify")
         .args(args)
         .current_dir(dir)
         .output()
         .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
+    (out.status.success(), utf8(out.stdout), utf8(out.stderr))
+}
+
+/// A fresh test folder holding `packing.csv` with the text `csv`.
+fn folder_with_packing(name: &str, csv: &str) -> PathBuf {
+    let dir = temp_dir(name);
+    std::fs::write(dir.join("packing.csv"), csv).unwrap();
+    dir
 }
 
 /// Unit discs with ids that are not their row numbers: 10 and 7 overlap (centres 1.5 apart:
@@ -31,8 +29,7 @@ const DISCS: &str = "id,x,y,a,b,theta\n10,0,0,1,1,0\n7,1.5,0,1,1,0\n3,5,5,1,1,0\
 
 #[test]
 fn verify_names_overlapping_pairs_and_items_outside_by_id() {
-    let dir = temp_dir("names");
-    std::fs::write(dir.join("packing.csv"), DISCS).unwrap();
+    let dir = folder_with_packing("names", DISCS);
     let (ok, text, err) = verify(
         &["packing.csv", "--container", "circle", "--size", "2.4"],
         &dir,
@@ -55,7 +52,6 @@ fn verify_names_overlapping_pairs_and_items_outside_by_id() {
 
 #[test]
 fn verify_lists_twenty_offenders_and_counts_the_rest() {
-    let dir = temp_dir("bounded");
     // 25 pairs of discs on top of each other, far apart from the other pairs.
     let mut csv = String::from("id,x,y,a,b,theta\n");
     for k in 0..25 {
@@ -67,7 +63,7 @@ fn verify_lists_twenty_offenders_and_counts_the_rest() {
             x + 0.5
         ));
     }
-    std::fs::write(dir.join("packing.csv"), csv).unwrap();
+    let dir = folder_with_packing("bounded", &csv);
     let (ok, text, err) = verify(
         &["packing.csv", "--container", "circle", "--size", "1000"],
         &dir,
@@ -81,12 +77,10 @@ fn verify_lists_twenty_offenders_and_counts_the_rest() {
 
 #[test]
 fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
-    let dir = temp_dir("hand");
-    std::fs::write(
-        dir.join("packing.csv"),
+    let dir = folder_with_packing(
+        "hand",
         "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,-1.5,0,0,1,0.5,0.5,1,0,0,0\n1,1.5,0,0,1,0.5,0.5,1,0,0,0\n",
-    )
-    .unwrap();
+    );
     let (ok, text, err) = verify(
         &["packing.csv", "--container", "ball", "--size", "2.5"],
         &dir,
@@ -127,8 +121,7 @@ fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
 
 #[test]
 fn a_hand_made_packing_verifies_with_a_minimal_summary() {
-    let dir = temp_dir("minimal");
-    std::fs::write(dir.join("packing.csv"), DISCS).unwrap();
+    let dir = folder_with_packing("minimal", DISCS);
     std::fs::write(
         dir.join("summary.json"),
         r#"{"container": {"kind": "rectangle", "half_sides": [7, 7]}}"#,
@@ -165,8 +158,7 @@ fn a_hand_made_packing_verifies_with_a_minimal_summary() {
 
 #[test]
 fn verify_without_a_container_says_how_to_give_one() {
-    let dir = temp_dir("nosummary");
-    std::fs::write(dir.join("packing.csv"), DISCS).unwrap();
+    let dir = folder_with_packing("nosummary", DISCS);
     let (ok, _, err) = verify(&["packing.csv"], &dir);
     assert!(
         !ok && err.contains("summary.json") && err.contains("--container"),
@@ -213,12 +205,10 @@ fn verify_without_a_container_says_how_to_give_one() {
 
 #[test]
 fn duplicate_ids_are_an_error_naming_the_id_and_both_lines() {
-    let dir = temp_dir("dup");
-    std::fs::write(
-        dir.join("packing.csv"),
+    let dir = folder_with_packing(
+        "dup",
         "id,x,y,a,b,theta\n10,0,0,1,1,0\n7,3,0,1,1,0\n10,6,0,1,1,0\n",
-    )
-    .unwrap();
+    );
     let (ok, _, err) = verify(
         &["packing.csv", "--container", "circle", "--size", "9"],
         &dir,

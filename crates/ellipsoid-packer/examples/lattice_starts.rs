@@ -8,15 +8,12 @@ use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Model;
 use std::time::Instant;
 
+mod common;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let dim: usize = args.get(1).map_or(Ok(3), |s| s.parse())?;
-    let kind = match args.get(2).map_or("ball", String::as_str) {
-        "ball" => ContainerKind::Ball,
-        "ellipsoid" => ContainerKind::Ellipsoid,
-        "box" => ContainerKind::Box,
-        other => return Err(format!("unknown container `{other}`").into()),
-    };
+    let kind = common::container_kind(args.get(2).map_or("ball", String::as_str))?;
     let m: usize = args.get(3).map_or(Ok(100), |s| s.parse())?;
     let k: usize = args.get(4).map_or(Ok(8), |s| s.parse())?;
     if dim == 2 {

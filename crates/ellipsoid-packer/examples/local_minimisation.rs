@@ -9,15 +9,12 @@ use implicit_packing::containment::ContainerKind;
 use implicit_packing::model::Model;
 use std::time::Instant;
 
+mod common;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let dim: usize = args.get(1).map_or(Ok(3), |s| s.parse())?;
-    let kind = match args.get(2).map_or("ball", String::as_str) {
-        "ball" => ContainerKind::Ball,
-        "ellipsoid" => ContainerKind::Ellipsoid,
-        "box" => ContainerKind::Box,
-        other => return Err(format!("unknown container `{other}`").into()),
-    };
+    let kind = common::container_kind(args.get(2).map_or("ball", String::as_str))?;
     let m: usize = args.get(3).map_or(Ok(100), |s| s.parse())?;
     let dense = match args.get(4).map_or("paper", String::as_str) {
         "paper" => false,
@@ -46,39 +43,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         false
     };
     let (density, before, factor, report, check, builds) = if dim == 2 {
-        let mut p = Model::<2>::new(vec![[2.0, 1.0]; m], kind)?;
-        let x0 = if dense {
-            lattice_start_of(&p, &LatticeStart::centred())
-        } else {
-            lattice_start(&p)
-        };
-        let r = local_minimisation(&mut p, &x0, &settings, &mut observe)?;
-        let check = independent_check(&mut p, &r.x)?;
-        (
-            r.density,
-            r.density_before_repair,
-            r.repair_factor,
-            r.report,
-            check,
-            p.pair_list_builds(),
-        )
+        minimise(vec![[2.0, 1.0]; m], kind, dense, &settings, &mut observe)?
     } else {
-        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; m], kind)?;
-        let x0 = if dense {
-            lattice_start_of(&p, &LatticeStart::centred())
-        } else {
-            lattice_start(&p)
-        };
-        let r = local_minimisation(&mut p, &x0, &settings, &mut observe)?;
-        let check = independent_check(&mut p, &r.x)?;
-        (
-            r.density,
-            r.density_before_repair,
-            r.repair_factor,
-            r.report,
-            check,
-            p.pair_list_builds(),
-        )
+        minimise(
+            vec![[1.0, 0.75, 0.5]; m],
+            kind,
+            dense,
+            &settings,
+            &mut observe,
+        )?
     };
     let elapsed = start.elapsed();
     println!("{check}");
@@ -92,6 +65,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.function_evaluations
     );
     Ok(())
+}
+
+/// What one run reports: density, density before the repair, repair factor, the solver's
+/// report, the independent check and how many times the pair list was built.
+type Outcome = (f64, f64, f64, auglag::Report, String, usize);
+
+/// One local minimisation of items with semi-axes `axes` in a container of `kind`, from the
+/// paper's lattice start or (`dense`) the centred lattice start.
+fn minimise<const N: usize>(
+    axes: Vec<[f64; N]>,
+    kind: ContainerKind,
+    dense: bool,
+    settings: &LocalSettings,
+    observe: &mut dyn FnMut(&auglag::Progress<'_>) -> bool,
+) -> Result<Outcome, Box<dyn std::error::Error>> {
+    let mut p = Model::<N>::new(axes, kind)?;
+    let x0 = if dense {
+        lattice_start_of(&p, &LatticeStart::centred())
+    } else {
+        lattice_start(&p)
+    };
+    let r = local_minimisation(&mut p, &x0, settings, observe)?;
+    let check = independent_check(&mut p, &r.x)?;
+    Ok((
+        r.density,
+        r.density_before_repair,
+        r.repair_factor,
+        r.report,
+        check,
+        p.pair_list_builds(),
+    ))
 }
 
 /// Checks a packing without the model's own certificate: PW85 verdicts on all m(m−1)/2 pairs,

@@ -9,19 +9,15 @@ use ellipsoid_packer::{
     multistart::{Callbacks, MultiStartProgress, MultiStartSettings, multistart},
     starts::paper_start,
 };
-use implicit_packing::containment::ContainerKind;
 use std::time::Duration;
+
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let arg = |k: usize, default: &str| args.get(k).cloned().unwrap_or_else(|| default.into());
     let dim: usize = arg(1, "3").parse()?;
-    let kind = match arg(2, "ball").as_str() {
-        "ball" => ContainerKind::Ball,
-        "ellipsoid" => ContainerKind::Ellipsoid,
-        "box" => ContainerKind::Box,
-        other => return Err(format!("unknown container `{other}`").into()),
-    };
+    let kind = common::container_kind(arg(2, "ball").as_str())?;
     let m: usize = arg(3, "100").parse()?;
     let seconds: f64 = arg(4, "60").parse()?;
     let threads: usize = arg(5, "2").parse()?;

@@ -627,22 +627,23 @@ mod tests {
         assert_eq!(&a[6..], &x[6..], "the container is not perturbed");
     }
 
-    #[test]
-    fn an_interrupt_before_the_first_local_minimisation_keeps_the_start() {
+    /// Eight ellipses (2, 1) in a circle from the paper's start, watched by `observer`: the
+    /// start and the run's result.
+    fn eight_in_a_circle(observer: &mut dyn Observer) -> (Vec<f64>, MultiStartResult) {
         let axes = vec![[2.0, 1.0]; 8];
         let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
-        let r = multistart(
-            &axes,
-            ContainerKind::Ball,
-            &x0,
-            &MultiStartSettings::paper(2, 1),
-            &mut Callbacks {
-                finished: |_: &MultiStartProgress| {},
-                iteration: |_: &SolverProgress<'_>| {},
-                should_stop: || true,
-            },
-        )
-        .unwrap();
+        let settings = MultiStartSettings::paper(2, 1);
+        let r = multistart(&axes, ContainerKind::Ball, &x0, &settings, observer).unwrap();
+        (x0, r)
+    }
+
+    #[test]
+    fn an_interrupt_before_the_first_local_minimisation_keeps_the_start() {
+        let (x0, r) = eight_in_a_circle(&mut Callbacks {
+            finished: |_: &MultiStartProgress| {},
+            iteration: |_: &SolverProgress<'_>| {},
+            should_stop: || true,
+        });
         assert!(r.interrupted && r.local_minimisations == 0);
         assert!(r.start_kept && r.best.x == x0);
         assert!(r.best.certificate.is_feasible());
@@ -650,25 +651,16 @@ mod tests {
 
     #[test]
     fn a_first_local_minimisation_cut_off_early_keeps_a_denser_start() {
-        let axes = vec![[2.0, 1.0]; 8];
-        let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
         let calls = std::sync::atomic::AtomicUsize::new(0);
         // Stopped at its first iteration, the first local minimisation returns a repaired
         // point near the start; whichever is denser is the best, and it is certified.
-        let r = multistart(
-            &axes,
-            ContainerKind::Ball,
-            &x0,
-            &MultiStartSettings::paper(2, 1),
-            &mut Callbacks {
-                finished: |_: &MultiStartProgress| {},
-                iteration: |_: &SolverProgress<'_>| {
-                    calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                },
-                should_stop: || calls.load(std::sync::atomic::Ordering::SeqCst) > 0,
+        let (x0, r) = eight_in_a_circle(&mut Callbacks {
+            finished: |_: &MultiStartProgress| {},
+            iteration: |_: &SolverProgress<'_>| {
+                calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
             },
-        )
-        .unwrap();
+            should_stop: || calls.load(std::sync::atomic::Ordering::SeqCst) > 0,
+        });
         let start = r.start_density.unwrap();
         assert!(r.best.density >= start, "{} < {start}", r.best.density);
         assert_eq!(r.start_kept, r.best.x == x0);

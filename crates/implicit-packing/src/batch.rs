@@ -468,13 +468,7 @@ pub fn pair_gradients<const N: usize>(
     pairs: &[(usize, usize)],
     out: &mut [Term<N>],
 ) -> Result<(), Error> {
-    if out.len() != pairs.len() {
-        return Err(Error::LengthMismatch {
-            what: "pair gradients",
-            expected: pairs.len(),
-            found: out.len(),
-        });
-    }
+    Error::check_length("pair gradients", pairs.len(), out.len())?;
     if let Some((pair, &(i, j))) = pairs
         .iter()
         .enumerate()

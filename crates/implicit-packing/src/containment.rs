@@ -40,6 +40,7 @@
 //! Birgin, Lobato, Martínez (2016), Section 6 and its reference \[8\] (E. G. Birgin, R. D. Lobato,
 //! J. M. Martínez, *Packing ellipsoids by nonlinear optimization*, J. Global Optim. 65 (2016)).
 
+use crate::derivatives::spin;
 use crate::error::Error;
 use crate::linalg::{graded_svd, mat_t_vec, torque};
 use crate::projection::newton;
@@ -90,13 +91,7 @@ impl<const N: usize> Container<N> {
     /// A container of the given kind from its variables (`[r]` or `N` semi-axes / half-sides).
     pub fn from_dimensions(kind: ContainerKind, dims: &[f64]) -> Result<Self, Error> {
         let expected = kind.dimension_count(N);
-        if dims.len() != expected {
-            return Err(Error::LengthMismatch {
-                what: "container dimensions",
-                expected,
-                found: dims.len(),
-            });
-        }
+        Error::check_length("container dimensions", expected, dims.len())?;
         for (dimension, &value) in dims.iter().enumerate() {
             if !(value.is_finite() && value > 0.0) {
                 return Err(Error::InvalidContainer { dimension, value });
@@ -128,11 +123,7 @@ impl<const N: usize> Container<N> {
     /// Ball: `π r²`, `4π r³/3`; ellipsoid: `π A₁A₂`, `4π A₁A₂A₃/3`; box: `Π 2 L_k`.
     pub fn measure(&self) -> (f64, [f64; N]) {
         let mut grad = [0.0; N];
-        let unit = if N == 2 {
-            std::f64::consts::PI
-        } else {
-            4.0 * std::f64::consts::PI / 3.0
-        };
+        let unit = unit_ball_measure::<N>();
         match *self {
             Container::Ball { radius } => {
                 let v = unit * radius.powi(N as i32);
@@ -155,16 +146,21 @@ impl<const N: usize> Container<N> {
     }
 }
 
+/// Area of the unit disc (2D) or volume of the unit ball (3D).
+fn unit_ball_measure<const N: usize>() -> f64 {
+    if N == 2 {
+        std::f64::consts::PI
+    } else {
+        4.0 * std::f64::consts::PI / 3.0
+    }
+}
+
 impl<const N: usize> Container<N> {
     /// Hessian of [`Container::measure`] with respect to the container variables (only the
     /// `[0][0]` entry for a ball: `N (N − 1) · unit · r^(N−2)`).
     pub fn measure_hessian(&self) -> [[f64; N]; N] {
         let mut h = [[0.0; N]; N];
-        let unit = if N == 2 {
-            std::f64::consts::PI
-        } else {
-            4.0 * std::f64::consts::PI / 3.0
-        };
+        let unit = unit_ball_measure::<N>();
         match *self {
             Container::Ball { radius } => {
                 h[0][0] = (N * (N - 1)) as f64 * unit * radius.powi(N as i32 - 2);
@@ -443,20 +439,6 @@ pub struct ContainmentDirection<const N: usize> {
     pub container: [f64; N],
 }
 
-#[inline(always)]
-fn spin_vec<const N: usize>(w: &[f64; 3], v: &[f64; N]) -> [f64; N] {
-    let mut out = [0.0; N];
-    if N == 3 {
-        out[0] = w[1] * v[2] - w[2] * v[1];
-        out[1] = w[2] * v[0] - w[0] * v[2];
-        out[2] = w[0] * v[1] - w[1] * v[0];
-    } else {
-        out[0] = -w[2] * v[1];
-        out[1] = w[2] * v[0];
-    }
-    out
-}
-
 /// The containment residual, its gradient, and the derivative of the gradient along `dir`
 /// (a Hessian–vector product in force/torque form). `None` in the hard case of the farthest
 /// point (the ellipsoid centred on the container's centre with a degenerate top direction),
@@ -507,8 +489,8 @@ pub fn containment_gradient_derivative<const N: usize>(
                 let mxe = torque(&m, &e);
                 let ds = (0..3).map(|a| w[a] * mxe[a]).sum::<f64>() / s;
                 // δ(M e_k) = w × m − M (w × e_k).
-                let we = spin_vec(w, &e);
-                let mut dm = spin_vec(w, &m);
+                let we = spin(w, &e);
+                let mut dm = spin(w, &m);
                 for r in 0..N {
                     for cc in 0..N {
                         dm[r] -= mm[r][cc] * we[cc];
@@ -578,8 +560,8 @@ pub fn containment_gradient_derivative<const N: usize>(
                 .map(|s| u[s] * ((0..N).map(|t| b[s][t] * u[t]).sum::<f64>() + kv[s]))
                 .sum();
             // r = P^½ Qᵀ [−w × aa + δ(C⁻²) p + C⁻² (w × e + δc)].
-            let wa = spin_vec(w, &aa);
-            let we = spin_vec(w, &e);
+            let wa = spin(w, &aa);
+            let we = spin(w, &e);
             let mut world = [0.0; N];
             for k in 0..N {
                 world[k] = -wa[k] + dcinv2[k] * p[k] + cinv2[k] * (we[k] + dir.centre[k]);

@@ -578,7 +578,7 @@ pub struct PairDirection<const N: usize> {
 
 /// `w × v` for a world angular velocity `w` and an `N`-vector `v` (2D: rotation about e_z).
 #[inline(always)]
-fn spin<const N: usize>(w: &[f64; 3], v: &[f64; N]) -> [f64; N] {
+pub(crate) fn spin<const N: usize>(w: &[f64; 3], v: &[f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     if N == 3 {
         out[0] = w[1] * v[2] - w[2] * v[1];

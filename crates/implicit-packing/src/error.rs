@@ -89,6 +89,25 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// `Ok` when a slice of `what` has the `expected` length, the `LengthMismatch` otherwise.
+    pub(crate) fn check_length(
+        what: &'static str,
+        expected: usize,
+        found: usize,
+    ) -> Result<(), Error> {
+        if found == expected {
+            Ok(())
+        } else {
+            Err(Error::LengthMismatch {
+                what,
+                expected,
+                found,
+            })
+        }
+    }
+}
+
 /// "item i: " (an ellipse or an ellipsoid: the messages serve both dimensions).
 fn item_prefix(f: &mut fmt::Formatter<'_>, item: Option<usize>) -> fmt::Result {
     match item {

@@ -205,13 +205,7 @@ impl<const N: usize> Model<N> {
     /// Reads the bodies and the container from `x` into the workspace.
     fn load(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
         let n = self.var_count();
-        if x.len() != n {
-            return Err(Error::LengthMismatch {
-                what: "variables",
-                expected: n,
-                found: x.len(),
-            });
-        }
+        Error::check_length("variables", n, x.len())?;
         for (index, &value) in x.iter().enumerate() {
             let limit = if index < self.len() * Self::vars_per_body()
                 && (index % Self::vars_per_body()) < N
@@ -326,13 +320,7 @@ impl<const N: usize> Model<N> {
         out: &mut ModelGradient,
     ) -> Result<(), Error> {
         let n = self.var_count();
-        if v.len() != n {
-            return Err(Error::LengthMismatch {
-                what: "direction",
-                expected: n,
-                found: v.len(),
-            });
-        }
+        Error::check_length("direction", n, v.len())?;
         if let Some(index) = v.iter().position(|a| !a.is_finite()) {
             return Err(Error::NonFiniteVariable {
                 index,
@@ -551,21 +539,9 @@ impl<const N: usize> Model<N> {
     /// [`Error::LengthMismatch`] if the number of bodies or dimensions is wrong,
     /// [`Error::InvalidSemiAxis`] naming the body whose semi-axes differ from the problem's.
     pub fn pack_variables(&self, bodies: &[Body<N>], container: &[f64]) -> Result<Vec<f64>, Error> {
-        if bodies.len() != self.len() {
-            return Err(Error::LengthMismatch {
-                what: "bodies",
-                expected: self.len(),
-                found: bodies.len(),
-            });
-        }
+        Error::check_length("bodies", self.len(), bodies.len())?;
         let nc = self.kind.dimension_count(N);
-        if container.len() != nc {
-            return Err(Error::LengthMismatch {
-                what: "container dimensions",
-                expected: nc,
-                found: container.len(),
-            });
-        }
+        Error::check_length("container dimensions", nc, container.len())?;
         let mut x = Vec::with_capacity(self.var_count());
         for (i, b) in bodies.iter().enumerate() {
             let l = b.semi_axes();

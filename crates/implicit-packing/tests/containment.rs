@@ -10,16 +10,8 @@ use implicit_packing::{Body, Ellipsoid};
 use testkit::Rng;
 
 fn random_body(rng: &mut Rng, spread: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
-    let c = [
-        rng.range(-spread, spread),
-        rng.range(-spread, spread),
-        rng.range(-spread, spread),
-    ];
-    let l = [
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-    ];
+    let c = rng.point::<3>(-spread, spread);
+    let l = rng.point::<3>(0.2, 2.0);
     let a = [
         rng.range(-3.0, 3.0),
         rng.range(-1.4, 1.4),
@@ -28,17 +20,53 @@ fn random_body(rng: &mut Rng, spread: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
     (c, l, a)
 }
 
+/// Every kind of container.
+const KINDS: [ContainerKind; 3] = [
+    ContainerKind::Ball,
+    ContainerKind::Ellipsoid,
+    ContainerKind::Box,
+];
+
+/// Container dimensions of `kind` in `d` dimensions, each in [2, 4).
+fn random_dimensions(rng: &mut Rng, kind: ContainerKind, d: usize) -> Vec<f64> {
+    (0..kind.dimension_count(d))
+        .map(|_| rng.range(2.0, 4.0))
+        .collect()
+}
+
+/// Central differences of `eval` at `v`, variable by variable, with step `h`.
+fn central_differences(v: &[f64], h: f64, eval: impl Fn(&[f64]) -> f64) -> Vec<f64> {
+    (0..v.len())
+        .map(|k| {
+            let mut vp = v.to_vec();
+            vp[k] += h;
+            let mut vm = v.to_vec();
+            vm[k] -= h;
+            (eval(&vp) - eval(&vm)) / (2.0 * h)
+        })
+        .collect()
+}
+
+/// A 3D containment gradient in the variables (centre, angles, the first `nd` container
+/// dimensions).
+fn in_angles_3d(
+    g: &implicit_packing::containment::ContainmentGradient<3>,
+    ang: [f64; 3],
+    nd: usize,
+) -> Vec<f64> {
+    let mut out = vec![g.centre[0], g.centre[1], g.centre[2]];
+    out.extend_from_slice(&angle_gradient_3d(ang, &g.torque));
+    out.extend_from_slice(&g.container[..nd]);
+    out
+}
+
 #[test]
 fn farthest_point_is_a_kkt_point_and_beats_sampling() {
     let mut rng = Rng::new(5);
     for _ in 0..200 {
         let (c, l, ang) = random_body(&mut rng, 3.0);
         let body = Ellipsoid::from_angles(c, l, ang).unwrap();
-        let a = [
-            rng.range(1.0, 5.0),
-            rng.range(1.0, 5.0),
-            rng.range(1.0, 5.0),
-        ];
+        let a = rng.point::<3>(1.0, 5.0);
         let (h, p) = farthest_point(&body, &a);
         let q = body.rotation();
         // p* on the surface of E.
@@ -99,18 +127,12 @@ fn closed_forms_sphere_in_ball_and_box_support() {
 #[test]
 fn containment_gradients_match_finite_differences() {
     let mut rng = Rng::new(9);
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let mut checked = 0;
         let mut worst = 0.0f64;
         while checked < 300 {
             let (c, l, ang) = random_body(&mut rng, 2.5);
-            let dims: Vec<f64> = (0..kind.dimension_count(3))
-                .map(|_| rng.range(2.0, 4.0))
-                .collect();
+            let dims = random_dimensions(&mut rng, kind, 3);
             let eval = |v: &[f64]| -> f64 {
                 let b = Ellipsoid::from_angles([v[0], v[1], v[2]], l, [v[3], v[4], v[5]]).unwrap();
                 let cont = Container::<3>::from_dimensions(kind, &v[6..]).unwrap();
@@ -126,18 +148,10 @@ fn containment_gradients_match_finite_differences() {
             let cont = Container::<3>::from_dimensions(kind, &dims).unwrap();
             let (f, g) = containment_gradient(&b, &cont);
             assert_eq!(f, f0);
-            let mut an = vec![g.centre[0], g.centre[1], g.centre[2]];
-            an.extend_from_slice(&angle_gradient_3d(ang, &g.torque));
-            an.extend_from_slice(&g.container[..dims.len()]);
-            let h = 1e-6;
+            let an = in_angles_3d(&g, ang, dims.len());
             let mut err = 0.0f64;
             let scale = an.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            for k in 0..v.len() {
-                let mut vp = v.clone();
-                vp[k] += h;
-                let mut vm = v.clone();
-                vm[k] -= h;
-                let fd = (eval(&vp) - eval(&vm)) / (2.0 * h);
+            for (k, fd) in central_differences(&v, 1e-6, eval).into_iter().enumerate() {
                 err = err.max((fd - an[k]).abs() / scale);
             }
             // Kinks of max{0, g}² (box: several constraints) are C¹: allow the O(h) there.
@@ -153,19 +167,13 @@ fn containment_gradients_match_finite_differences() {
 fn containment_gradients_match_finite_differences_2d() {
     use implicit_packing::Ellipse;
     let mut rng = Rng::new(10);
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let mut checked = 0;
         while checked < 300 {
             let c = [rng.range(-2.5, 2.5), rng.range(-2.5, 2.5)];
             let l = [rng.range(0.2, 2.0), rng.range(0.2, 2.0)];
             let theta = rng.range(-3.0, 3.0);
-            let dims: Vec<f64> = (0..kind.dimension_count(2))
-                .map(|_| rng.range(2.0, 4.0))
-                .collect();
+            let dims = random_dimensions(&mut rng, kind, 2);
             let eval = |v: &[f64]| -> f64 {
                 let b = Ellipse::ellipse([v[0], v[1]], l, v[2]).unwrap();
                 containment_residual(&b, &Container::<2>::from_dimensions(kind, &v[3..]).unwrap())
@@ -181,13 +189,7 @@ fn containment_gradients_match_finite_differences_2d() {
             let mut an = vec![g.centre[0], g.centre[1], g.torque[2]];
             an.extend_from_slice(&g.container[..dims.len()]);
             let scale = an.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let h = 1e-6;
-            for k in 0..v.len() {
-                let mut vp = v.clone();
-                vp[k] += h;
-                let mut vm = v.clone();
-                vm[k] -= h;
-                let fd = (eval(&vp) - eval(&vm)) / (2.0 * h);
+            for (k, fd) in central_differences(&v, 1e-6, eval).into_iter().enumerate() {
                 assert!(
                     (fd - an[k]).abs() <= 1e-6 * scale,
                     "{kind:?} var {k}: fd {fd} analytic {}",
@@ -207,25 +209,18 @@ fn containment_hessian_vector_products_match_finite_differences() {
     use implicit_packing::derivatives::angular_velocity_derivatives_3d;
     use implicit_packing::shape::angular_velocities_3d;
     let mut rng = Rng::new(12);
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let nd = kind.dimension_count(3);
         let grad_at = |v: &[f64], l: [f64; 3]| -> Vec<f64> {
             let b = Ellipsoid::from_angles([v[0], v[1], v[2]], l, [v[3], v[4], v[5]]).unwrap();
             let (_, g) =
                 containment_gradient(&b, &Container::<3>::from_dimensions(kind, &v[6..]).unwrap());
-            let mut out = vec![g.centre[0], g.centre[1], g.centre[2]];
-            out.extend_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &g.torque));
-            out.extend_from_slice(&g.container[..nd]);
-            out
+            in_angles_3d(&g, [v[3], v[4], v[5]], nd)
         };
         let (mut checked, mut worst) = (0, 0.0f64);
         while checked < 300 {
             let (c, l, ang) = random_body(&mut rng, 2.5);
-            let dims: Vec<f64> = (0..nd).map(|_| rng.range(2.0, 4.0)).collect();
+            let dims = random_dimensions(&mut rng, kind, 3);
             let mut v = vec![c[0], c[1], c[2], ang[0], ang[1], ang[2]];
             v.extend_from_slice(&dims);
             let b = Body::from_angles(c, l, ang).unwrap();

@@ -2,8 +2,10 @@
 //! gradient of d² against the implicit-function system of Appendix A.1.
 #![allow(clippy::needless_range_loop)]
 
-use implicit_packing::derivatives::{a1_reference, angle_gradient_3d, pair_derivatives};
-use implicit_packing::pair::pair_term;
+use implicit_packing::derivatives::{
+    PairGradient, a1_reference, angle_gradient_3d, pair_derivatives,
+};
+use implicit_packing::pair::{PairTerm, pair_term};
 use implicit_packing::shape::angular_velocities_3d;
 use implicit_packing::{Body, Ellipse, Ellipsoid};
 use testkit::Rng;
@@ -22,16 +24,8 @@ fn bodies2(v: &[f64; 6], li: [f64; 2], lj: [f64; 2]) -> (Ellipse, Ellipse) {
 }
 
 fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
-    let li = [
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-    ];
-    let lj = [
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-    ];
+    let li = rng.point::<3>(0.3, 2.0);
+    let lj = rng.point::<3>(0.3, 2.0);
     let ri = li.iter().cloned().fold(0.0, f64::max);
     let rj = lj.iter().cloned().fold(0.0, f64::max);
     let dir = rng.direction();
@@ -48,9 +42,11 @@ fn random_pair3(rng: &mut Rng) -> ([f64; 12], [f64; 3], [f64; 3]) {
     (v, li, lj)
 }
 
-/// Away from the kinks of max{0, ·}² and from the hard case, where f is smooth.
-fn smooth(a: f64, b: f64, inside_t: bool) -> bool {
-    a.abs() > 1e-3 && b.abs() > 1e-3 && inside_t
+/// Whether f is positive and smooth at `p`: away from the kinks of max{0, ·}² and from the
+/// hard case (X not unique), the one non-smooth point of U and d² besides those kinks; random
+/// pairs never hit it exactly, but are skipped if they do.
+fn positive_and_smooth<const N: usize>(p: &PairTerm<N>) -> bool {
+    p.f != 0.0 && (1.0 - p.d2).abs() > 1e-3 && (p.eps - p.u).abs() > 1e-3 && p.x_unique
 }
 
 fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
@@ -60,6 +56,75 @@ fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
         .zip(fd)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     if scale == 0.0 { worst } else { worst / scale }
+}
+
+/// The relative error of the finite differences `fd` against `exact`, which must be at most
+/// 1e-6; `case` names the case in the failure message.
+fn assert_close(exact: &[f64], fd: &[f64], case: impl FnOnce() -> String) -> f64 {
+    let e = rel_err(exact, fd);
+    assert!(
+        e <= 1e-6,
+        "{}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}",
+        case()
+    );
+    e
+}
+
+/// The central difference of `grad` from `v` along `dv`, with step 1e-6.
+fn along<const M: usize>(
+    v: &[f64; M],
+    dv: &[f64; M],
+    grad: impl Fn(&[f64; M]) -> [f64; M],
+) -> [f64; M] {
+    let h = 1e-6;
+    let vp: [f64; M] = std::array::from_fn(|k| v[k] + h * dv[k]);
+    let vm: [f64; M] = std::array::from_fn(|k| v[k] - h * dv[k]);
+    let (gp, gm) = (grad(&vp), grad(&vm));
+    std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h))
+}
+
+/// A 3D pair gradient in the variables of [`bodies3`]: torques become derivatives with
+/// respect to the angles `v[3..6]` and `v[9..12]`.
+fn in_angles_3d(v: &[f64; 12], g: &PairGradient<3>) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    out[0..3].copy_from_slice(&g.centre_i);
+    out[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &g.torque_i));
+    out[6..9].copy_from_slice(&g.centre_j);
+    out[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &g.torque_j));
+    out
+}
+
+/// A 2D pair gradient in the variables of [`bodies2`]: the torque about z is the derivative
+/// with respect to the angle.
+fn in_angles_2d(g: &PairGradient<2>) -> [f64; 6] {
+    [
+        g.centre_i[0],
+        g.centre_i[1],
+        g.torque_i[2],
+        g.centre_j[0],
+        g.centre_j[1],
+        g.torque_j[2],
+    ]
+}
+
+/// Two ellipses with semi-axes in [0.3, 2), centres up to 1.1 times the sum of their largest
+/// semi-axes apart, as variables of [`bodies2`].
+fn random_pair2(rng: &mut Rng) -> ([f64; 6], [f64; 2], [f64; 2]) {
+    let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+    let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
+    let r = li[0].max(li[1]) + lj[0].max(lj[1]);
+    let ang = rng.range(0.0, std::f64::consts::TAU);
+    let dist = rng.range(0.0, 1.1) * r;
+    let c = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+    let v = [
+        c[0],
+        c[1],
+        rng.range(-3.0, 3.0),
+        c[0] + dist * ang.cos(),
+        c[1] + dist * ang.sin(),
+        rng.range(-3.0, 3.0),
+    ];
+    (v, li, lj)
 }
 
 #[test]
@@ -72,23 +137,12 @@ fn gradient_of_f_matches_finite_differences_3d() {
         let (v, li, lj) = random_pair3(&mut rng);
         let (i, j) = bodies3(&v, li, lj);
         let p = pair_term(&i, &j);
-        // The hard case (X not unique) is the one non-smooth point of U and d² besides the
-        // kinks of max{0, ·}²; random pairs never hit it exactly, but skip it if they do.
-        let far_from_hard = p.x_unique;
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, far_from_hard) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let d = pair_derivatives(&i, &j);
-        let mut g = [0.0; 12];
-        g[0..3].copy_from_slice(&d.grad_f.centre_i);
-        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
-        g[6..9].copy_from_slice(&d.grad_f.centre_j);
-        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
-        let mut gu = [0.0; 12];
-        gu[0..3].copy_from_slice(&d.grad_u.centre_i);
-        gu[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.torque_i));
-        gu[6..9].copy_from_slice(&d.grad_u.centre_j);
-        gu[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.torque_j));
+        let g = in_angles_3d(&v, &d.grad_f);
+        let gu = in_angles_3d(&v, &d.grad_u);
         let mut fd = [0.0; 12];
         let mut fdu = [0.0; 12];
         let h = 1e-6;
@@ -104,20 +158,15 @@ fn gradient_of_f_matches_finite_differences_3d() {
             fd[k] = (pp.f - pm.f) / (2.0 * h);
             fdu[k] = (pp.u - pm.u) / (2.0 * h);
         }
-        let e = rel_err(&g, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}\n v = {v:?} li {li:?} lj {lj:?} d2 {} u {}",
-            p.d2,
-            p.u
-        );
+        let e = assert_close(&g, &fd, || {
+            format!(
+                "pair {checked} (v = {v:?} li {li:?} lj {lj:?} d2 {} u {})",
+                p.d2, p.u
+            )
+        });
         worst = worst.max(e);
         if p.centre_inside || p.u < 1.0 {
-            let eu = rel_err(&gu, &fdu);
-            assert!(
-                eu <= 1e-6,
-                "pair {checked}: ∇U rel err {eu:e}\n g = {gu:?}\nfd = {fdu:?}"
-            );
+            let eu = assert_close(&gu, &fdu, || format!("pair {checked}, ∇U"));
             worst_u = worst_u.max(eu);
             n_u += 1;
         }
@@ -134,41 +183,14 @@ fn gradient_of_f_matches_finite_differences_2d() {
     let mut checked = 0;
     let mut worst = 0.0f64;
     while checked < 1000 {
-        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
-        let a = rng.range(0.0, std::f64::consts::TAU);
-        let dist = rng.range(0.0, 1.1) * r;
-        let v = [
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-3.0, 3.0),
-            0.0,
-            0.0,
-            rng.range(-3.0, 3.0),
-        ];
-        let v = [
-            v[0],
-            v[1],
-            v[2],
-            v[0] + dist * a.cos(),
-            v[1] + dist * a.sin(),
-            v[5],
-        ];
+        let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let d = pair_derivatives(&i, &j);
-        let g = [
-            d.grad_f.centre_i[0],
-            d.grad_f.centre_i[1],
-            d.grad_f.torque_i[2],
-            d.grad_f.centre_j[0],
-            d.grad_f.centre_j[1],
-            d.grad_f.torque_j[2],
-        ];
+        let g = in_angles_2d(&d.grad_f);
         let h = 1e-6;
         let mut fd = [0.0; 6];
         for k in 0..6 {
@@ -180,12 +202,7 @@ fn gradient_of_f_matches_finite_differences_2d() {
             let (im, jm) = bodies2(&vm, li, lj);
             fd[k] = (pair_term(&ip, &jp).f - pair_term(&im, &jm).f) / (2.0 * h);
         }
-        let e = rel_err(&g, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\n g = {g:?}\nfd = {fd:?}"
-        );
-        worst = worst.max(e);
+        worst = worst.max(assert_close(&g, &fd, || format!("pair {checked}")));
         checked += 1;
     }
     println!("2D: {checked} pairs, worst relative error of ∇f {worst:.2e}");
@@ -259,13 +276,7 @@ fn hessian_vector_products_match_finite_differences() {
     };
     let grad12 = |v: &[f64; 12], li: [f64; 3], lj: [f64; 3]| -> [f64; 12] {
         let (i, j) = bodies3(v, li, lj);
-        let d = pair_derivatives(&i, &j);
-        let mut g = [0.0; 12];
-        g[0..3].copy_from_slice(&d.grad_f.centre_i);
-        g[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &d.grad_f.torque_i));
-        g[6..9].copy_from_slice(&d.grad_f.centre_j);
-        g[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &d.grad_f.torque_j));
-        g
+        in_angles_3d(v, &pair_derivatives(&i, &j).grad_f)
     };
     let mut rng = Rng::new(99);
     let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
@@ -273,7 +284,7 @@ fn hessian_vector_products_match_finite_differences() {
         let (v, li, lj) = random_pair3(&mut rng);
         let (i, j) = bodies3(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let dv: [f64; 12] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
@@ -309,19 +320,10 @@ fn hessian_vector_products_match_finite_differences() {
             exact[3 + a] = e_i;
             exact[9 + a] = e_j;
         }
-        let h = 1e-6;
-        let vp: [f64; 12] = std::array::from_fn(|k| v[k] + h * dv[k]);
-        let vm: [f64; 12] = std::array::from_fn(|k| v[k] - h * dv[k]);
-        let (gp, gm) = (grad12(&vp, li, lj), grad12(&vm, li, lj));
-        let fd: [f64; 12] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
-        let e = rel_err(&exact, &fd);
-        assert!(
-            e <= 1e-6,
-            "pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}\n u {} eps {} d2 {}",
-            p.u,
-            p.eps,
-            p.d2
-        );
+        let fd = along(&v, &dv, |x| grad12(x, li, lj));
+        let e = assert_close(&exact, &fd, || {
+            format!("pair {checked} (u {} eps {} d2 {})", p.u, p.eps, p.d2)
+        });
         worst = worst.max(e);
         with_u += usize::from(p.u < p.eps);
         checked += 1;
@@ -332,35 +334,14 @@ fn hessian_vector_products_match_finite_differences() {
 
     let grad6 = |v: &[f64; 6], li: [f64; 2], lj: [f64; 2]| -> [f64; 6] {
         let (i, j) = bodies2(v, li, lj);
-        let d = pair_derivatives(&i, &j);
-        [
-            d.grad_f.centre_i[0],
-            d.grad_f.centre_i[1],
-            d.grad_f.torque_i[2],
-            d.grad_f.centre_j[0],
-            d.grad_f.centre_j[1],
-            d.grad_f.torque_j[2],
-        ]
+        in_angles_2d(&pair_derivatives(&i, &j).grad_f)
     };
     let (mut checked, mut worst) = (0, 0.0f64);
     while checked < 1000 {
-        let li = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let lj = [rng.range(0.3, 2.0), rng.range(0.3, 2.0)];
-        let r = li[0].max(li[1]) + lj[0].max(lj[1]);
-        let ang = rng.range(0.0, std::f64::consts::TAU);
-        let dist = rng.range(0.0, 1.1) * r;
-        let c = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
-        let v = [
-            c[0],
-            c[1],
-            rng.range(-3.0, 3.0),
-            c[0] + dist * ang.cos(),
-            c[1] + dist * ang.sin(),
-            rng.range(-3.0, 3.0),
-        ];
+        let (v, li, lj) = random_pair2(&mut rng);
         let (i, j) = bodies2(&v, li, lj);
         let p = pair_term(&i, &j);
-        if p.f == 0.0 || !smooth(1.0 - p.d2, p.eps - p.u, p.x_unique) {
+        if !positive_and_smooth(&p) {
             continue;
         }
         let dv: [f64; 6] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
@@ -371,25 +352,9 @@ fn hessian_vector_products_match_finite_differences() {
             spin_j: [0.0, 0.0, dv[5]],
         };
         let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
-        let exact = [
-            hv.centre_i[0],
-            hv.centre_i[1],
-            hv.torque_i[2],
-            hv.centre_j[0],
-            hv.centre_j[1],
-            hv.torque_j[2],
-        ];
-        let h = 1e-6;
-        let vp: [f64; 6] = std::array::from_fn(|k| v[k] + h * dv[k]);
-        let vm: [f64; 6] = std::array::from_fn(|k| v[k] - h * dv[k]);
-        let (gp, gm) = (grad6(&vp, li, lj), grad6(&vm, li, lj));
-        let fd: [f64; 6] = std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h));
-        let e = rel_err(&exact, &fd);
-        assert!(
-            e <= 1e-6,
-            "2D pair {checked}: rel err {e:e}\nexact {exact:?}\n   fd {fd:?}"
-        );
-        worst = worst.max(e);
+        let exact = in_angles_2d(&hv);
+        let fd = along(&v, &dv, |x| grad6(x, li, lj));
+        worst = worst.max(assert_close(&exact, &fd, || format!("2D pair {checked}")));
         checked += 1;
     }
     println!("2D Hessian-vector products: {checked} pairs, worst relative error {worst:.2e}");

@@ -28,15 +28,12 @@ fn config3(
         .iter()
         .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
         .sum();
-    let side = (vol / density).cbrt();
-    let per = (m as f64).cbrt().ceil() as usize;
-    let h = side / per as f64;
+    let (side, per, h) = lattice::<3>(vol, density, m);
     let mut x = Vec::new();
     for i in 0..m {
         let (a, b, c) = (i % per, (i / per) % per, i / (per * per));
-        for (k, idx) in [a, b, c].into_iter().enumerate() {
-            let _ = k;
-            x.push((idx as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        for idx in [a, b, c] {
+            x.push(jittered(idx, h, side, rng));
         }
         x.push(rng.range(-3.0, 3.0));
         x.push(rng.range(-1.4, 1.4));
@@ -49,6 +46,21 @@ fn config3(
     (axes, x)
 }
 
+/// For `m` items of total area or volume `measure` at `density`: the side of their square or
+/// cube, the lattice cells per side and the cell size.
+fn lattice<const D: usize>(measure: f64, density: f64, m: usize) -> (f64, usize, f64) {
+    let root = |v: f64| if D == 3 { v.cbrt() } else { v.sqrt() };
+    let side = root(measure / density);
+    let per = root(m as f64).ceil() as usize;
+    (side, per, side / per as f64)
+}
+
+/// Coordinate of lattice index `idx` (spacing `h`, the lattice centred on a square or cube of
+/// `side`), moved at random by up to a fifth of the spacing.
+fn jittered(idx: usize, h: f64, side: f64, rng: &mut Rng) -> f64 {
+    (idx as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h
+}
+
 fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
     let axes: Vec<[f64; 2]> = (0..m)
         .map(|_| [rng.range(0.8, 1.2), rng.range(0.4, 0.7)])
@@ -57,18 +69,23 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
         .iter()
         .map(|l| std::f64::consts::PI * l[0] * l[1])
         .sum();
-    let side = (area / density).sqrt();
-    let per = (m as f64).sqrt().ceil() as usize;
-    let h = side / per as f64;
+    let (side, per, h) = lattice::<2>(area, density, m);
     let mut x = Vec::new();
     for i in 0..m {
-        x.push(((i % per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
-        x.push(((i / per) as f64 + 0.5) * h - side / 2.0 + rng.range(-0.2, 0.2) * h);
+        x.push(jittered(i % per, h, side, rng));
+        x.push(jittered(i / per, h, side, rng));
         x.push(rng.range(-3.0, 3.0));
     }
     x.extend_from_slice(&[0.45 * side, 0.48 * side]);
     (axes, x)
 }
+
+/// Every kind of container.
+const KINDS: [ContainerKind; 3] = [
+    ContainerKind::Ball,
+    ContainerKind::Ellipsoid,
+    ContainerKind::Box,
+];
 
 #[test]
 fn grid_sum_equals_all_pairs_sum() {
@@ -151,11 +168,7 @@ fn fd_check(
 #[test]
 fn model_gradient_matches_finite_differences() {
     let mut rng = Rng::new(33);
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
         let mut p = Model::<3>::new(axes, kind).unwrap();
         fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
@@ -251,33 +264,32 @@ fn hessian_vector_products_match_finite_differences() {
             "{worst:?} {worst_sym}"
         );
     };
-    for kind in [
-        ContainerKind::Ball,
-        ContainerKind::Ellipsoid,
-        ContainerKind::Box,
-    ] {
+    for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
-        let mut p = Model::<3>::new(axes.clone(), kind).unwrap();
-        let mut q = Model::<3>::new(axes, kind).unwrap();
-        check(
-            &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
-            &mut |x, g| {
-                q.evaluate(x, Some(g)).unwrap();
-            },
-            &x,
-            &mut rng,
-        );
+        on_two_copies(axes, kind, &x, &mut rng, check);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    let mut p = Model::<2>::new(axes.clone(), ContainerKind::Box).unwrap();
-    let mut q = Model::<2>::new(axes, ContainerKind::Box).unwrap();
+    on_two_copies(axes, ContainerKind::Box, &x, &mut rng, check);
+}
+
+/// Runs `check` with the Hessian–vector products of one model of `axes` in a container of
+/// `kind` and the gradients of another (two models, as each closure borrows its own mutably).
+fn on_two_copies<const N: usize>(
+    axes: Vec<[f64; N]>,
+    kind: ContainerKind,
+    x: &[f64],
+    rng: &mut Rng,
+    check: impl Fn(Hvp<'_>, Grad<'_>, &[f64], &mut Rng),
+) {
+    let mut p = Model::<N>::new(axes.clone(), kind).unwrap();
+    let mut q = Model::<N>::new(axes, kind).unwrap();
     check(
         &mut |x, v, out| p.hessian_vector_product(x, v, out).unwrap(),
         &mut |x, g| {
             q.evaluate(x, Some(g)).unwrap();
         },
-        &x,
-        &mut rng,
+        x,
+        rng,
     );
 }
 

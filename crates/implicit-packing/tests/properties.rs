@@ -35,46 +35,30 @@ impl FromParts for Ellipsoid {
     }
 }
 
+/// Euler angles of eq. 2, the middle one away from the poles.
+fn random_angles(rng: &mut Rng) -> [f64; 3] {
+    [
+        rng.range(-3.0, 3.0),
+        rng.range(-1.5, 1.5),
+        rng.range(-3.0, 3.0),
+    ]
+}
+
+/// An ellipsoid at `c` with semi-axes `l` and [`random_angles`].
+fn oriented_at_random(rng: &mut Rng, c: [f64; 3], l: [f64; 3]) -> Ellipsoid {
+    Body::from_angles(c, l, random_angles(rng)).unwrap()
+}
+
 fn random_pair_full(rng: &mut Rng) -> (Ellipsoid, Ellipsoid) {
-    let li = [
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-    ];
-    let lj = [
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-        rng.range(0.2, 2.0),
-    ];
+    let li = rng.point::<3>(0.2, 2.0);
+    let lj = rng.point::<3>(0.2, 2.0);
     let r = li.iter().chain(lj.iter()).cloned().fold(0.0, f64::max);
     let dir = rng.direction();
     let d = rng.range(0.0, 2.0) * r;
-    let ci = [
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-    ];
-    let i = Body::from_angles(
-        ci,
-        li,
-        [
-            rng.range(-3.0, 3.0),
-            rng.range(-1.5, 1.5),
-            rng.range(-3.0, 3.0),
-        ],
-    )
-    .unwrap();
+    let ci = rng.point::<3>(-1.0, 1.0);
+    let i = oriented_at_random(rng, ci, li);
     let cj = [ci[0] + d * dir[0], ci[1] + d * dir[1], ci[2] + d * dir[2]];
-    let j = Body::from_angles(
-        cj,
-        lj,
-        [
-            rng.range(-3.0, 3.0),
-            rng.range(-1.5, 1.5),
-            rng.range(-3.0, 3.0),
-        ],
-    )
-    .unwrap();
+    let j = oriented_at_random(rng, cj, lj);
     (i, j)
 }
 
@@ -154,38 +138,12 @@ fn direct_and_svd_routes_agree() {
     let mut worst = 0.0f64;
     let mut n = 0;
     while n < 10_000 {
-        let li = [
-            rng.range(0.6, 1.6),
-            rng.range(0.6, 1.6),
-            rng.range(0.6, 1.6),
-        ];
-        let lj = [
-            rng.range(0.35, 1.0),
-            rng.range(0.35, 1.0),
-            rng.range(0.35, 1.0),
-        ];
+        let li = rng.point::<3>(0.6, 1.6);
+        let lj = rng.point::<3>(0.35, 1.0);
         let dir = rng.direction();
         let d = rng.range(0.5, 4.0);
-        let i = Body::from_angles(
-            [0.0; 3],
-            li,
-            [
-                rng.range(-3.0, 3.0),
-                rng.range(-1.5, 1.5),
-                rng.range(-3.0, 3.0),
-            ],
-        )
-        .unwrap();
-        let j = Body::from_angles(
-            [d * dir[0], d * dir[1], d * dir[2]],
-            lj,
-            [
-                rng.range(-3.0, 3.0),
-                rng.range(-1.5, 1.5),
-                rng.range(-3.0, 3.0),
-            ],
-        )
-        .unwrap();
+        let i = oriented_at_random(&mut rng, [0.0; 3], li);
+        let j = oriented_at_random(&mut rng, [d * dir[0], d * dir[1], d * dir[2]], lj);
         let a = pair_term_by(&i, &j, Route::Auto);
         let b = pair_term_by(&i, &j, Route::Svd);
         if b.centre_inside {
@@ -306,11 +264,7 @@ fn aligned_pairs_match_the_closed_form() {
         // larger than i, where |c| ≫ d and the rounding of the centres alone moves d² by
         // |c| ε (input conditioning, not the solver).
         let size = 10f64.powf(rng.range(-3.0, 0.5));
-        let li = [
-            rng.range(0.3, 1.0),
-            rng.range(0.3, 1.0),
-            rng.range(0.3, 1.0),
-        ];
+        let li = rng.point::<3>(0.3, 1.0);
         let lj = [
             size * rng.range(0.3, 1.0),
             size * rng.range(0.3, 1.0),
@@ -320,11 +274,7 @@ fn aligned_pairs_match_the_closed_form() {
         let dist = (li[k] + lj[k]) * (1.0 + 10f64.powf(rng.range(-12.0, 0.0)));
         let u_exact = lj[k] * (dist - lj[k]) / (li[k] * li[k]);
         let d2_exact = ((dist - lj[k]) / li[k]).powi(2);
-        let angles = [
-            rng.range(-3.0, 3.0),
-            rng.range(-1.5, 1.5),
-            rng.range(-3.0, 3.0),
-        ];
+        let angles = random_angles(&mut rng);
         let i = Body::from_angles([0.0; 3], li, angles).unwrap();
         let q = i.rotation();
         let j = Body::from_angles([q[0][k] * dist, q[1][k] * dist, q[2][k] * dist], lj, angles)

@@ -20,18 +20,9 @@ fn random_shape(rng: &mut Rng, stiff: bool) -> ([f64; 3], [f64; 4]) {
             10f64.powf(rng.range(-2.0, 2.0)),
         ]
     } else {
-        [
-            rng.range(0.2, 2.0),
-            rng.range(0.2, 2.0),
-            rng.range(0.2, 2.0),
-        ]
+        rng.point::<3>(0.2, 2.0)
     };
-    let q = [
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-    ];
+    let q = rng.point::<4>(-1.0, 1.0);
     let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     (l, [q[0] / n, q[1] / n, q[2] / n, q[3] / n])
 }
@@ -43,11 +34,7 @@ fn random_pair(rng: &mut Rng, stiff: bool) -> (Ellipsoid, Ellipsoid) {
     let rj = lj.iter().cloned().fold(0.0, f64::max);
     let dir = rng.direction();
     let dist = rng.range(0.0, 1.0) * (ri + rj);
-    let ci = [
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-        rng.range(-1.0, 1.0),
-    ];
+    let ci = rng.point::<3>(-1.0, 1.0);
     let cj = [
         ci[0] + dist * dir[0],
         ci[1] + dist * dir[1],

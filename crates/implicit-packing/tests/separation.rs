@@ -51,12 +51,7 @@ fn axes3(rng: &mut Rng, family: usize, size: f64) -> [f64; 3] {
 
 fn quaternion(rng: &mut Rng) -> [f64; 4] {
     loop {
-        let q = [
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        ];
+        let q = rng.point::<4>(-1.0, 1.0);
         let n2: f64 = q.iter().map(|v| v * v).sum();
         if n2 > 1e-3 && n2 <= 1.0 {
             let n = n2.sqrt();

@@ -37,15 +37,20 @@ fn pairs() -> Vec<Pair> {
             let unit = pw85::contact_function(&dir, &q1, &q2)
                 .expect("valid pair")
                 .mu2;
-            let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
-            let scale = (target / unit).sqrt();
             Pair {
-                r12: dir.map(|x| x * scale),
+                r12: at_random_mu2(dir, unit, &mut rng),
                 q1,
                 q2,
             }
         })
         .collect()
+}
+
+/// `dir` (where μ² is `unit`) scaled so that μ² is log-uniform in [1/4, 4].
+fn at_random_mu2<const D: usize>(dir: [f64; D], unit: f64, rng: &mut Rng) -> [f64; D] {
+    let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
+    let scale = (target / unit).sqrt();
+    dir.map(|x| x * scale)
 }
 
 fn pairs_2d() -> Vec<Pair2d> {
@@ -64,10 +69,8 @@ fn pairs_2d() -> Vec<Pair2d> {
             let unit = pw85::contact_function_2d(&dir, &q1, &q2)
                 .expect("valid pair")
                 .mu2;
-            let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
-            let scale = (target / unit).sqrt();
             Pair2d {
-                r12: dir.map(|x| x * scale),
+                r12: at_random_mu2(dir, unit, &mut rng),
                 q1,
                 q2,
             }

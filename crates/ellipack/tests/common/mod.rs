@@ -4,7 +4,8 @@
 #![allow(dead_code)]
 
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 use testkit::Rng;
 
 /// Ellipses (2, 1) (or of varied sizes when `mixed`) on a lattice of 4.2 × 4.2 cells, each
@@ -90,4 +91,71 @@ pub fn temp_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// The `ellipack` binary built for these tests.
+pub fn ellipack() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ellipack"))
+}
+
+/// The names in `dir`, sorted, so that tests can compare a folder's whole listing.
+pub fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A process's output as text; lossy, because a failing test should show what it got.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The process's output as text, which must be UTF-8.
+pub fn utf8(bytes: Vec<u8>) -> String {
+    String::from_utf8(bytes).unwrap()
+}
+
+/// `ellipack <args> --input <input>`, run to its end.
+pub fn on_input(args: &[&str], input: &Path) -> Output {
+    ellipack()
+        .args(args)
+        .arg("--input")
+        .arg(input)
+        .output()
+        .unwrap()
+}
+
+/// `ellipack pack <scene> --out <out>`, run to its end.
+pub fn pack_into(scene: &Path, out: &Path) -> Output {
+    ellipack()
+        .arg("pack")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+/// Asserts that the process succeeded, showing its standard error otherwise.
+pub fn assert_success(output: &Output) {
+    assert!(output.status.success(), "{}", text(&output.stderr));
+}
+
+/// Asserts that the process failed with status 1 (the command failed) and returns its
+/// standard error.
+pub fn refused(output: &Output) -> String {
+    let stderr = text(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    stderr
+}
+
+/// Whether `path` is itself a symbolic link (not what it points to).
+pub fn is_symlink(path: &Path) -> bool {
+    std::fs::symlink_metadata(path)
+        .unwrap()
+        .file_type()
+        .is_symlink()
 }
