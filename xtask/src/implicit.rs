@@ -66,7 +66,7 @@ pub fn moved(b: &Ellipsoid, centre: [f64; 3]) -> Result<Ellipsoid, Error> {
 }
 
 /// The body turned by the small rotation `exp([w]×)` (world frame) about its centre: used to
-/// differentiate with respect to the angular velocity `w` (dQ = [w]× Q).
+/// differentiate with respect to the angular velocity `w` (dQ = \[w\]× Q).
 pub fn turned(b: &Ellipsoid, w: [f64; 3]) -> Result<Ellipsoid, Error> {
     let angle = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
     let dq = if angle == 0.0 {

@@ -102,7 +102,7 @@ pub fn item_measure<const N: usize>(problem: &Model<N>) -> f64 {
 /// repaired.
 ///
 /// # Errors
-/// [`Error::LengthMismatch`] when `x0` does not fit the problem; errors of the model on
+/// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model on
 /// non-finite variables at the start.
 pub fn local_minimisation<const N: usize>(
     problem: &mut Model<N>,
@@ -167,7 +167,7 @@ pub fn local_minimisation<const N: usize>(
 /// writes a packing worse than the one it started from.
 ///
 /// # Errors
-/// [`Error::LengthMismatch`] when `x` does not fit the problem; errors of the model on
+/// [`Error::Model`] (`LengthMismatch`) when `x` does not fit the problem; errors of the model on
 /// non-finite variables.
 pub fn certified_start<const N: usize>(
     problem: &mut Model<N>,

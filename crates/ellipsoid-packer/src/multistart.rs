@@ -190,7 +190,7 @@ where
     }
 }
 
-/// Runs the multi-start from `x0` (for example [`lattice_start`], or a packing read back to
+/// Runs the multi-start from `x0` (for example [`lattice_start`](crate::starts::lattice_start), or a packing read back to
 /// resume a run). When `x0` is itself a certified packing it is the first best packing
 /// ([`certified_start`]): the result is never less dense than the start, and a run stopped
 /// at any moment has a certified packing to return. `progress` sees every finished local minimisation, in start order;

@@ -26,7 +26,7 @@
 //!
 //! **`f`** (eq. 34): `∇f = −2 max{0, 1 − d²} ∇d² − 2 max{0, ε − U} ∇U`.
 //!
-//! [`a1_reference`] solves the `(n+1) × (n+1)` linear system of Appendix A.1 for `dX/dp`, `dU/dp`
+//! `a1_reference` (feature `internals`) solves the `(n+1) × (n+1)` linear system of Appendix A.1 for `dX/dp`, `dU/dp`
 //! parameter by parameter, with `S` formed explicitly: slow and less accurate on stiff pairs, it
 //! is kept as the scalar reference the fast path is tested against.
 //!

@@ -10,7 +10,7 @@
 //!
 //! * [`shape`]: centres, semi-axes, rotations (eqs. 1–2), quaternions;
 //! * [`pair`]: the pair term `f` (eqs. 3, 21–22, 34–36, Prop. 3.3);
-//! * [`projection`]: the secular equation of the projection onto `xᵀ S x = 1`;
+//! * `projection` (feature `internals`): the secular equation of the projection onto `xᵀ S x = 1`;
 //! * [`derivatives`]: first derivatives of the pair term (Appendix A.1 and the envelope form)
 //!   and exact Hessian–vector products;
 //! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first

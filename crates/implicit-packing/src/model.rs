@@ -34,7 +34,7 @@
 //! plane orthogonal to the centre line separates them with a margin (an exact certificate: the pair
 //! term is then exactly zero, value and gradient, see
 //! [`crate::pair::separated_along_centre_line`]); the rest take the fast direct solve when it
-//! applies ([`crate::pair`]), four pairs at a time in AVX registers ([`crate::batch`]; the same
+//! applies ([`crate::pair`]), four pairs at a time in AVX registers (module `batch`; the same
 //! bits as one at a time, and added in the same order). Each ellipsoid's rotation and the angular
 //! velocities of its angles are computed once per evaluation, from one set of sines and cosines;
 //! pair gradients add forces to the centres and torques to a per-ellipsoid buffer, which is turned

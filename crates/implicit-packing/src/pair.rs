@@ -22,7 +22,7 @@
 //!
 //! `S` is never formed: its condition number reaches 1e16 for axis ratios of 1e4 because it is a
 //! square. The SVD of the graded factor `F` gives its eigenvalues to a few ulps
-//! (module `linalg`: one-sided Jacobi after a pivoted QR), and [`crate::projection`] solves the secular equation in that basis.
+//! (module `linalg`: one-sided Jacobi after a pivoted QR), and the module `projection` solves the secular equation in that basis.
 //!
 //! # References
 //! Birgin, Lobato, Martínez (2016), Sections 3–5.

@@ -6,7 +6,7 @@
 //!   random pairs, as plain arrays (the PW85 storage: upper triangle, row-major).
 //! - [`table`]: a comma-separated table read by column name, with errors that name the file,
 //!   the line and the column.
-//! - [`reference`]: the independent high-precision reference values in the repository's
+//! - [`reference`](mod@reference): the independent high-precision reference values in the repository's
 //!   `validation/reference/`, as typed rows.
 //!
 //! The kit depends on the standard library only. It must not depend on pw85 or the other
