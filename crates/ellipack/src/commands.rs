@@ -262,9 +262,9 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     let certificate = verification.certificate;
     println!(
         "{} {}, container: {}, density {:.5}",
-        packing.items.len(),
-        packing.items.noun(),
-        packing.container.kind().name(),
+        packing.items().len(),
+        packing.items().noun(),
+        packing.container().kind().name(),
         packing.density()
     );
     println!(

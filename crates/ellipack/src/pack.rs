@@ -193,7 +193,7 @@ pub fn probe_output_folder(path: &Path) -> Result<(), PackError> {
 /// [`PackError::ContainerMismatch`].
 pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, PackError> {
     let (packing, _) = crate::packing::read_packing_dir(folder)?;
-    let found = packing.container.kind();
+    let found = packing.container().kind();
     if found != scene.container {
         return Err(PackError::ContainerMismatch {
             summary: folder.join(crate::packing::SUMMARY_FILE),
@@ -270,10 +270,10 @@ fn run_n<const N: usize>(
     let problem = Model::<N>::new(axes.to_vec(), kind)?;
     let x0 = match &options.resume_from {
         Some(packing) => {
-            if packing.container.kind() != scene.container {
+            if packing.container().kind() != scene.container {
                 return Err(PackError::Mismatch(format!(
                     "the packing's container is {}, the scene's {}",
-                    packing.container.kind(),
+                    packing.container().kind(),
                     scene.container
                 )));
             }
@@ -414,7 +414,7 @@ pub struct Verification {
 /// # Errors
 /// As [`verify`].
 pub fn verify_detailed(packing: &Packing) -> Result<Verification, PackError> {
-    match &packing.items {
+    match &packing.items() {
         Items::Ellipses(v) => {
             let axes: Vec<[f64; 2]> = v.iter().map(|e| e.semi_axes).collect();
             verify_n::<2>(packing, &axes)
@@ -430,7 +430,7 @@ fn verify_n<const N: usize>(
     packing: &Packing,
     axes: &[[f64; N]],
 ) -> Result<Verification, PackError> {
-    let kind = model_container(packing.container.kind());
+    let kind = model_container(packing.container().kind());
     let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
     let x = variables_of::<N>(packing, axes, kind)?;
     let model = problem.certify(&x)?;
@@ -569,14 +569,14 @@ fn variables_of<const N: usize>(
     axes: &[[f64; N]],
     kind: ModelContainer,
 ) -> Result<Vec<f64>, PackError> {
-    if packing.items.len() != axes.len() {
+    if packing.items().len() != axes.len() {
         return Err(PackError::Mismatch(format!(
             "the packing has {} items, the scene {}",
-            packing.items.len(),
+            packing.items().len(),
             axes.len()
         )));
     }
-    let centre = packing.container.center().to_vec();
+    let centre = packing.container().center().to_vec();
     let same = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
@@ -588,7 +588,7 @@ fn variables_of<const N: usize>(
             axes[i]
         ))
     };
-    let size = packing.container.size();
+    let size = packing.container().size();
     let dims: Vec<f64> = match kind {
         ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
         _ => size,
@@ -596,7 +596,7 @@ fn variables_of<const N: usize>(
     // The bodies relative to the container's centre, with the scene's semi-axes (equal to the
     // packing's within 1e-12, checked here), so that the model takes them as its own.
     let axis = |i: usize, k: usize| axes[i].get(k).copied().unwrap_or(f64::NAN);
-    match &packing.items {
+    match &packing.items() {
         Items::Ellipses(v) if N == 2 => {
             let mut bodies = Vec::with_capacity(v.len());
             for (i, e) in v.iter().enumerate() {
@@ -751,7 +751,7 @@ mod tests {
             assert!(
                 (scale - expected).abs() <= 1e-9 * expected,
                 "{:?}: {scale} vs {expected}",
-                packing.container.kind()
+                packing.container().kind()
             );
         }
     }

@@ -533,13 +533,28 @@ pub fn density(container: &Container, items: &Items) -> f64 {
 /// A container and the items in it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Packing {
-    /// The container.
-    pub container: Container,
-    /// The items.
-    pub items: Items,
+    // Crate-visible so that the crate's own tests can draw broken data; users go through
+    // `Packing::new`, which checks.
+    pub(crate) container: Container,
+    pub(crate) items: Items,
 }
 
 impl Packing {
+    /// The container.
+    pub fn container(&self) -> &Container {
+        &self.container
+    }
+
+    /// The items.
+    pub fn items(&self) -> &Items {
+        &self.items
+    }
+
+    /// The container and the items, taken apart.
+    pub fn into_parts(self) -> (Container, Items) {
+        (self.container, self.items)
+    }
+
     /// A packing, checked: items and container of the same dimension, positive finite sizes,
     /// finite centres and angles, non-zero quaternions.
     ///

@@ -246,7 +246,7 @@ impl Layout {
         let font_px = (w / 55.0).clamp(12.0, 36.0);
         let title_band = 2.0 * font_px;
         let (lo, hi) = world_box(packing);
-        let dimension = packing.container.dimension();
+        let dimension = packing.container().dimension();
         let mut panels: Vec<Panel> = if dimension == 2 {
             vec![Panel {
                 u: 0,
@@ -321,23 +321,23 @@ fn panel_3d(u: usize, v: usize, depth: (usize, f64), label: &'static str) -> Pan
 
 /// "30 ellipses in an ellipse (semi-axes 9.12, 7.54), density 0.87152".
 fn default_title(packing: &Packing) -> String {
-    let kind = packing.container.kind();
+    let kind = packing.container().kind();
     let article = if kind.name().starts_with('e') {
         "an"
     } else {
         "a"
     };
     let size: Vec<String> = packing
-        .container
+        .container()
         .size()
         .iter()
         .map(|s| format!("{}", Sig(*s)))
         .collect();
-    let size_name = packing.container.size_name().replace('_', "-");
+    let size_name = packing.container().size_name().replace('_', "-");
     format!(
         "{} {} in {article} {kind} ({size_name} {}) — density {:.5}",
-        packing.items.len(),
-        packing.items.noun(),
+        packing.items().len(),
+        packing.items().noun(),
         size.join(", "),
         packing.density()
     )
@@ -377,17 +377,17 @@ fn world_box(packing: &Packing) -> ([f64; 3], [f64; 3]) {
             }
         }
     };
-    if packing.container.defect().is_none() {
+    if packing.container().defect().is_none() {
         include(
-            packing.container.center(),
-            &packing.container.half_extents(),
+            packing.container().center(),
+            &packing.container().half_extents(),
         );
     }
-    for (center, m) in quadratic_forms(&packing.items) {
+    for (center, m) in quadratic_forms(packing.items()) {
         let half: Vec<f64> = (0..center.len()).map(|k| m[k][k].sqrt()).collect();
         include(&center, &half);
     }
-    let n = packing.container.dimension();
+    let n = packing.container().dimension();
     let mut span = (0..n)
         .map(|k| hi[k] - lo[k])
         .filter(|s| s.is_finite())
@@ -511,12 +511,12 @@ fn draw<DB: DrawingBackend>(
         (FONT, title_font).into_font().color(&BLACK),
     ))
     .map_err(err)?;
-    let forms = quadratic_forms(&packing.items);
+    let forms = quadratic_forms(packing.items());
     // Colour by size when the items differ (mixed shapes), else one colour.
     let measures: Vec<f64> = forms
         .iter()
         .map(|(_, m)| {
-            if packing.container.dimension() == 2 {
+            if packing.container().dimension() == 2 {
                 (m[0][0] * m[1][1] - m[0][1] * m[0][1]).max(0.0).sqrt()
             } else {
                 determinant(m).max(0.0).sqrt()
@@ -540,7 +540,7 @@ fn draw<DB: DrawingBackend>(
             area.draw(&Text::new(panel.label, (panel.origin.0, label_y), style))
                 .map_err(err)?;
         }
-        let outline = container_outline(&packing.container, panel, scale);
+        let outline = container_outline(packing.container(), panel, scale);
         if let Some(points) = &outline {
             area.draw(&Polygon::new(points.clone(), CONTAINER_FILL.filled()))
                 .map_err(err)?;
@@ -699,6 +699,56 @@ fn draw_scale_bar<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn broken_data_draws_what_it_can_without_panicking() {
+        use crate::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
+        // Built by hand, bypassing Packing::new's checks.
+        let packing = Packing {
+            container: Container::Circle {
+                center: [0.0, 0.0],
+                radius: -1.0,
+            },
+            items: Items::Ellipses(vec![
+                EllipseItem {
+                    center: [f64::NAN, 0.0],
+                    semi_axes: [1.0, 1.0],
+                    theta: 0.0,
+                },
+                EllipseItem {
+                    center: [0.0, 0.0],
+                    semi_axes: [0.0, 1.0],
+                    theta: 0.0,
+                },
+                EllipseItem {
+                    center: [1e300, -1e300],
+                    semi_axes: [1.0, 1e-300],
+                    theta: 1e300,
+                },
+            ]),
+        };
+        png_bytes(&packing, &RenderOptions::default()).unwrap();
+        svg_string(&packing, &RenderOptions::default()).unwrap();
+        let packing = Packing {
+            container: Container::Ball {
+                center: [0.0; 3],
+                radius: f64::INFINITY,
+            },
+            items: Items::Ellipsoids(vec![EllipsoidItem {
+                center: [0.0; 3],
+                semi_axes: [1e6, 1e-6, 1.0],
+                quaternion: [0.0; 4],
+            }]),
+        };
+        png_bytes(
+            &packing,
+            &RenderOptions {
+                width: 1,
+                label: Some(String::new()),
+            },
+        )
+        .unwrap();
+    }
 
     /// The outline drawn for an ellipsoid is its exact shadow: every surface point projects
     /// inside the ellipse of the 2×2 sub-block of M, and some reach its boundary.

@@ -53,7 +53,7 @@ fn assert_whole_run(out: &Path) {
         "summary and packing disagree: {text}"
     );
     let (packing, summary) = read_packing_dir(out).unwrap();
-    assert_eq!(summary.items, packing.items.len());
+    assert_eq!(summary.items, packing.items().len());
     assert_eq!(summary.density, packing.density());
 }
 
@@ -110,10 +110,12 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
 
     // Another packing (the container shrunk, so that its items stick out) written into the
     // staging folder; the write fails after the first file.
-    let (mut packing, _) = read_packing_dir(&out).unwrap();
-    if let ellipack::packing::Container::Circle { radius, .. } = &mut packing.container {
+    let (packing, _) = read_packing_dir(&out).unwrap();
+    let (mut container, items) = packing.into_parts();
+    if let ellipack::packing::Container::Circle { radius, .. } = &mut container {
         *radius *= 0.5;
     }
+    let packing = ellipack::packing::Packing::new(container, items).unwrap();
     let summary = Summary::new(
         &packing,
         1.0,
@@ -126,7 +128,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
         },
     );
     let write_set = |into: &Path| -> Result<(), String> {
-        ellipack::packing::write_csv(&into.join("packing.csv"), &packing.items)
+        ellipack::packing::write_csv(&into.join("packing.csv"), packing.items())
             .map_err(|e| e.to_string())?;
         Err("injected failure after the first file".into())
     };

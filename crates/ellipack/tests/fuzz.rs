@@ -330,12 +330,12 @@ proptest! {
     }
 
     #[test]
-    fn packing_csv_2d(bytes in input(leak(packing::csv_string(&common::ellipses(2, true, 1).items)))) {
+    fn packing_csv_2d(bytes in input(leak(packing::csv_string(common::ellipses(2, true, 1).items())))) {
         check_packing_csv(&bytes);
     }
 
     #[test]
-    fn packing_csv_3d(bytes in input(leak(packing::csv_string(&common::ellipsoids(2, true, 2).items)))) {
+    fn packing_csv_3d(bytes in input(leak(packing::csv_string(common::ellipsoids(2, true, 2).items())))) {
         check_packing_csv(&bytes);
     }
 

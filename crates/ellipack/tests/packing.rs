@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 fn summary_of(p: &Packing) -> Summary {
     Summary::new(
         p,
-        p.container.measure(),
+        p.container().measure(),
         12.25,
         7,
         Certificate {
@@ -56,9 +56,9 @@ fn every_kind() -> Vec<Packing> {
         .into_iter()
         .map(|c| {
             let items = if c.dimension() == 2 {
-                e2.items.clone()
+                e2.items().clone()
             } else {
-                e3.items.clone()
+                e3.items().clone()
             };
             Packing::new(c, items).unwrap()
         })
@@ -68,11 +68,11 @@ fn every_kind() -> Vec<Packing> {
 #[test]
 fn csv_and_json_round_trips_are_exact() {
     for p in every_kind() {
-        let dir = common::temp_dir(&format!("roundtrip-{}", p.container.kind()));
+        let dir = common::temp_dir(&format!("roundtrip-{}", p.container().kind()));
         let summary = summary_of(&p);
         packing::write_files(&dir, &p, &summary, true).unwrap();
         let (p2, s2) = packing::read_packing_dir(&dir).unwrap();
-        assert_eq!(p2, p, "{}", p.container.kind());
+        assert_eq!(p2, p, "{}", p.container().kind());
         assert_eq!(s2, summary);
         assert_eq!(common::names(&dir).len(), 3, "only the three files");
         std::fs::remove_dir_all(&dir).unwrap();
@@ -82,7 +82,7 @@ fn csv_and_json_round_trips_are_exact() {
 #[test]
 fn the_csv_has_the_documented_columns() {
     let p2 = common::ellipses(2, false, 1);
-    let text = packing::csv_string(&p2.items);
+    let text = packing::csv_string(p2.items());
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("id,x,y,a,b,theta"));
     let first: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -92,7 +92,7 @@ fn the_csv_has_the_documented_columns() {
     assert_eq!(mantissa.replace(['.', '-'], "").len(), 17, "{}", first[3]);
     assert_eq!(text.lines().count(), 5);
     let p3 = common::ellipsoids(2, false, 1);
-    let text = packing::csv_string(&p3.items);
+    let text = packing::csv_string(p3.items());
     assert_eq!(text.lines().next(), Some("id,x,y,z,a,b,c,qw,qx,qy,qz"));
     assert_eq!(text.lines().count(), 9);
 }
@@ -178,15 +178,15 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
     for p in every_kind() {
         let text = packing::xyz_string(&p);
         let mut lines = text.lines();
-        assert_eq!(lines.next().unwrap(), p.items.len().to_string());
+        assert_eq!(lines.next().unwrap(), p.items().len().to_string());
         let comment = lines.next().unwrap();
         assert!(
             comment.contains("Properties=species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4")
         );
         assert!(comment.contains("Lattice=\""), "{comment}");
         let back = packing::read_xyz(&text, "packing.xyz").unwrap();
-        assert_eq!(back.container, p.container);
-        match (&back.items, &p.items) {
+        assert_eq!(back.container(), p.container());
+        match (&back.items(), &p.items()) {
             (Items::Ellipsoids(a), Items::Ellipsoids(b)) => assert_eq!(a, b),
             (Items::Ellipses(a), Items::Ellipses(b)) => {
                 assert_eq!(a.len(), b.len());
@@ -374,7 +374,7 @@ fn files_that_disagree_are_an_error() {
     let dir = common::temp_dir("disagree");
     let p2 = &every_kind()[0];
     let p3 = &every_kind()[3];
-    packing::write_csv(&dir.join("packing.csv"), &p2.items).unwrap();
+    packing::write_csv(&dir.join("packing.csv"), p2.items()).unwrap();
     packing::write_summary(&dir.join("summary.json"), &summary_of(p3)).unwrap();
     let e = packing::read_packing_dir(&dir).unwrap_err().to_string();
     assert!(e.contains("ball"), "{e}");
@@ -434,8 +434,8 @@ fn mangled_files_never_panic() {
     let p2 = &every_kind()[1];
     let p3 = &every_kind()[5];
     let texts = [
-        packing::csv_string(&p2.items),
-        packing::csv_string(&p3.items),
+        packing::csv_string(p2.items()),
+        packing::csv_string(p3.items()),
         packing::xyz_string(p2),
         packing::xyz_string(p3),
         packing::summary_json(&summary_of(p3)).unwrap(),
@@ -466,7 +466,7 @@ fn mangled_files_never_panic() {
 fn containers_from_solver_variables() {
     use ellipack::packing::ContainerKind;
     for p in every_kind() {
-        let c = &p.container;
+        let c = p.container();
         assert_eq!(
             &Container::from_parts(c.kind(), c.center(), &c.size()).unwrap(),
             c
