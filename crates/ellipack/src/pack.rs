@@ -7,7 +7,7 @@
 //! (Ω = θ in 2D, the angles [φ, θ, ψ] of eq. 2 in 3D), with containers centred at the origin.
 
 use crate::packing::{
-    Certificate, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
+    CertificateCounts, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
     PackingError, Summary,
 };
 use crate::scene::Scene;
@@ -298,8 +298,8 @@ fn run_n<const N: usize>(
     local.feasibility_tolerance = scene.solver.feasibility_tolerance;
     local.optimality_tolerance = scene.solver.optimality_tolerance;
     local.inner_solver = match scene.solver.inner_solver {
-        crate::scene::InnerSolver::Spg => auglag::InnerSolver::Spg,
-        crate::scene::InnerSolver::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
+        crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
+        crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
     };
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
@@ -370,7 +370,7 @@ fn start_defects(certificate: &implicit_packing::model::Certificate) -> StartDef
 ///
 /// # Errors
 /// [`PackError`] when the items do not form a valid model (a zero semi-axis, NaN).
-pub fn verify(packing: &Packing) -> Result<Certificate, PackError> {
+pub fn verify(packing: &Packing) -> Result<CertificateCounts, PackError> {
     verify_detailed(packing).map(|v| v.certificate)
 }
 
@@ -401,7 +401,7 @@ pub struct ItemOutside {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Verification {
     /// The certificate (counts and smallest μ²), as [`verify`] returns it.
-    pub certificate: Certificate,
+    pub certificate: CertificateCounts,
     /// Every overlapping pair, the smallest μ² (the deepest overlap) first.
     pub overlapping_pairs: Vec<OverlappingPair>,
     /// Every item outside the container, the largest scale first.
@@ -467,8 +467,8 @@ fn verify_n<const N: usize>(
 }
 
 /// The summary's certificate: the counts and the smallest μ² of the one certificate.
-fn certificate_of(model: &implicit_packing::model::Certificate) -> Certificate {
-    Certificate {
+fn certificate_of(model: &implicit_packing::model::Certificate) -> CertificateCounts {
+    CertificateCounts {
         overlapping_pairs: model.overlapping.len() as u64,
         containment_violations: model.outside.len() as u64,
         min_mu2: model.min_mu2,

@@ -632,7 +632,7 @@ impl Packing {
 /// containment).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Certificate {
+pub struct CertificateCounts {
     /// Pairs with μ² < 1 (overlapping interiors).
     pub overlapping_pairs: u64,
     /// Items not inside the container.
@@ -642,7 +642,7 @@ pub struct Certificate {
     pub min_mu2: Option<f64>,
 }
 
-impl Certificate {
+impl CertificateCounts {
     /// No overlap and every item inside.
     pub fn is_certified(&self) -> bool {
         self.overlapping_pairs == 0 && self.containment_violations == 0
@@ -680,7 +680,7 @@ pub struct Summary {
     /// Local minimisations completed.
     pub local_minimisations: u64,
     /// The certificate.
-    pub certificate: Certificate,
+    pub certificate: CertificateCounts,
     /// What the certified repair cost, when the packing came from the solver.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repair: Option<Repair>,
@@ -708,7 +708,7 @@ impl Summary {
         objective: f64,
         wall_seconds: f64,
         local_minimisations: u64,
-        certificate: Certificate,
+        certificate: CertificateCounts,
     ) -> Self {
         Summary {
             container: packing.container.clone(),
@@ -1073,7 +1073,7 @@ pub struct StatedSummary {
     pub items: Option<usize>,
     /// The certificate a run stated, when present.
     #[serde(default)]
-    pub certificate: Option<Certificate>,
+    pub certificate: Option<CertificateCounts>,
 }
 
 /// Reads a [`StatedSummary`] from summary text.

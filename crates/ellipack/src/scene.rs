@@ -49,14 +49,14 @@
 //! #     .skip_while(|l| !l.starts_with("//! ```toml")).skip(1)
 //! #     .take_while(|l| !l.starts_with("//! ```"))
 //! #     .map(|l| l.strip_prefix("//! ").unwrap_or("")).collect::<Vec<_>>().join("\n");
-//! use ellipack::scene::{Dimension, InnerSolver, Scene};
+//! use ellipack::scene::{Dimension, InnerSolverName, Scene};
 //! use ellipack::packing::ContainerKind;
 //!
 //! let scene = Scene::from_toml_str(&text, "scene.toml").unwrap();
 //! assert_eq!(scene.dimension, Dimension::Two);
 //! assert_eq!(scene.container, ContainerKind::Ellipse);
 //! assert_eq!(scene.item_count(), 30);
-//! assert_eq!(scene.solver.inner_solver, InnerSolver::ProjectedLbfgs);
+//! assert_eq!(scene.solver.inner_solver, InnerSolverName::ProjectedLbfgs);
 //! assert_eq!(scene.solver.perturbation, 0.025);
 //!
 //! let err = Scene::from_toml_str("dimension = 2\n[container]\nkind = \"ball\"\n", "bad.toml")
@@ -144,10 +144,11 @@ impl Dimension {
     }
 }
 
-/// The inner solver of the augmented Lagrangian's bound-constrained subproblems.
+/// The name, in a scene file, of the inner solver of the augmented Lagrangian's
+/// bound-constrained subproblems ([`auglag::InnerSolver`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum InnerSolver {
+pub enum InnerSolverName {
     /// Nonmonotone spectral projected gradient (`"spg"`).
     Spg,
     /// Active-set projected L-BFGS (`"projected-lbfgs"`).
@@ -155,12 +156,12 @@ pub enum InnerSolver {
     ProjectedLbfgs,
 }
 
-impl InnerSolver {
+impl InnerSolverName {
     /// The name in scene files.
     pub fn name(self) -> &'static str {
         match self {
-            InnerSolver::Spg => "spg",
-            InnerSolver::ProjectedLbfgs => "projected-lbfgs",
+            InnerSolverName::Spg => "spg",
+            InnerSolverName::ProjectedLbfgs => "projected-lbfgs",
         }
     }
 }
@@ -188,7 +189,7 @@ pub struct SolverSettings {
     /// Cap on the multi-start's local minimisations; `None`: until the time limit.
     pub local_minimisations: Option<u64>,
     /// The subproblem solver.
-    pub inner_solver: InnerSolver,
+    pub inner_solver: InnerSolverName,
     /// Largest relative perturbation of centres and angles between multi-start iterations, in
     /// [0, 1) (default: 0.025 in 2D, 0.10 in 3D, the paper's Section 6).
     pub perturbation: f64,
@@ -228,7 +229,7 @@ impl SolverSettings {
             time_limit: DEFAULT_TIME_LIMIT,
             threads: 0,
             local_minimisations: None,
-            inner_solver: InnerSolver::default(),
+            inner_solver: InnerSolverName::default(),
             perturbation: default_perturbation(dimension),
             lattice_starts: DEFAULT_LATTICE_STARTS,
             from_best: true,
@@ -359,7 +360,7 @@ struct RawSolver {
     time_limit: Option<Spanned<f64>>,
     threads: Option<Spanned<i64>>,
     local_minimisations: Option<Spanned<i64>>,
-    inner_solver: Option<InnerSolver>,
+    inner_solver: Option<InnerSolverName>,
     perturbation: Option<Spanned<f64>>,
     lattice_starts: Option<Spanned<i64>>,
     from_best: Option<bool>,

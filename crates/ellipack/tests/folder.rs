@@ -3,7 +3,7 @@
 //! and the leftovers of killed runs are cleaned up.
 
 use ellipack::folder::Staging;
-use ellipack::packing::{Certificate, Summary, read_packing_dir, write_files};
+use ellipack::packing::{CertificateCounts, Summary, read_packing_dir, write_files};
 use std::path::{Path, PathBuf};
 
 mod common;
@@ -121,7 +121,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
         1.0,
         1.0,
         1,
-        Certificate {
+        CertificateCounts {
             overlapping_pairs: 0,
             containment_violations: 0,
             min_mu2: None,

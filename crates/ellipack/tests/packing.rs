@@ -4,7 +4,8 @@
 mod common;
 
 use ellipack::packing::{
-    self, Certificate, Container, EllipseItem, EllipsoidItem, Items, Packing, PackingError, Summary,
+    self, CertificateCounts, Container, EllipseItem, EllipsoidItem, Items, Packing, PackingError,
+    Summary,
 };
 use std::f64::consts::PI;
 
@@ -14,7 +15,7 @@ fn summary_of(p: &Packing) -> Summary {
         p.container().measure(),
         12.25,
         7,
-        Certificate {
+        CertificateCounts {
             overlapping_pairs: 0,
             containment_violations: 0,
             min_mu2: Some(1.000_000_123_456_789),

@@ -4,7 +4,7 @@
 mod common;
 
 use ellipack::packing::ContainerKind;
-use ellipack::scene::{DEFAULT_SCENE, Dimension, InnerSolver, Scene, SceneError};
+use ellipack::scene::{DEFAULT_SCENE, Dimension, InnerSolverName, Scene, SceneError};
 use std::time::Duration;
 
 const GOOD_3D: &str = r#"
@@ -79,7 +79,7 @@ fn a_full_scene_parses_to_what_it_says() {
     assert_eq!(s.time_limit, Duration::from_secs_f64(12.5));
     assert_eq!(s.threads, 3);
     assert_eq!(s.local_minimisations, Some(9));
-    assert_eq!(s.inner_solver, InnerSolver::Spg);
+    assert_eq!(s.inner_solver, InnerSolverName::Spg);
     assert_eq!(s.perturbation, 0.2);
     let o = &scene.output;
     assert_eq!(
@@ -99,7 +99,7 @@ fn omitted_settings_take_the_papers_defaults() {
     assert_eq!(scene.solver.perturbation, 0.025);
     assert_eq!(scene.solver.threads, 0);
     assert_eq!(scene.solver.local_minimisations, None);
-    assert_eq!(scene.solver.inner_solver, InnerSolver::ProjectedLbfgs);
+    assert_eq!(scene.solver.inner_solver, InnerSolverName::ProjectedLbfgs);
     assert!(scene.output.pictures && scene.output.xyz);
     let three_d = parse(
         "dimension = 3\n[container]\nkind = \"ball\"\n[[shapes]]\ncount = 1\nsemi_axes = [1, 1, 1]\n",
