@@ -990,12 +990,21 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError>
 /// [`PackingError::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
 /// wrong type; [`PackingError::Inconsistent`] for a container size that is not positive.
 pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingError> {
-    let summary: Summary = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+    summary_of(text, source_name, |s: &Summary| &s.container)
+}
+
+/// A summary of type `T` parsed from JSON `text`, with its container (`container_of`) checked.
+fn summary_of<T: serde::de::DeserializeOwned>(
+    text: &str,
+    source_name: &str,
+    container_of: impl Fn(&T) -> &Container,
+) -> Result<T, PackingError> {
+    let summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
         source_name: source_name.to_string(),
         line: e.line() as u64,
         message: format!("column {}: {e}", e.column()),
     })?;
-    if let Some((field, message)) = summary.container.defect() {
+    if let Some((field, message)) = container_of(&summary).defect() {
         return Err(PackingError::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),
@@ -1081,19 +1090,7 @@ pub struct StatedSummary {
 /// # Errors
 /// As [`read_summary`].
 pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, PackingError> {
-    let summary: StatedSummary =
-        serde_json::from_str(text).map_err(|e| PackingError::Malformed {
-            source_name: source_name.to_string(),
-            line: e.line() as u64,
-            message: format!("column {}: {e}", e.column()),
-        })?;
-    if let Some((field, message)) = summary.container.defect() {
-        return Err(PackingError::Inconsistent {
-            source_name: source_name.to_string(),
-            message: format!("container.{field}: {message}"),
-        });
-    }
-    Ok(summary)
+    summary_of(text, source_name, |s: &StatedSummary| &s.container)
 }
 
 /// Reads `packing.csv` as a [`Table`] and puts its items into `container`, checking that they
