@@ -11,7 +11,7 @@ use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::report::Section;
 use crate::scene::LoadedScene;
 use ellipsoid_packer::starts::lattice_start;
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Model, ModelGradient};
 use std::hint::black_box;
 use std::time::Instant;
@@ -61,7 +61,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     let mut worst_sum = 0.0f64;
     for &m in &counts {
         run.say(&format!("  m = {m}"));
-        let mut problem = Model::<3>::new(vec![l; m], ContainerKind::Ball).map_err(refused)?;
+        let mut problem = Model::<3>::new(vec![l; m], ContainerShape::Ball).map_err(refused)?;
         let mut x = lattice_start(&problem);
         // The lattice start touches nowhere; pulling the centres in by 15 % makes neighbours
         // overlap, as during a solve, so that the pair terms are really evaluated.

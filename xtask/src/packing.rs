@@ -11,7 +11,7 @@ use crate::report::Section;
 use crate::scene::LoadedScene;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress, MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::Duration;
 
@@ -56,7 +56,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     }
     let l = [axes[0], axes[1]];
     let semi_axes = vec![l; m];
-    let problem = Model::<2>::new(semi_axes.clone(), ContainerKind::Ball).map_err(refused)?;
+    let problem = Model::<2>::new(semi_axes.clone(), ContainerShape::Ball).map_err(refused)?;
     let x0 = lattice_start(&problem);
     let mut settings = MultiStartSettings::paper(2, s.scene.seed);
     settings.max_local_minimisations = usize::MAX;
@@ -66,7 +66,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
     let say = crate::progress(run.start);
     let result = multistart::<2>(
         &semi_axes,
-        ContainerKind::Ball,
+        ContainerShape::Ball,
         &x0,
         &settings,
         &mut Callbacks::on_finished(|p: &MultiStartProgress| {
@@ -82,7 +82,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }),
     )
     .map_err(refused)?;
-    let mut problem = Model::<2>::new(semi_axes, ContainerKind::Ball).map_err(refused)?;
+    let mut problem = Model::<2>::new(semi_axes, ContainerShape::Ball).map_err(refused)?;
     let x = result.best.x.clone();
     let radius = x.last().copied().unwrap_or(f64::NAN);
     let bodies = problem.bodies_at(&x).map_err(refused)?.to_vec();

@@ -70,7 +70,7 @@ pub fn implicit_pairs() -> Result<String, Error> {
 /// overlap), and a ninth along x that pokes out of the ball of radius 3. The positions are
 /// fixed decimals, no pair is near tangency, and the certificate is a list of integers.
 pub fn packing_certificate() -> Result<String, Error> {
-    use implicit_packing::containment::ContainerKind;
+    use implicit_packing::containment::ContainerShape;
     use implicit_packing::model::Model;
     let refused = |e: implicit_packing::Error| Error::Implicit {
         context: "the fixed packing of the certificate snapshot".into(),
@@ -89,7 +89,7 @@ pub fn packing_certificate() -> Result<String, Error> {
     bodies
         .push(implicit_packing::Body::from_angles([2.5, 0.0, 0.0], l, [0.0; 3]).map_err(refused)?);
     let mut problem =
-        Model::<3>::new(vec![l; bodies.len()], ContainerKind::Ball).map_err(refused)?;
+        Model::<3>::new(vec![l; bodies.len()], ContainerShape::Ball).map_err(refused)?;
     let x = problem.pack_variables(&bodies, &[3.0]).map_err(refused)?;
     let cert = problem.certify(&x).map_err(refused)?;
     Ok(format!(

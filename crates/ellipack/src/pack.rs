@@ -16,7 +16,9 @@ pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::Body;
-use implicit_packing::containment::{Container as ContainerShape, ContainerKind as ModelContainer};
+use implicit_packing::containment::{
+    Container as SizedContainer, ContainerShape as ModelContainer,
+};
 use implicit_packing::model::Model;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -528,9 +530,9 @@ fn packing_of<const N: usize>(
         )
     };
     let dims: Vec<f64> = match shape {
-        ContainerShape::Ball { radius } => vec![radius; N],
-        ContainerShape::Ellipsoid { semi_axes } => semi_axes.to_vec(),
-        ContainerShape::Box { half_sides } => half_sides.to_vec(),
+        SizedContainer::Ball { radius } => vec![radius; N],
+        SizedContainer::Ellipsoid { semi_axes } => semi_axes.to_vec(),
+        SizedContainer::Box { half_sides } => half_sides.to_vec(),
     };
     let d = |k: usize| dims.get(k).copied().unwrap_or(0.0);
     let container = match kind {

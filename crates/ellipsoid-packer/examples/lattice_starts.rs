@@ -4,7 +4,7 @@
 use ellipsoid_packer::local::{LocalSettings, item_measure, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
 use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::Instant;
 
@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 fn run<const N: usize>(
     axes: Vec<[f64; N]>,
-    kind: ContainerKind,
+    kind: ContainerShape,
     k: usize,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let mut p = Model::<N>::new(axes, kind)?;

@@ -5,7 +5,7 @@
 use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
 use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::Instant;
 
@@ -75,7 +75,7 @@ type Outcome = (f64, f64, f64, auglag::Report, String, usize);
 /// paper's lattice start or (`dense`) the centred lattice start.
 fn minimise<const N: usize>(
     axes: Vec<[f64; N]>,
-    kind: ContainerKind,
+    kind: ContainerShape,
     dense: bool,
     settings: &LocalSettings,
     observe: &mut dyn FnMut(&auglag::Progress<'_>) -> bool,
@@ -163,12 +163,12 @@ fn independent_check<const N: usize>(
                 point[i] = c[i] + (0..N).map(|k| r[i][k] * l[k] * s[k]).sum::<f64>();
             }
             let g = match kind {
-                ContainerKind::Ball => point.iter().map(|v| v * v).sum::<f64>().sqrt() / dims[0],
-                ContainerKind::Ellipsoid => (0..N)
+                ContainerShape::Ball => point.iter().map(|v| v * v).sum::<f64>().sqrt() / dims[0],
+                ContainerShape::Ellipsoid => (0..N)
                     .map(|k| (point[k] / dims[k]).powi(2))
                     .sum::<f64>()
                     .sqrt(),
-                ContainerKind::Box => (0..N).map(|k| point[k].abs() / dims[k]).fold(0.0, f64::max),
+                ContainerShape::Box => (0..N).map(|k| point[k].abs() / dims[k]).fold(0.0, f64::max),
             };
             worst = worst.max(g);
         }

@@ -13,10 +13,10 @@
 //!
 //! ```
 //! use ellipsoid_packer::{local::{LocalSettings, local_minimisation}, starts::lattice_start};
-//! use implicit_packing::{containment::ContainerKind, model::Model};
+//! use implicit_packing::{containment::ContainerShape, model::Model};
 //!
 //! // Five ellipses (2, 1) in the smallest disc the solver finds from the paper's start.
-//! let mut problem = Model::<2>::new(vec![[2.0, 1.0]; 5], ContainerKind::Ball)?;
+//! let mut problem = Model::<2>::new(vec![[2.0, 1.0]; 5], ContainerShape::Ball)?;
 //! let x0 = lattice_start(&problem);
 //! let result = local_minimisation(&mut problem, &x0, &LocalSettings::default(), &mut |_| false)?;
 //! assert!(result.certificate.is_feasible());

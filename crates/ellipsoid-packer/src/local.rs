@@ -466,14 +466,14 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
 mod tests {
     use super::*;
     use crate::starts::lattice_start;
-    use implicit_packing::containment::ContainerKind;
+    use implicit_packing::containment::ContainerShape;
 
     #[test]
     fn lattice_start_is_certified_feasible() {
-        let mut p2 = Model::<2>::new(vec![[2.0, 1.0]; 30], ContainerKind::Ellipsoid).unwrap();
+        let mut p2 = Model::<2>::new(vec![[2.0, 1.0]; 30], ContainerShape::Ellipsoid).unwrap();
         let x = lattice_start(&p2);
         assert!(p2.certify(&x).unwrap().is_feasible());
-        let mut p3 = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 27], ContainerKind::Box).unwrap();
+        let mut p3 = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 27], ContainerShape::Box).unwrap();
         let x = lattice_start(&p3);
         assert!(p3.certify(&x).unwrap().is_feasible());
     }
@@ -482,7 +482,7 @@ mod tests {
     fn two_and_three_unit_circles_in_the_smallest_circle() {
         // Known optima: R = 2 for two unit circles, 1 + 2/√3 for three.
         for (m, optimum) in [(2, 2.0), (3, 1.0 + 2.0 / 3f64.sqrt())] {
-            let mut p = Model::<2>::new(vec![[1.0, 1.0]; m], ContainerKind::Ball).unwrap();
+            let mut p = Model::<2>::new(vec![[1.0, 1.0]; m], ContainerShape::Ball).unwrap();
             let mut x = lattice_start(&p);
             // Break the symmetry of the lattice start a little.
             x[2] += 0.1;
@@ -505,7 +505,7 @@ mod tests {
 
     #[test]
     fn ellipses_in_an_ellipse_end_certified_and_denser_than_the_start() {
-        let mut p = Model::<2>::new(vec![[2.0, 1.0]; 12], ContainerKind::Ellipsoid).unwrap();
+        let mut p = Model::<2>::new(vec![[2.0, 1.0]; 12], ContainerShape::Ellipsoid).unwrap();
         let x0 = lattice_start(&p);
         let start_density = item_measure(&p) / p.evaluate(&x0, None).unwrap().objective;
         let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
@@ -520,7 +520,7 @@ mod tests {
 
     #[test]
     fn repair_separates_overlapping_items_by_the_least_dilation() {
-        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerKind::Ball).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
         // Two unit spheres 1.5 apart in a ball of radius 3: μ = 0.75, s = 4/3.
         let x = vec![
             -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
@@ -533,7 +533,7 @@ mod tests {
 
     #[test]
     fn interrupt_still_returns_a_certified_packing() {
-        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerKind::Ball).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerShape::Ball).unwrap();
         let x0 = lattice_start(&p);
         let mut calls = 0;
         let r = local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| {

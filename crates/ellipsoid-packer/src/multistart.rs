@@ -30,7 +30,7 @@
 use crate::Error;
 use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
 use crate::starts::{LatticeStart, lattice_start_of, perturb};
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::{Duration, Instant};
 
@@ -202,7 +202,7 @@ where
 /// values).
 pub fn multistart<const N: usize>(
     semi_axes: &[[f64; N]],
-    kind: ContainerKind,
+    kind: ContainerShape,
     x0: &[f64],
     settings: &MultiStartSettings,
     observer: &mut dyn Observer,
@@ -459,13 +459,13 @@ mod tests {
 
     fn run(threads: usize, seed: u64) -> MultiStartResult {
         let axes = vec![[2.0, 1.0]; 6];
-        let x0 = paper_start(&axes, ContainerKind::Ellipsoid).unwrap();
+        let x0 = paper_start(&axes, ContainerShape::Ellipsoid).unwrap();
         let settings = MultiStartSettings {
             threads,
             max_local_minimisations: 3,
             ..MultiStartSettings::paper(2, seed)
         };
-        multistart(&axes, ContainerKind::Ellipsoid, &x0, &settings, &mut ()).unwrap()
+        multistart(&axes, ContainerShape::Ellipsoid, &x0, &settings, &mut ()).unwrap()
     }
 
     #[test]
@@ -480,7 +480,7 @@ mod tests {
     #[test]
     fn the_best_is_at_least_the_first() {
         let axes = vec![[1.0, 0.75, 0.5]; 6];
-        let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
+        let x0 = paper_start(&axes, ContainerShape::Ball).unwrap();
         let mut first = None;
         let settings = MultiStartSettings {
             max_local_minimisations: 3,
@@ -488,7 +488,7 @@ mod tests {
         };
         let r = multistart(
             &axes,
-            ContainerKind::Ball,
+            ContainerShape::Ball,
             &x0,
             &settings,
             &mut Callbacks::on_finished(|p: &MultiStartProgress| {
@@ -526,11 +526,11 @@ mod tests {
     /// local minimisation in start order.
     fn run_7_in_a_box(settings: &MultiStartSettings) -> (MultiStartResult, Vec<f64>) {
         let axes = vec![[2.0, 1.0]; 7];
-        let x0 = paper_start(&axes, ContainerKind::Box).unwrap();
+        let x0 = paper_start(&axes, ContainerShape::Box).unwrap();
         let mut densities = Vec::new();
         let r = multistart(
             &axes,
-            ContainerKind::Box,
+            ContainerShape::Box,
             &x0,
             settings,
             &mut Callbacks::on_finished(|p: &MultiStartProgress| densities.push(p.last_density)),
@@ -586,8 +586,8 @@ mod tests {
     fn a_chain_restarts_only_after_enough_stale_starts() {
         let result = |density: f64| {
             let axes = vec![[2.0, 1.0]; 2];
-            let x0 = paper_start(&axes, ContainerKind::Box).unwrap();
-            let mut p = Model::<2>::new(axes, ContainerKind::Box).unwrap();
+            let x0 = paper_start(&axes, ContainerShape::Box).unwrap();
+            let mut p = Model::<2>::new(axes, ContainerShape::Box).unwrap();
             let mut r =
                 local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
             r.density = density;
@@ -631,9 +631,9 @@ mod tests {
     /// start and the run's result.
     fn eight_in_a_circle(observer: &mut dyn Observer) -> (Vec<f64>, MultiStartResult) {
         let axes = vec![[2.0, 1.0]; 8];
-        let x0 = paper_start(&axes, ContainerKind::Ball).unwrap();
+        let x0 = paper_start(&axes, ContainerShape::Ball).unwrap();
         let settings = MultiStartSettings::paper(2, 1);
-        let r = multistart(&axes, ContainerKind::Ball, &x0, &settings, observer).unwrap();
+        let r = multistart(&axes, ContainerShape::Ball, &x0, &settings, observer).unwrap();
         (x0, r)
     }
 

@@ -34,7 +34,7 @@
 //!   1999, chapter 1 (the hexagonal and face-centred cubic lattices).
 
 use crate::Error;
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 
 /// One dense lattice start: which lattice orientation, shifted by how much, cut to which
@@ -150,7 +150,7 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
     let kind = problem.container_kind();
     let l = lattice_semi_axes(problem);
     let reach = l.iter().fold(0.0_f64, |a, &b| a.max(b));
-    let aspect = if kind == ContainerKind::Ball {
+    let aspect = if kind == ContainerShape::Ball {
         [1.0; N]
     } else {
         start
@@ -158,12 +158,12 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
             .map(|a| if a > 0.0 && a.is_finite() { a } else { 1.0 })
     };
     let gauge = |p: &[f64; N]| match kind {
-        ContainerKind::Ball => p.iter().map(|v| v * v).sum::<f64>().sqrt(),
-        ContainerKind::Ellipsoid => (0..N)
+        ContainerShape::Ball => p.iter().map(|v| v * v).sum::<f64>().sqrt(),
+        ContainerShape::Ellipsoid => (0..N)
             .map(|k| (p[k] / aspect[k]).powi(2))
             .sum::<f64>()
             .sqrt(),
-        ContainerKind::Box => (0..N)
+        ContainerShape::Box => (0..N)
             .map(|k| (p[k].abs() + l[k]) / aspect[k])
             .fold(0.0, f64::max),
     };
@@ -235,21 +235,21 @@ fn deepest_points<const N: usize>(
 /// `reach`) about each point — for a box, the exact bounding box of the unrotated items.
 fn container_holding<const N: usize>(
     points: &[[f64; N]],
-    kind: ContainerKind,
+    kind: ContainerShape,
     l: &[f64; N],
     reach: f64,
     aspect: &[f64; N],
 ) -> [f64; N] {
     let grow = 1.0 + 1e-9;
     match kind {
-        ContainerKind::Ball => {
+        ContainerShape::Ball => {
             let r = points
                 .iter()
                 .map(|p| p.iter().map(|v| v * v).sum::<f64>().sqrt())
                 .fold(0.0, f64::max);
             [(r + reach) * grow; N]
         }
-        ContainerKind::Ellipsoid => {
+        ContainerShape::Ellipsoid => {
             // E(a t) contains the points; E(a t) + E(a s) = E(a (t + s)) for homothetic
             // ellipsoids, and E(a s) ⊇ B(reach) when s = reach / min a.
             let t = points
@@ -265,7 +265,7 @@ fn container_holding<const N: usize>(
             let s = t + reach / a_min;
             aspect.map(|a| a * s * grow)
         }
-        ContainerKind::Box => {
+        ContainerShape::Box => {
             let mut half = [0.0; N];
             for p in points {
                 for k in 0..N {
@@ -303,9 +303,9 @@ pub fn lattice_start<const N: usize>(problem: &Model<N>) -> Vec<f64> {
     let (radius, reach) = (radius * (1.0 + 1e-9), reach.map(|r| r * (1.0 + 1e-9)));
     let dims = &mut x[m * stride..];
     match problem.container_kind() {
-        implicit_packing::containment::ContainerKind::Ball => dims[0] = radius,
-        implicit_packing::containment::ContainerKind::Ellipsoid => dims.fill(radius),
-        implicit_packing::containment::ContainerKind::Box => dims.copy_from_slice(&reach),
+        implicit_packing::containment::ContainerShape::Ball => dims[0] = radius,
+        implicit_packing::containment::ContainerShape::Ellipsoid => dims.fill(radius),
+        implicit_packing::containment::ContainerShape::Box => dims.copy_from_slice(&reach),
     }
     x
 }
@@ -418,7 +418,7 @@ impl SplitMix64 {
 /// Errors of [`Model::new`] (no items, invalid semi-axes).
 pub fn paper_start<const N: usize>(
     semi_axes: &[[f64; N]],
-    kind: ContainerKind,
+    kind: ContainerShape,
 ) -> Result<Vec<f64>, Error> {
     Ok(lattice_start(&Model::<N>::new(semi_axes.to_vec(), kind)?))
 }
@@ -427,7 +427,7 @@ pub fn paper_start<const N: usize>(
 mod tests {
     use super::*;
 
-    fn certified<const N: usize>(axes: [f64; N], m: usize, kind: ContainerKind, k: usize) -> f64 {
+    fn certified<const N: usize>(axes: [f64; N], m: usize, kind: ContainerShape, k: usize) -> f64 {
         let mut p = Model::<N>::new(vec![axes; m], kind).unwrap();
         let x = lattice_start_of(&p, &LatticeStart::sequence(k));
         let c = p.certify(&x).unwrap();
@@ -438,9 +438,9 @@ mod tests {
     #[test]
     fn every_start_is_feasible() {
         for kind in [
-            ContainerKind::Ball,
-            ContainerKind::Ellipsoid,
-            ContainerKind::Box,
+            ContainerShape::Ball,
+            ContainerShape::Ellipsoid,
+            ContainerShape::Box,
         ] {
             for k in 0..12 {
                 certified([2.0, 1.0], 40, kind, k);
@@ -452,11 +452,11 @@ mod tests {
     #[test]
     fn fcc_starts_are_denser_than_the_papers_cubic_start_in_a_box() {
         let m = 100;
-        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerKind::Box).unwrap();
+        let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; m], ContainerShape::Box).unwrap();
         let paper = crate::starts::lattice_start(&p);
         let paper = crate::local::item_measure(&p) / p.evaluate(&paper, None).unwrap().objective;
         let best = (0..16)
-            .map(|k| certified([1.0, 0.75, 0.5], m, ContainerKind::Box, k))
+            .map(|k| certified([1.0, 0.75, 0.5], m, ContainerShape::Box, k))
             .fold(0.0, f64::max);
         assert!(best > paper * 1.1, "FCC {best} against cubic {paper}");
     }

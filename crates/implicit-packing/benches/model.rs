@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use implicit_packing::batch::pair_gradients;
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::derivatives::{PairGradient, pair_gradient};
 use implicit_packing::model::{Model, ModelGradient, PAIR_LIST_SKIN};
 use implicit_packing::pair::separated_along_centre_line;
@@ -66,7 +66,7 @@ fn interleaved(sizes: &[usize]) -> Vec<f64> {
         .iter()
         .map(|&m| {
             let (axes, x) = configuration(m, 0.6);
-            let p = Model::<3>::new(axes, ContainerKind::Box).expect("valid problem");
+            let p = Model::<3>::new(axes, ContainerShape::Box).expect("valid problem");
             (m, p, x, ModelGradient::default(), f64::INFINITY)
         })
         .collect();
@@ -86,7 +86,7 @@ fn interleaved(sizes: &[usize]) -> Vec<f64> {
 fn main() {
     for &m in &[1_000usize, 10_000, 100_000] {
         let (axes, x) = configuration(m, 0.6);
-        let mut p = Model::<3>::new(axes, ContainerKind::Box).expect("valid problem");
+        let mut p = Model::<3>::new(axes, ContainerShape::Box).expect("valid problem");
         let mut g = ModelGradient::default();
         let ev = p.evaluate(&x, Some(&mut g)).expect("evaluates");
         let passes = if m >= 100_000 { 5 } else { 20 };

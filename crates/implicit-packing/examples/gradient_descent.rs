@@ -9,7 +9,7 @@
 //!
 //! Run with `cargo run --release -p implicit-packing --example gradient_descent`.
 
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Model, ModelGradient};
 
 /// Ellipses of semi-axes (1, 0.5) in a circle of radius 2.3: density 0.57.
@@ -21,7 +21,7 @@ const MAX_ITERATIONS: usize = 5000;
 
 fn main() -> Result<(), implicit_packing::Error> {
     let inflated = SEMI_AXES.map(|l| INFLATION * l);
-    let mut problem = Model::<2>::new(vec![inflated; ELLIPSES], ContainerKind::Ball)?;
+    let mut problem = Model::<2>::new(vec![inflated; ELLIPSES], ContainerShape::Ball)?;
     // Variables: [c_x, c_y, θ] per ellipse, then the container's radius. The start crowds the
     // ellipses near the centre, every one overlapping its neighbours.
     let mut x = Vec::with_capacity(problem.var_count());
@@ -75,7 +75,7 @@ fn main() -> Result<(), implicit_packing::Error> {
     }
     println!("stopped after {iterations} iterations at {value:.3e}");
 
-    let mut exact = Model::<2>::new(vec![SEMI_AXES; ELLIPSES], ContainerKind::Ball)?;
+    let mut exact = Model::<2>::new(vec![SEMI_AXES; ELLIPSES], ContainerShape::Ball)?;
     let certificate = exact.certify(&x)?;
     println!(
         "PW85 certificate: {} overlapping pairs, {} ellipses outside ({} pairs checked)",

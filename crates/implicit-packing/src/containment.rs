@@ -66,9 +66,10 @@ pub enum Container<const N: usize> {
     },
 }
 
-/// The kind of a container, without its dimensions.
+/// The shape of a container (ball, ellipsoid, box), without its dimensions: [`Container`] is a
+/// shape with its dimensions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ContainerKind {
+pub enum ContainerShape {
     /// A ball: one dimension, the radius.
     Ball,
     /// An axis-aligned ellipsoid: `N` dimensions, the semi-axes.
@@ -77,11 +78,11 @@ pub enum ContainerKind {
     Box,
 }
 
-impl ContainerKind {
+impl ContainerShape {
     /// The number of container variables in dimension `n`.
     pub fn dimension_count(self, n: usize) -> usize {
         match self {
-            ContainerKind::Ball => 1,
+            ContainerShape::Ball => 1,
             _ => n,
         }
     }
@@ -89,7 +90,7 @@ impl ContainerKind {
 
 impl<const N: usize> Container<N> {
     /// A container of the given kind from its variables (`[r]` or `N` semi-axes / half-sides).
-    pub fn from_dimensions(kind: ContainerKind, dims: &[f64]) -> Result<Self, Error> {
+    pub fn from_dimensions(kind: ContainerShape, dims: &[f64]) -> Result<Self, Error> {
         let expected = kind.dimension_count(N);
         Error::check_length("container dimensions", expected, dims.len())?;
         for (dimension, &value) in dims.iter().enumerate() {
@@ -98,22 +99,22 @@ impl<const N: usize> Container<N> {
             }
         }
         let mut a = [0.0; N];
-        if kind != ContainerKind::Ball {
+        if kind != ContainerShape::Ball {
             a.copy_from_slice(dims);
         }
         Ok(match kind {
-            ContainerKind::Ball => Container::Ball { radius: dims[0] },
-            ContainerKind::Ellipsoid => Container::Ellipsoid { semi_axes: a },
-            ContainerKind::Box => Container::Box { half_sides: a },
+            ContainerShape::Ball => Container::Ball { radius: dims[0] },
+            ContainerShape::Ellipsoid => Container::Ellipsoid { semi_axes: a },
+            ContainerShape::Box => Container::Box { half_sides: a },
         })
     }
 
     /// The kind of this container.
-    pub fn kind(&self) -> ContainerKind {
+    pub fn kind(&self) -> ContainerShape {
         match self {
-            Container::Ball { .. } => ContainerKind::Ball,
-            Container::Ellipsoid { .. } => ContainerKind::Ellipsoid,
-            Container::Box { .. } => ContainerKind::Box,
+            Container::Ball { .. } => ContainerShape::Ball,
+            Container::Ellipsoid { .. } => ContainerShape::Ellipsoid,
+            Container::Box { .. } => ContainerShape::Box,
         }
     }
 

@@ -46,7 +46,7 @@
 
 use crate::batch::{KernelQueue, Term, ValueOnly, WithGradient};
 use crate::containment::{
-    Container, ContainerKind, ContainmentDirection, containment_gradient,
+    Container, ContainerShape, ContainmentDirection, containment_gradient,
     containment_gradient_derivative, containment_residual,
 };
 use crate::derivatives::{
@@ -104,7 +104,7 @@ pub use crate::certificate::Certificate;
 #[derive(Debug)]
 pub struct Model<const N: usize> {
     semi_axes: Vec<[f64; N]>,
-    kind: ContainerKind,
+    kind: ContainerShape,
     bodies: Vec<Body<N>>,
     centres: Vec<[f64; N]>,
     // Per ellipsoid, computed once per evaluation by `load`: (sin ψ, cos ψ) of eq. 2's third
@@ -144,7 +144,7 @@ impl<const N: usize> Model<N> {
     /// # Errors
     /// [`Error::Empty`] without ellipsoids, [`Error::InvalidSemiAxis`] naming the ellipsoid and
     /// the semi-axis that is not in `[1e-30, 1e30]`.
-    pub fn new(semi_axes: Vec<[f64; N]>, kind: ContainerKind) -> Result<Self, Error> {
+    pub fn new(semi_axes: Vec<[f64; N]>, kind: ContainerShape) -> Result<Self, Error> {
         if semi_axes.is_empty() {
             return Err(Error::Empty);
         }
@@ -193,7 +193,7 @@ impl<const N: usize> Model<N> {
     }
 
     /// The container kind.
-    pub fn container_kind(&self) -> ContainerKind {
+    pub fn container_kind(&self) -> ContainerShape {
         self.kind
     }
 

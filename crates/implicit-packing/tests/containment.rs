@@ -3,7 +3,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use implicit_packing::containment::{
-    Container, ContainerKind, containment_gradient, containment_residual, farthest_point,
+    Container, ContainerShape, containment_gradient, containment_residual, farthest_point,
 };
 use implicit_packing::derivatives::angle_gradient_3d;
 use implicit_packing::{Body, Ellipsoid};
@@ -21,14 +21,14 @@ fn random_body(rng: &mut Rng, spread: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
 }
 
 /// Every kind of container.
-const KINDS: [ContainerKind; 3] = [
-    ContainerKind::Ball,
-    ContainerKind::Ellipsoid,
-    ContainerKind::Box,
+const KINDS: [ContainerShape; 3] = [
+    ContainerShape::Ball,
+    ContainerShape::Ellipsoid,
+    ContainerShape::Box,
 ];
 
 /// Container dimensions of `kind` in `d` dimensions, each in [2, 4).
-fn random_dimensions(rng: &mut Rng, kind: ContainerKind, d: usize) -> Vec<f64> {
+fn random_dimensions(rng: &mut Rng, kind: ContainerShape, d: usize) -> Vec<f64> {
     (0..kind.dimension_count(d))
         .map(|_| rng.range(2.0, 4.0))
         .collect()

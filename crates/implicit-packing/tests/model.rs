@@ -3,7 +3,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use implicit_packing::Error;
-use implicit_packing::containment::ContainerKind;
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Model, ModelGradient};
 use testkit::Rng;
 
@@ -13,7 +13,7 @@ fn config3(
     rng: &mut Rng,
     m: usize,
     density: f64,
-    kind: ContainerKind,
+    kind: ContainerShape,
 ) -> (Vec<[f64; 3]>, Vec<f64>) {
     let axes: Vec<[f64; 3]> = (0..m)
         .map(|_| {
@@ -40,7 +40,7 @@ fn config3(
         x.push(rng.range(-3.0, 3.0));
     }
     match kind {
-        ContainerKind::Ball => x.push(0.45 * side * 3f64.sqrt()),
+        ContainerShape::Ball => x.push(0.45 * side * 3f64.sqrt()),
         _ => x.extend_from_slice(&[0.45 * side, 0.5 * side, 0.55 * side]),
     }
     (axes, x)
@@ -81,18 +81,18 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
 }
 
 /// Every kind of container.
-const KINDS: [ContainerKind; 3] = [
-    ContainerKind::Ball,
-    ContainerKind::Ellipsoid,
-    ContainerKind::Box,
+const KINDS: [ContainerShape; 3] = [
+    ContainerShape::Ball,
+    ContainerShape::Ellipsoid,
+    ContainerShape::Box,
 ];
 
 #[test]
 fn grid_sum_equals_all_pairs_sum() {
     let mut rng = Rng::new(21);
     for &(m, density) in &[(200usize, 0.6), (343, 0.3), (50, 0.7)] {
-        let (axes, x) = config3(&mut rng, m, density, ContainerKind::Box);
-        let mut p = Model::<3>::new(axes, ContainerKind::Box).unwrap();
+        let (axes, x) = config3(&mut rng, m, density, ContainerShape::Box);
+        let mut p = Model::<3>::new(axes, ContainerShape::Box).unwrap();
         let ev = p.evaluate(&x, None).unwrap();
         let all = p.overlap_all_pairs(&x).unwrap();
         assert!(ev.overlap > 0.0);
@@ -108,7 +108,7 @@ fn grid_sum_equals_all_pairs_sum() {
         assert!(ev.pairs < m * (m - 1) / 2);
     }
     let (axes, x) = config2(&mut rng, 400, 0.6);
-    let mut p = Model::<2>::new(axes, ContainerKind::Ellipsoid).unwrap();
+    let mut p = Model::<2>::new(axes, ContainerShape::Ellipsoid).unwrap();
     let ev = p.evaluate(&x, None).unwrap();
     let all = p.overlap_all_pairs(&x).unwrap();
     assert_eq!(
@@ -174,13 +174,13 @@ fn model_gradient_matches_finite_differences() {
         fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    let mut p = Model::<2>::new(axes, ContainerKind::Box).unwrap();
+    let mut p = Model::<2>::new(axes, ContainerShape::Box).unwrap();
     fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
 }
 
 #[test]
 fn bad_variables_are_reported_by_index() {
-    let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerShape::Ball).unwrap();
     let mut x = vec![0.0; p.var_count()];
     x[0] = 3.0;
     x[6] = -3.0;
@@ -202,7 +202,7 @@ fn bad_variables_are_reported_by_index() {
         Err(Error::LengthMismatch { .. })
     ));
     assert!(matches!(
-        Model::<2>::new(vec![[1.0, 1.0], [1.0, 0.0]], ContainerKind::Box),
+        Model::<2>::new(vec![[1.0, 1.0], [1.0, 0.0]], ContainerShape::Box),
         Err(Error::InvalidSemiAxis {
             item: Some(1),
             axis: 1,
@@ -269,14 +269,14 @@ fn hessian_vector_products_match_finite_differences() {
         on_two_copies(axes, kind, &x, &mut rng, check);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    on_two_copies(axes, ContainerKind::Box, &x, &mut rng, check);
+    on_two_copies(axes, ContainerShape::Box, &x, &mut rng, check);
 }
 
 /// Runs `check` with the Hessian–vector products of one model of `axes` in a container of
 /// `kind` and the gradients of another (two models, as each closure borrows its own mutably).
 fn on_two_copies<const N: usize>(
     axes: Vec<[f64; N]>,
-    kind: ContainerKind,
+    kind: ContainerShape,
     x: &[f64],
     rng: &mut Rng,
     check: impl Fn(Hvp<'_>, Grad<'_>, &[f64], &mut Rng),
@@ -299,8 +299,8 @@ fn on_two_copies<const N: usize>(
 fn certification_agrees_with_the_model() {
     let mut rng = Rng::new(66);
     for &density in &[0.3, 0.6] {
-        let (axes, x) = config3(&mut rng, 125, density, ContainerKind::Box);
-        let mut p = Model::<3>::new(axes, ContainerKind::Box).unwrap();
+        let (axes, x) = config3(&mut rng, 125, density, ContainerShape::Box);
+        let mut p = Model::<3>::new(axes, ContainerShape::Box).unwrap();
         let cert = p.certify(&x).unwrap();
         let b = p.bodies().to_vec();
         let mut expect = Vec::new();
@@ -333,7 +333,7 @@ fn certification_agrees_with_the_model() {
         assert!(!cert.is_feasible());
     }
     // Two separated ellipses well inside a disc: feasible.
-    let mut p = Model::<2>::new(vec![[1.0, 0.5], [1.0, 0.5]], ContainerKind::Ball).unwrap();
+    let mut p = Model::<2>::new(vec![[1.0, 0.5], [1.0, 0.5]], ContainerShape::Ball).unwrap();
     let cert = p.certify(&[-1.5, 0.0, 0.0, 1.5, 0.0, 0.3, 4.0]).unwrap();
     assert!(cert.is_feasible(), "{cert:?}");
     let cert = p.certify(&[-0.5, 0.0, 0.0, 0.5, 0.0, 0.3, 1.2]).unwrap();
@@ -346,8 +346,11 @@ fn certification_agrees_with_the_model() {
 /// falls back to a difference of gradients and stays finite.
 #[test]
 fn hessian_vector_product_in_the_hard_case_is_finite() {
-    let mut p =
-        Model::<3>::new(vec![[1.0, 0.5, 0.25], [0.8, 0.6, 0.3]], ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(
+        vec![[1.0, 0.5, 0.25], [0.8, 0.6, 0.3]],
+        ContainerShape::Ball,
+    )
+    .unwrap();
     let x = [
         0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0, -0.3, 0.1, 0.2, 3.0,
     ];
@@ -368,8 +371,8 @@ fn hessian_vector_product_in_the_hard_case_is_finite() {
 #[test]
 fn pack_variables_round_trips() {
     let mut rng = Rng::new(77);
-    let (axes, x) = config3(&mut rng, 8, 0.4, ContainerKind::Ball);
-    let mut p = Model::<3>::new(axes, ContainerKind::Ball).unwrap();
+    let (axes, x) = config3(&mut rng, 8, 0.4, ContainerShape::Ball);
+    let mut p = Model::<3>::new(axes, ContainerShape::Ball).unwrap();
     let bodies = p.bodies_at(&x).unwrap().to_vec();
     let y = p.pack_variables(&bodies, &x[x.len() - 1..]).unwrap();
     let again = p.bodies_at(&y).unwrap().to_vec();
@@ -382,7 +385,7 @@ fn pack_variables_round_trips() {
             }
         }
     }
-    let q = Model::<2>::new(vec![[1.0, 0.5]], ContainerKind::Box).unwrap();
+    let q = Model::<2>::new(vec![[1.0, 0.5]], ContainerShape::Box).unwrap();
     let e = implicit_packing::Ellipse::ellipse([0.3, -0.2], [1.0, 0.5], 2.5).unwrap();
     let y = q.pack_variables(&[e], &[2.0, 3.0]).unwrap();
     assert_eq!((y[0], y[1], y[3], y[4]), (0.3, -0.2, 2.0, 3.0));
@@ -403,7 +406,7 @@ fn pack_variables_round_trips() {
 /// gradients and stays finite.
 #[test]
 fn containment_hessian_in_the_hard_case_is_finite() {
-    let mut p = Model::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerKind::Ball).unwrap();
+    let mut p = Model::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerShape::Ball).unwrap();
     let x = [0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.8];
     let v = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6, 0.7];
     let mut out = ModelGradient::default();
