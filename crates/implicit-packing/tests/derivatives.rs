@@ -83,6 +83,27 @@ fn along<const M: usize>(
     std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h))
 }
 
+/// Central finite differences of each of `Q` pair-term quantities with respect to each
+/// variable in turn: `out[q][k]` ≈ ∂ value_q / ∂ v_k.
+fn partials<const M: usize, const Q: usize>(
+    v: &[f64; M],
+    values: impl Fn(&[f64; M]) -> [f64; Q],
+) -> [[f64; M]; Q] {
+    let h = 1e-6;
+    let mut out = [[0.0; M]; Q];
+    for k in 0..M {
+        let mut vp = *v;
+        vp[k] += h;
+        let mut vm = *v;
+        vm[k] -= h;
+        let (pp, pm) = (values(&vp), values(&vm));
+        for q in 0..Q {
+            out[q][k] = (pp[q] - pm[q]) / (2.0 * h);
+        }
+    }
+    out
+}
+
 /// A 3D pair gradient in the variables of [`bodies3`]: torques become derivatives with
 /// respect to the angles `v[3..6]` and `v[9..12]`.
 fn in_angles_3d(v: &[f64; 12], g: &PairGradient<3>) -> [f64; 12] {
@@ -143,21 +164,11 @@ fn gradient_of_f_matches_finite_differences_3d() {
         let d = pair_derivatives(&i, &j);
         let g = in_angles_3d(&v, &d.grad_f);
         let gu = in_angles_3d(&v, &d.grad_u);
-        let mut fd = [0.0; 12];
-        let mut fdu = [0.0; 12];
-        let h = 1e-6;
-        for k in 0..12 {
-            let mut vp = v;
-            vp[k] += h;
-            let mut vm = v;
-            vm[k] -= h;
-            let (ip, jp) = bodies3(&vp, li, lj);
-            let (im, jm) = bodies3(&vm, li, lj);
-            let pp = pair_term(&ip, &jp);
-            let pm = pair_term(&im, &jm);
-            fd[k] = (pp.f - pm.f) / (2.0 * h);
-            fdu[k] = (pp.u - pm.u) / (2.0 * h);
-        }
+        let [fd, fdu] = partials(&v, |x| {
+            let (i, j) = bodies3(x, li, lj);
+            let p = pair_term(&i, &j);
+            [p.f, p.u]
+        });
         let e = assert_close(&g, &fd, || {
             format!(
                 "pair {checked} (v = {v:?} li {li:?} lj {lj:?} d2 {} u {})",
@@ -191,17 +202,10 @@ fn gradient_of_f_matches_finite_differences_2d() {
         }
         let d = pair_derivatives(&i, &j);
         let g = in_angles_2d(&d.grad_f);
-        let h = 1e-6;
-        let mut fd = [0.0; 6];
-        for k in 0..6 {
-            let mut vp = v;
-            vp[k] += h;
-            let mut vm = v;
-            vm[k] -= h;
-            let (ip, jp) = bodies2(&vp, li, lj);
-            let (im, jm) = bodies2(&vm, li, lj);
-            fd[k] = (pair_term(&ip, &jp).f - pair_term(&im, &jm).f) / (2.0 * h);
-        }
+        let [fd] = partials(&v, |x| {
+            let (i, j) = bodies2(x, li, lj);
+            [pair_term(&i, &j).f]
+        });
         worst = worst.max(assert_close(&g, &fd, || format!("pair {checked}")));
         checked += 1;
     }
