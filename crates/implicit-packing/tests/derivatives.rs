@@ -49,6 +49,38 @@ fn positive_and_smooth<const N: usize>(p: &PairTerm<N>) -> bool {
     p.f != 0.0 && (1.0 - p.d2).abs() > 1e-3 && (p.eps - p.u).abs() > 1e-3 && p.x_unique
 }
 
+/// A random pair from `draw` with its bodies and pair term.
+struct Sample<const N: usize, const M: usize> {
+    v: [f64; M],
+    li: [f64; N],
+    lj: [f64; N],
+    i: Body<N>,
+    j: Body<N>,
+    p: PairTerm<N>,
+}
+
+/// Draws a pair's variables and the axes of its two bodies (`random_pair3`, `random_pair2`).
+type Draw<const N: usize, const M: usize> = fn(&mut Rng) -> ([f64; M], [f64; N], [f64; N]);
+/// Builds a pair's bodies from its variables and axes (`bodies3`, `bodies2`).
+type Bodies<const N: usize, const M: usize> =
+    fn(&[f64; M], [f64; N], [f64; N]) -> (Body<N>, Body<N>);
+
+/// The next pair from `draw` at which f is positive and smooth, skipping those where it is not.
+fn smooth_pair<const N: usize, const M: usize>(
+    rng: &mut Rng,
+    draw: Draw<N, M>,
+    bodies: Bodies<N, M>,
+) -> Sample<N, M> {
+    loop {
+        let (v, li, lj) = draw(rng);
+        let (i, j) = bodies(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if positive_and_smooth(&p) {
+            return Sample { v, li, lj, i, j, p };
+        }
+    }
+}
+
 fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     let scale = g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let worst = g
@@ -155,12 +187,7 @@ fn gradient_of_f_matches_finite_differences_3d() {
     let mut worst = 0.0f64;
     let (mut worst_u, mut n_u) = (0.0f64, 0);
     while checked < 1000 {
-        let (v, li, lj) = random_pair3(&mut rng);
-        let (i, j) = bodies3(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample { v, li, lj, i, j, p } = smooth_pair(&mut rng, random_pair3, bodies3);
         let d = pair_derivatives(&i, &j);
         let g = in_angles_3d(&v, &d.grad_f);
         let gu = in_angles_3d(&v, &d.grad_u);
@@ -194,12 +221,9 @@ fn gradient_of_f_matches_finite_differences_2d() {
     let mut checked = 0;
     let mut worst = 0.0f64;
     while checked < 1000 {
-        let (v, li, lj) = random_pair2(&mut rng);
-        let (i, j) = bodies2(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample {
+            v, li, lj, i, j, ..
+        } = smooth_pair(&mut rng, random_pair2, bodies2);
         let d = pair_derivatives(&i, &j);
         let g = in_angles_2d(&d.grad_f);
         let [fd] = partials(&v, |x| {
@@ -285,12 +309,7 @@ fn hessian_vector_products_match_finite_differences() {
     let mut rng = Rng::new(99);
     let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
     while checked < 1000 {
-        let (v, li, lj) = random_pair3(&mut rng);
-        let (i, j) = bodies3(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample { v, li, lj, i, j, p } = smooth_pair(&mut rng, random_pair3, bodies3);
         let dv: [f64; 12] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
         let ai = [v[3], v[4], v[5]];
         let aj = [v[9], v[10], v[11]];
@@ -342,12 +361,9 @@ fn hessian_vector_products_match_finite_differences() {
     };
     let (mut checked, mut worst) = (0, 0.0f64);
     while checked < 1000 {
-        let (v, li, lj) = random_pair2(&mut rng);
-        let (i, j) = bodies2(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample {
+            v, li, lj, i, j, ..
+        } = smooth_pair(&mut rng, random_pair2, bodies2);
         let dv: [f64; 6] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
         let dir = PairDirection {
             centre_i: [dv[0], dv[1]],

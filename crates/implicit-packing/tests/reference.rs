@@ -7,33 +7,18 @@ use std::collections::BTreeMap;
 use testkit::reference::{self, Blm2Case, Blm3Case, scaled_error};
 
 fn bodies_3d(r: &Blm3Case) -> (Ellipsoid, Ellipsoid) {
-    both_bodies(
-        &r.id,
-        r.line,
-        Body::from_quaternion(r.ci, r.li, r.qi),
-        Body::from_quaternion(r.cj, r.lj, r.qj),
-    )
+    let i = Body::from_quaternion(r.ci, r.li, r.qi)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
+    let j = Body::from_quaternion(r.cj, r.lj, r.qj)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
+    (i, j)
 }
 
 fn bodies_2d(r: &Blm2Case) -> (Ellipse, Ellipse) {
-    both_bodies(
-        &r.id,
-        r.line,
-        Body::ellipse(r.ci, r.li, r.theta_i),
-        Body::ellipse(r.cj, r.lj, r.theta_j),
-    )
-}
-
-/// The two bodies of a reference case, or a panic naming the case, its line and the body.
-#[track_caller]
-fn both_bodies<B, E: std::fmt::Display>(
-    id: impl std::fmt::Display,
-    line: usize,
-    i: Result<B, E>,
-    j: Result<B, E>,
-) -> (B, B) {
-    let i = i.unwrap_or_else(|e| panic!("case {id} (line {line}): body i: {e}"));
-    let j = j.unwrap_or_else(|e| panic!("case {id} (line {line}): body j: {e}"));
+    let i = Body::ellipse(r.ci, r.li, r.theta_i)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
+    let j = Body::ellipse(r.cj, r.lj, r.theta_j)
+        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
     (i, j)
 }
 
