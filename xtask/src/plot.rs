@@ -373,20 +373,11 @@ pub fn render(fig: &Figure, dir: &Path, base: &str, outputs: &mut Outputs) -> Re
     std::fs::create_dir_all(dir).map_err(crate::error::io(dir))?;
     let svg = dir.join(format!("{base}.svg"));
     let png = dir.join(format!("{base}.png"));
+    let size = (WIDTH, height);
     let tmp = Outputs::scratch(&svg);
-    draw_file(
-        SVGBackend::new(&tmp, (WIDTH, height)),
-        fig,
-        (&tmp, &svg),
-        outputs,
-    )?;
+    draw_file(SVGBackend::new(&tmp, size), fig, (&tmp, &svg), outputs)?;
     let tmp = Outputs::scratch(&png);
-    draw_file(
-        BitMapBackend::new(&tmp, (WIDTH, height)),
-        fig,
-        (&tmp, &png),
-        outputs,
-    )?;
+    draw_file(BitMapBackend::new(&tmp, size), fig, (&tmp, &png), outputs)?;
     Ok(())
 }
 
