@@ -162,14 +162,11 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 break;
             }
             let pair = sample::pair_near_contact(&mut rng, aspect, 0.5, 1.5)?;
-            let p = pair.pw85()?;
-            // The reference: pw85 with its coefficients forced into double-double.
-            let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2)
-                .map_err(error::pw85("an aspect-ratio pair"))?;
-            if r.error_estimate > SELF_REFERENCE {
-                excluded_aspect += 1;
+            let Some((p, r)) =
+                self_referenced(&pair, "an aspect-ratio pair", &mut excluded_aspect)?
+            else {
                 continue;
-            }
+            };
             accepted += 1;
             for (k, &m) in methods.iter().enumerate() {
                 let e = if m == Method::Ours {
@@ -230,13 +227,9 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 .mu2;
             let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
             let pair = unit.at_distance_factor(((1.0 + sign * gap) / mu2).sqrt());
-            let p = pair.pw85()?;
-            let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2)
-                .map_err(error::pw85("a tangency pair"))?;
-            if r.error_estimate > SELF_REFERENCE {
-                excluded_gap += 1;
+            let Some((p, r)) = self_referenced(&pair, "a tangency pair", &mut excluded_gap)? else {
                 continue;
-            }
+            };
             accepted += 1;
             // The verdict of the reference is trusted only beyond its own error.
             let decided = (r.mu2 - 1.0).abs() > 2.0 * r.error_estimate * r.mu2;
@@ -492,4 +485,21 @@ fn method_label(m: Method, tol: f64) -> String {
     } else {
         m.name().into()
     }
+}
+
+/// `pair` in PW85 form with its reference: pw85 with its coefficients forced into
+/// double-double. `None`, counted in `excluded`, where the reference's own error estimate
+/// exceeds [`SELF_REFERENCE`].
+fn self_referenced(
+    pair: &sample::Pair3,
+    what: &str,
+    excluded: &mut usize,
+) -> Result<Option<(sample::Pw85Pair, pw85::Contact)>, Error> {
+    let p = pair.pw85()?;
+    let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2).map_err(error::pw85(what))?;
+    if r.error_estimate > SELF_REFERENCE {
+        *excluded += 1;
+        return Ok(None);
+    }
+    Ok(Some((p, r)))
 }
