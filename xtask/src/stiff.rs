@@ -102,12 +102,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         .collect();
     for (c, errs) in &by_cat {
         for (m, e) in methods.iter().zip(errs) {
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                m.name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("category", c.clone(), m.name(), *e));
         }
     }
     // The implicit criterion on its own reference file.
@@ -131,18 +126,8 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             );
         }
         for (c, (e3, e2)) in &blm_cats {
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                "projection_3d".into(),
-                output::short(*e3),
-            ]);
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                "projection_2d".into(),
-                output::short(*e2),
-            ]);
+            rows.push(row("category", c.clone(), "projection_3d", *e3));
+            rows.push(row("category", c.clone(), "projection_2d", *e2));
         }
     }
 
@@ -189,21 +174,11 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }
         for (k, e) in w.iter().enumerate() {
             aspect_err[k].push((aspect, *e));
-            rows.push(vec![
-                "aspect".into(),
-                format!("{aspect:e}"),
-                methods[k].name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("aspect", format!("{aspect:e}"), methods[k].name(), *e));
         }
         if with_implicit {
             aspect_implicit.push((aspect, wi));
-            rows.push(vec![
-                "aspect".into(),
-                format!("{aspect:e}"),
-                "projection".into(),
-                output::short(wi),
-            ]);
+            rows.push(row("aspect", format!("{aspect:e}"), "projection", wi));
         }
     }
 
@@ -262,12 +237,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }
         for (k, e) in w.iter().enumerate() {
             gap_err[k].push((gap, *e));
-            rows.push(vec![
-                "tangency".into(),
-                format!("{gap:e}"),
-                methods[k].name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("tangency", format!("{gap:e}"), methods[k].name(), *e));
         }
     }
 
@@ -502,4 +472,14 @@ fn self_referenced(
         return Ok(None);
     }
     Ok(Some((p, r)))
+}
+
+/// A row of the CSV: the sweep, its value, the method and its worst error.
+fn row(sweep: &str, value: String, method: &str, worst_error: f64) -> Vec<String> {
+    vec![
+        sweep.into(),
+        value,
+        method.into(),
+        output::short(worst_error),
+    ]
 }
