@@ -78,11 +78,16 @@ fn pairs_2d() -> Vec<Pair2d> {
         .collect()
 }
 
-fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
+/// The sum of μ² over `pairs` through `contact`, one pair at a time; a failed pair counts 0.
+fn scalar_sum<P>(pairs: &[P], contact: impl Fn(&P) -> Result<pw85::Contact, pw85::Error>) -> f64 {
     pairs
         .iter()
-        .map(|p| pw85::contact_function_2d(&p.r12, &p.q1, &p.q2).map_or(0.0, |c| c.mu2))
+        .map(|p| contact(p).map_or(0.0, |c| c.mu2))
         .sum()
+}
+
+fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
+    scalar_sum(pairs, |p| pw85::contact_function_2d(&p.r12, &p.q1, &p.q2))
 }
 
 fn baseline_brent(pairs: &[Pair]) -> f64 {
@@ -93,10 +98,7 @@ fn baseline_brent(pairs: &[Pair]) -> f64 {
 }
 
 fn scalar_contact(pairs: &[Pair]) -> f64 {
-    pairs
-        .iter()
-        .map(|p| pw85::contact_function(&p.r12, &p.q1, &p.q2).map_or(0.0, |c| c.mu2))
-        .sum()
+    scalar_sum(pairs, |p| pw85::contact_function(&p.r12, &p.q1, &p.q2))
 }
 
 fn scalar_overlap(pairs: &[Pair]) -> usize {
