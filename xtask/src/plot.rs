@@ -373,25 +373,48 @@ pub fn render(fig: &Figure, dir: &Path, base: &str, outputs: &mut Outputs) -> Re
     std::fs::create_dir_all(dir).map_err(crate::error::io(dir))?;
     let svg = dir.join(format!("{base}.svg"));
     let png = dir.join(format!("{base}.png"));
-    let plot_err = |path: &Path| {
-        let path = path.to_path_buf();
-        move |e: String| Error::Plot { path, message: e }
-    };
+    let size = (WIDTH, height);
     let tmp = Outputs::scratch(&svg);
-    draw_figure(
-        SVGBackend::new(&tmp, (WIDTH, height)).into_drawing_area(),
-        fig,
-    )
-    .map_err(|e| e.to_string())
-    .map_err(plot_err(&svg))?;
-    outputs.adopt(&tmp, &svg, Stability::Volatile)?;
+    draw_file(SVGBackend::new(&tmp, size), fig, (&tmp, &svg), outputs)?;
     let tmp = Outputs::scratch(&png);
-    draw_figure(
-        BitMapBackend::new(&tmp, (WIDTH, height)).into_drawing_area(),
-        fig,
-    )
-    .map_err(|e| e.to_string())
-    .map_err(plot_err(&png))?;
-    outputs.adopt(&tmp, &png, Stability::Volatile)?;
+    draw_file(BitMapBackend::new(&tmp, size), fig, (&tmp, &png), outputs)?;
     Ok(())
+}
+
+/// Draws `fig` through `backend`, which writes the scratch file `tmp`, then adopts it as `path`.
+fn draw_file<DB: DrawingBackend>(
+    backend: DB,
+    fig: &Figure,
+    (tmp, path): (&Path, &Path),
+    outputs: &mut Outputs,
+) -> Result<(), Error> {
+    // The backend is consumed (and so has flushed `tmp`) before the file is adopted.
+    draw_figure(backend.into_drawing_area(), fig).map_err(|e| Error::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    outputs.adopt(tmp, path, Stability::Volatile)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn render_writes_both_pictures() {
+        let dir = std::env::temp_dir().join(format!("xtask-plot-{}", std::process::id()));
+        let fig = Figure {
+            panels: Vec::new(),
+            panel_height: 40,
+        };
+        let mut outputs = Outputs::new(false);
+        render(&fig, &dir, "empty", &mut outputs).unwrap();
+        for name in ["empty.svg", "empty.png"] {
+            let len = std::fs::metadata(dir.join(name)).map_or(0, |m| m.len());
+            assert!(len > 0, "{name} missing or empty");
+        }
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(left.len(), 2, "no scratch file stays: {left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

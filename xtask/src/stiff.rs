@@ -102,12 +102,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         .collect();
     for (c, errs) in &by_cat {
         for (m, e) in methods.iter().zip(errs) {
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                m.name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("category", c.clone(), m.name(), *e));
         }
     }
     // The implicit criterion on its own reference file.
@@ -131,18 +126,8 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             );
         }
         for (c, (e3, e2)) in &blm_cats {
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                "projection_3d".into(),
-                output::short(*e3),
-            ]);
-            rows.push(vec![
-                "category".into(),
-                c.clone(),
-                "projection_2d".into(),
-                output::short(*e2),
-            ]);
+            rows.push(row("category", c.clone(), "projection_3d", *e3));
+            rows.push(row("category", c.clone(), "projection_2d", *e2));
         }
     }
 
@@ -162,14 +147,11 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 break;
             }
             let pair = sample::pair_near_contact(&mut rng, aspect, 0.5, 1.5)?;
-            let p = pair.pw85()?;
-            // The reference: pw85 with its coefficients forced into double-double.
-            let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2)
-                .map_err(error::pw85("an aspect-ratio pair"))?;
-            if r.error_estimate > SELF_REFERENCE {
-                excluded_aspect += 1;
+            let Some((p, r)) =
+                self_referenced(&pair, "an aspect-ratio pair", &mut excluded_aspect)?
+            else {
                 continue;
-            }
+            };
             accepted += 1;
             for (k, &m) in methods.iter().enumerate() {
                 let e = if m == Method::Ours {
@@ -192,21 +174,11 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }
         for (k, e) in w.iter().enumerate() {
             aspect_err[k].push((aspect, *e));
-            rows.push(vec![
-                "aspect".into(),
-                format!("{aspect:e}"),
-                methods[k].name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("aspect", format!("{aspect:e}"), methods[k].name(), *e));
         }
         if with_implicit {
             aspect_implicit.push((aspect, wi));
-            rows.push(vec![
-                "aspect".into(),
-                format!("{aspect:e}"),
-                "projection".into(),
-                output::short(wi),
-            ]);
+            rows.push(row("aspect", format!("{aspect:e}"), "projection", wi));
         }
     }
 
@@ -230,13 +202,9 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 .mu2;
             let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
             let pair = unit.at_distance_factor(((1.0 + sign * gap) / mu2).sqrt());
-            let p = pair.pw85()?;
-            let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2)
-                .map_err(error::pw85("a tangency pair"))?;
-            if r.error_estimate > SELF_REFERENCE {
-                excluded_gap += 1;
+            let Some((p, r)) = self_referenced(&pair, "a tangency pair", &mut excluded_gap)? else {
                 continue;
-            }
+            };
             accepted += 1;
             // The verdict of the reference is trusted only beyond its own error.
             let decided = (r.mu2 - 1.0).abs() > 2.0 * r.error_estimate * r.mu2;
@@ -269,12 +237,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         }
         for (k, e) in w.iter().enumerate() {
             gap_err[k].push((gap, *e));
-            rows.push(vec![
-                "tangency".into(),
-                format!("{gap:e}"),
-                methods[k].name().into(),
-                output::short(*e),
-            ]);
+            rows.push(row("tangency", format!("{gap:e}"), methods[k].name(), *e));
         }
     }
 
@@ -492,4 +455,31 @@ fn method_label(m: Method, tol: f64) -> String {
     } else {
         m.name().into()
     }
+}
+
+/// `pair` in PW85 form with its reference: pw85 with its coefficients forced into
+/// double-double. `None`, counted in `excluded`, where the reference's own error estimate
+/// exceeds [`SELF_REFERENCE`].
+fn self_referenced(
+    pair: &sample::Pair3,
+    what: &str,
+    excluded: &mut usize,
+) -> Result<Option<(sample::Pw85Pair, pw85::Contact)>, Error> {
+    let p = pair.pw85()?;
+    let r = pw85::contact_function_refined(&p.r12, &p.q1, &p.q2).map_err(error::pw85(what))?;
+    if r.error_estimate > SELF_REFERENCE {
+        *excluded += 1;
+        return Ok(None);
+    }
+    Ok(Some((p, r)))
+}
+
+/// A row of the CSV: the sweep, its value, the method and its worst error.
+fn row(sweep: &str, value: String, method: &str, worst_error: f64) -> Vec<String> {
+    vec![
+        sweep.into(),
+        value,
+        method.into(),
+        output::short(worst_error),
+    ]
 }

@@ -525,17 +525,22 @@ fn fused_hook_gives_the_same_solution_as_the_default_path() {
     }
 }
 
+/// The default options with `solver` as the inner solver, then changed by `set`.
+fn options_for(solver: InnerSolver, set: impl FnOnce(&mut Options)) -> Options {
+    let mut options = Options {
+        inner_solver: solver,
+        ..Options::default()
+    };
+    set(&mut options);
+    options
+}
+
 #[test]
 fn evaluation_and_iteration_limits_stop_the_run() {
     let p = Rosenbrock(10);
     let x0 = vec![-1.2; 10];
     for solver in SOLVERS {
-        let options = Options {
-            max_evaluations: 25,
-            inner_solver: solver,
-            ..Options::default()
-        };
-        let s = minimize(&p, &x0, &options).unwrap();
+        let s = minimize(&p, &x0, &options_for(solver, |o| o.max_evaluations = 25)).unwrap();
         assert_eq!(s.report.stop_reason, StopReason::MaxEvaluations);
         assert!(s.report.function_evaluations <= 26);
         assert!(
@@ -544,20 +549,11 @@ fn evaluation_and_iteration_limits_stop_the_run() {
                 .starts_with("maximum number of evaluations")
         );
         // A budget spent by the start alone: no subproblem, but still a measured report.
-        let options = Options {
-            max_evaluations: 1,
-            inner_solver: solver,
-            ..Options::default()
-        };
-        let s = minimize(&p, &x0, &options).unwrap();
+        let s = minimize(&p, &x0, &options_for(solver, |o| o.max_evaluations = 1)).unwrap();
         assert_eq!(s.report.stop_reason, StopReason::MaxEvaluations);
         assert_eq!(s.report.outer_iterations, 0);
         assert_eq!(s.report.objective, p.objective(&x0, None));
-        let options = Options {
-            max_inner_iterations: 7,
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = options_for(solver, |o| o.max_inner_iterations = 7);
         let s = minimize(&p, &x0, &options).unwrap();
         assert_eq!(s.report.stop_reason, StopReason::MaxInnerIterations);
         assert_eq!(s.report.inner_iterations, 7);

@@ -175,16 +175,27 @@ fn check_radii<const D: usize>(pts: &[[f64; D]], radii: &[f64]) {
 /// radius degenerate towards brute force, and the size split pays.
 fn bimodal<const D: usize>(rng: &mut Rng, m: usize, side: f64) -> (Vec<[f64; D]>, Vec<f64>) {
     let pts: Vec<[f64; D]> = (0..m).map(|_| rng.point::<D>(0.0, side)).collect();
-    let radii = (0..m)
+    let radii = giants_among_small(rng, m, |i| i % 400 == 7, 2.0, (0.02, 0.05));
+    (pts, radii)
+}
+
+/// `m` radii: `giant` where `is_giant(i)`, elsewhere drawn uniformly from `small`.
+fn giants_among_small(
+    rng: &mut Rng,
+    m: usize,
+    is_giant: impl Fn(usize) -> bool,
+    giant: f64,
+    small: (f64, f64),
+) -> Vec<f64> {
+    (0..m)
         .map(|i| {
-            if i % 400 == 7 {
-                2.0
+            if is_giant(i) {
+                giant
             } else {
-                rng.range(0.02, 0.05)
+                rng.range(small.0, small.1)
             }
         })
-        .collect();
-    (pts, radii)
+        .collect()
 }
 
 #[test]
@@ -536,15 +547,7 @@ fn large_inputs_match_the_hashed_layout_and_sampled_brute_force() {
     // never does, so the two are independent computations of the same pairs.
     let mut rng = Rng::new(14);
     let pts: Vec<[f64; 3]> = (0..40_000).map(|_| rng.point::<3>(0.0, 30.0)).collect();
-    let radii: Vec<f64> = (0..pts.len())
-        .map(|i| {
-            if i % 3000 == 0 {
-                2.5
-            } else {
-                rng.range(0.2, 0.5)
-            }
-        })
-        .collect();
+    let radii = giants_among_small(&mut rng, pts.len(), |i| i % 3000 == 0, 2.5, (0.2, 0.5));
     for b in [
         GridBuilder::<3>::with_cutoff(0.9),
         GridBuilder::<3>::with_radii(&radii),

@@ -75,47 +75,60 @@ fn coords(side: f64) -> impl Strategy<Value = f64> {
     ]
 }
 
+/// A random case in `D` dimensions: (box side, points), cutoff as a fraction of the side,
+/// periodic axes, whether items have radii, (hashed, split) layout, and the seeds of the radii.
+type Case<const D: usize> = (
+    (f64, Vec<[f64; D]>),
+    f64,
+    [bool; D],
+    bool,
+    bool,
+    bool,
+    Vec<f64>,
+);
+
+/// Cases of up to `max` points.
+fn case<const D: usize>(max: usize) -> impl Strategy<Value = Case<D>> {
+    (
+        (1.0f64..20.0).prop_flat_map(move |s| {
+            (
+                Just(s),
+                prop::collection::vec(prop::array::uniform(coords(s)), 0..max),
+            )
+        }),
+        0.01f64..0.5,
+        prop::array::uniform(any::<bool>()),
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+        prop::collection::vec(0.0f64..1.0, max),
+    )
+}
+
+fn matches_brute_force<const D: usize>(
+    ((side, pts), cutoff_frac, periodic, use_radii, hashed, split, radius_seed): Case<D>,
+) -> Result<(), TestCaseError> {
+    let cutoff = cutoff_frac * side;
+    let radii = use_radii.then(|| {
+        // Log-uniform over two decades: the split between sizes is exercised.
+        (0..pts.len())
+            .map(|i| cutoff * 0.5 * 100f64.powf(radius_seed[i] - 1.0))
+            .collect()
+    });
+    run::<D>(pts, radii, cutoff, periodic, side, (hashed, split))
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
-    fn grid_3d_matches_brute_force(
-        (side, pts) in (1.0f64..20.0).prop_flat_map(|s| {
-            (Just(s), prop::collection::vec(prop::array::uniform3(coords(s)), 0..120))
-        }),
-        cutoff_frac in 0.01f64..0.5,
-        periodic in prop::array::uniform3(any::<bool>()),
-        use_radii in any::<bool>(),
-        hashed in any::<bool>(),
-        split in any::<bool>(),
-        radius_seed in prop::collection::vec(0.0f64..1.0, 120),
-    ) {
-        let cutoff = cutoff_frac * side;
-        let radii = use_radii.then(|| {
-            // Log-uniform over two decades: the split between sizes is exercised.
-            (0..pts.len()).map(|i| cutoff * 0.5 * 100f64.powf(radius_seed[i] - 1.0)).collect()
-        });
-        run::<3>(pts, radii, cutoff, periodic, side, (hashed, split))?;
+    fn grid_3d_matches_brute_force(case in case::<3>(120)) {
+        matches_brute_force(case)?;
     }
 
     #[test]
-    fn grid_2d_matches_brute_force(
-        (side, pts) in (1.0f64..20.0).prop_flat_map(|s| {
-            (Just(s), prop::collection::vec(prop::array::uniform2(coords(s)), 0..150))
-        }),
-        cutoff_frac in 0.01f64..0.5,
-        periodic in prop::array::uniform2(any::<bool>()),
-        use_radii in any::<bool>(),
-        hashed in any::<bool>(),
-        split in any::<bool>(),
-        radius_seed in prop::collection::vec(0.0f64..1.0, 150),
-    ) {
-        let cutoff = cutoff_frac * side;
-        let radii = use_radii.then(|| {
-            // Log-uniform over two decades: the split between sizes is exercised.
-            (0..pts.len()).map(|i| cutoff * 0.5 * 100f64.powf(radius_seed[i] - 1.0)).collect()
-        });
-        run::<2>(pts, radii, cutoff, periodic, side, (hashed, split))?;
+    fn grid_2d_matches_brute_force(case in case::<2>(150)) {
+        matches_brute_force(case)?;
     }
 
     #[test]

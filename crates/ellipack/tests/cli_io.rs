@@ -3,7 +3,7 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::os::unix::fs::{FileTypeExt, PermissionsExt};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 mod common;
@@ -11,6 +11,22 @@ use common::{ellipack, is_symlink, names, on_input, temp_dir, utf8};
 
 const HEADER_3D: &str =
     "case_id,r12_x,r12_y,r12_z,q1_0,q1_1,q1_2,q1_3,q1_4,q1_5,q2_0,q2_1,q2_2,q2_3,q2_4,q2_5";
+
+/// Runs `ellipack <command>` on `input`, which must fail with status 1 (the command failed);
+/// its standard error, which must be UTF-8.
+fn refused_on(command: &str, input: &Path) -> String {
+    let out = on_input(&[command], input);
+    assert_eq!(out.status.code(), Some(1));
+    utf8(out.stderr)
+}
+
+/// A fresh test folder `name` holding `file` with `text`: (the folder, the file).
+fn folder_with(name: &str, file: &str, text: impl AsRef<[u8]>) -> (PathBuf, PathBuf) {
+    let dir = temp_dir(name);
+    let input = dir.join(file);
+    std::fs::write(&input, text).unwrap();
+    (dir, input)
+}
 
 fn pairs_3d(rows: usize) -> String {
     let mut text = format!("{HEADER_3D}\n");
@@ -37,15 +53,13 @@ fn write_to(command: &str, input: &Path, output: &Path) -> std::process::Output 
 
 #[test]
 fn a_2d_file_goes_through_the_2d_kernel() {
-    let dir = temp_dir("2d");
-    let input = dir.join("ellipses.csv");
-    std::fs::write(
-        &input,
+    let (dir, input) = folder_with(
+        "2d",
+        "ellipses.csv",
         "q2_2,case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,note\n\
          1,apart,3,0,4,0,1,1,0,x\n\
          1,close,1,0.5,4,1,1,1,0,y\n",
-    )
-    .unwrap();
+    );
     let output = on_input(&["contact"], &input);
     assert_eq!(output.status.code(), Some(0), "{output:?}");
     let text = utf8(output.stdout);
@@ -73,9 +87,7 @@ fn a_2d_file_goes_through_the_2d_kernel() {
         "r12_x,r12_y,r12_z,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n1,0,0,1,0,1,1,0,1\n",
     )
     .unwrap();
-    let output = on_input(&["contact"], &input);
-    assert_eq!(output.status.code(), Some(1));
-    let stderr = utf8(output.stderr);
+    let stderr = refused_on("contact", &input);
     assert!(
         stderr.contains("line 1") && stderr.contains("missing q1_3") && stderr.contains("r12_z"),
         "{stderr}"
@@ -85,10 +97,8 @@ fn a_2d_file_goes_through_the_2d_kernel() {
 
 #[test]
 fn the_output_may_not_be_the_input() {
-    let dir = temp_dir("same");
-    let input = dir.join("pairs.csv");
     let text = pairs_3d(2);
-    std::fs::write(&input, &text).unwrap();
+    let (dir, input) = folder_with("same", "pairs.csv", &text);
     std::os::unix::fs::symlink(&input, dir.join("link.csv")).unwrap();
     std::fs::hard_link(&input, dir.join("hard.csv")).unwrap();
     let dotted = dir.join(".").join("pairs.csv");
@@ -123,9 +133,7 @@ fn dev_null_stays_a_character_device() {
 
 #[test]
 fn dev_stdout_is_written_through() {
-    let dir = temp_dir("stdout");
-    let input = dir.join("pairs.csv");
-    std::fs::write(&input, pairs_3d(3)).unwrap();
+    let (dir, input) = folder_with("stdout", "pairs.csv", pairs_3d(3));
     let out = on_input(&["contact", "--output", "/dev/stdout"], &input);
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(utf8(out.stdout).lines().count(), 4);
@@ -162,9 +170,7 @@ fn dev_stdout_is_written_through() {
 
 #[test]
 fn a_fifo_is_written_into() {
-    let dir = temp_dir("fifo");
-    let input = dir.join("pairs.csv");
-    std::fs::write(&input, pairs_3d(5)).unwrap();
+    let (dir, input) = folder_with("fifo", "pairs.csv", pairs_3d(5));
     let fifo = dir.join("results.fifo");
     assert!(
         Command::new("mkfifo")
@@ -199,9 +205,7 @@ fn a_fifo_is_written_into() {
 
 #[test]
 fn a_symlink_is_kept_and_its_target_written() {
-    let dir = temp_dir("symlink");
-    let input = dir.join("pairs.csv");
-    std::fs::write(&input, pairs_3d(2)).unwrap();
+    let (dir, input) = folder_with("symlink", "pairs.csv", pairs_3d(2));
     std::fs::create_dir(dir.join("store")).unwrap();
     let target = dir.join("store").join("results.csv");
     std::fs::write(&target, "old").unwrap();
@@ -225,9 +229,7 @@ fn a_symlink_is_kept_and_its_target_written() {
 
 #[test]
 fn a_replaced_file_keeps_its_mode() {
-    let dir = temp_dir("mode");
-    let input = dir.join("pairs.csv");
-    std::fs::write(&input, pairs_3d(2)).unwrap();
+    let (dir, input) = folder_with("mode", "pairs.csv", pairs_3d(2));
     let output = dir.join("results.csv");
     std::fs::write(&output, "old").unwrap();
     std::fs::set_permissions(&output, std::fs::Permissions::from_mode(0o640)).unwrap();
@@ -287,25 +289,19 @@ fn a_closed_pipe_ends_quietly() {
 
 #[test]
 fn duplicate_columns_are_errors_naming_the_column() {
-    let dir = temp_dir("duplicate");
-    let input = dir.join("pairs.csv");
-    std::fs::write(
-        &input,
+    let (dir, input) = folder_with(
+        "duplicate",
+        "pairs.csv",
         format!("{HEADER_3D},q1_4\n0,3,0,0,1,0,0,1,0,1,1,0,0,1,0,1,7\n"),
-    )
-    .unwrap();
-    let out = on_input(&["contact"], &input);
-    assert_eq!(out.status.code(), Some(1));
-    let stderr = utf8(out.stderr);
+    );
+    let stderr = refused_on("contact", &input);
     assert!(
         stderr.contains("column `q1_4` appears twice in the header (columns 9 and 17)"),
         "{stderr}"
     );
     let header = ellipack::measure::COLUMNS_2D.join(",");
     std::fs::write(&input, format!("{header},theta_j\n0,0,1,1,0,3,0,1,1,0,1\n")).unwrap();
-    let out = on_input(&["measure"], &input);
-    assert_eq!(out.status.code(), Some(1));
-    let stderr = utf8(out.stderr);
+    let stderr = refused_on("measure", &input);
     assert!(
         stderr.contains("column `theta_j` appears twice"),
         "{stderr}"
@@ -315,9 +311,7 @@ fn duplicate_columns_are_errors_naming_the_column() {
 
 #[test]
 fn the_exit_status_says_whether_rows_failed() {
-    let dir = temp_dir("status");
-    let input = dir.join("pairs.csv");
-    std::fs::write(&input, pairs_3d(3)).unwrap();
+    let (dir, input) = folder_with("status", "pairs.csv", pairs_3d(3));
     let status = |command: &str| on_input(&[command], &input).status.code();
     assert_eq!(status("contact"), Some(0), "every row fine");
     std::fs::write(

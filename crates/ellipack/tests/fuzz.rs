@@ -225,39 +225,31 @@ fn check_measure(bytes: &[u8]) {
     }
 }
 
-/// An input refused is refused in words.
-fn errors_say_something<T, E: std::error::Error>(result: Result<T, E>) {
-    if let Err(e) = result {
+/// An input refused is refused in words: `read` of `bytes`, as text (lossily), named `name`.
+fn read_says_something<T, E: std::error::Error>(
+    bytes: &[u8],
+    name: &str,
+    read: fn(&str, &str) -> Result<T, E>,
+) {
+    if let Err(e) = read(&String::from_utf8_lossy(bytes), name) {
         says_something(&e);
     }
 }
 
 fn check_scene(bytes: &[u8]) {
-    errors_say_something(Scene::from_toml_str(
-        &String::from_utf8_lossy(bytes),
-        "fuzz.toml",
-    ));
+    read_says_something(bytes, "fuzz.toml", Scene::from_toml_str);
 }
 
 fn check_packing_csv(bytes: &[u8]) {
-    errors_say_something(packing::read_csv(
-        &String::from_utf8_lossy(bytes),
-        "packing.csv",
-    ));
+    read_says_something(bytes, "packing.csv", packing::read_csv);
 }
 
 fn check_summary(bytes: &[u8]) {
-    errors_say_something(packing::read_summary(
-        &String::from_utf8_lossy(bytes),
-        "summary.json",
-    ));
+    read_says_something(bytes, "summary.json", packing::read_summary);
 }
 
 fn check_xyz(bytes: &[u8]) {
-    errors_say_something(packing::read_xyz(
-        &String::from_utf8_lossy(bytes),
-        "packing.xyz",
-    ));
+    read_says_something(bytes, "packing.xyz", packing::read_xyz);
 }
 
 const PAIRS_2D: &str = "case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n\

@@ -16,6 +16,11 @@ fn verify(args: &[&str], dir: &Path) -> (bool, String, String) {
     (out.status.success(), utf8(out.stdout), utf8(out.stderr))
 }
 
+/// `ellipack verify packing.csv --container <kind> --size <size>` in `dir`.
+fn verify_packing(dir: &Path, kind: &str, size: &str) -> (bool, String, String) {
+    verify(&["packing.csv", "--container", kind, "--size", size], dir)
+}
+
 /// A fresh test folder holding `packing.csv` with the text `csv`.
 fn folder_with_packing(name: &str, csv: &str) -> PathBuf {
     let dir = temp_dir(name);
@@ -30,10 +35,7 @@ const DISCS: &str = "id,x,y,a,b,theta\n10,0,0,1,1,0\n7,1.5,0,1,1,0\n3,5,5,1,1,0\
 #[test]
 fn verify_names_overlapping_pairs_and_items_outside_by_id() {
     let dir = folder_with_packing("names", DISCS);
-    let (ok, text, err) = verify(
-        &["packing.csv", "--container", "circle", "--size", "2.4"],
-        &dir,
-    );
+    let (ok, text, err) = verify_packing(&dir, "circle", "2.4");
     assert!(!ok, "{text}{err}");
     assert!(
         text.contains("1 overlapping pairs, 2 containment violations"),
@@ -64,10 +66,7 @@ fn verify_lists_twenty_offenders_and_counts_the_rest() {
         ));
     }
     let dir = folder_with_packing("bounded", &csv);
-    let (ok, text, err) = verify(
-        &["packing.csv", "--container", "circle", "--size", "1000"],
-        &dir,
-    );
+    let (ok, text, err) = verify_packing(&dir, "circle", "1000");
     assert!(!ok, "{err}");
     assert!(text.contains("25 overlapping pairs"), "{text}");
     assert_eq!(text.matches(": μ² = ").count(), 20, "{text}");
@@ -81,10 +80,7 @@ fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
         "hand",
         "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,-1.5,0,0,1,0.5,0.5,1,0,0,0\n1,1.5,0,0,1,0.5,0.5,1,0,0,0\n",
     );
-    let (ok, text, err) = verify(
-        &["packing.csv", "--container", "ball", "--size", "2.5"],
-        &dir,
-    );
+    let (ok, text, err) = verify_packing(&dir, "ball", "2.5");
     assert!(ok, "{text}{err}");
     assert!(
         text.contains("container: ball") && text.contains("\ncertified"),
@@ -92,10 +88,7 @@ fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
     );
     // A cuboid that is too short along x: each item reaches 2.5 from the centre, the half side
     // is 2, so t = 1.25.
-    let (ok, text, _) = verify(
-        &["packing.csv", "--container", "cuboid", "--size", "2,1,1"],
-        &dir,
-    );
+    let (ok, text, _) = verify_packing(&dir, "cuboid", "2,1,1");
     assert!(!ok && text.contains("t = 1.250000000"), "{text}");
     // The same cuboid moved by its centre holds one item but not the other.
     let (ok, text, err) = verify(
@@ -171,10 +164,7 @@ fn verify_without_a_container_says_how_to_give_one() {
         !ok && err.contains("cube") && err.contains("cuboid"),
         "{err}"
     );
-    let (ok, _, err) = verify(
-        &["packing.csv", "--container", "rectangle", "--size", "5"],
-        &dir,
-    );
+    let (ok, _, err) = verify_packing(&dir, "rectangle", "5");
     assert!(
         !ok && err.contains("rectangle") && err.contains("2"),
         "{err}"
@@ -195,10 +185,7 @@ fn verify_without_a_container_says_how_to_give_one() {
         !ok && err.contains("--container circle: a circle needs 2 centre values, not 3"),
         "{err}"
     );
-    let (ok, _, err) = verify(
-        &["packing.csv", "--container", "circle", "--size", "-5"],
-        &dir,
-    );
+    let (ok, _, err) = verify_packing(&dir, "circle", "-5");
     assert!(!ok && err.contains("radius must be positive"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -209,10 +196,7 @@ fn duplicate_ids_are_an_error_naming_the_id_and_both_lines() {
         "dup",
         "id,x,y,a,b,theta\n10,0,0,1,1,0\n7,3,0,1,1,0\n10,6,0,1,1,0\n",
     );
-    let (ok, _, err) = verify(
-        &["packing.csv", "--container", "circle", "--size", "9"],
-        &dir,
-    );
+    let (ok, _, err) = verify_packing(&dir, "circle", "9");
     assert!(!ok, "{err}");
     assert!(
         err.contains("packing.csv: line 4: id 10 is already the id of line 2"),

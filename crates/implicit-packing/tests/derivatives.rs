@@ -49,6 +49,38 @@ fn positive_and_smooth<const N: usize>(p: &PairTerm<N>) -> bool {
     p.f != 0.0 && (1.0 - p.d2).abs() > 1e-3 && (p.eps - p.u).abs() > 1e-3 && p.x_unique
 }
 
+/// A random pair from `draw` with its bodies and pair term.
+struct Sample<const N: usize, const M: usize> {
+    v: [f64; M],
+    li: [f64; N],
+    lj: [f64; N],
+    i: Body<N>,
+    j: Body<N>,
+    p: PairTerm<N>,
+}
+
+/// Draws a pair's variables and the axes of its two bodies (`random_pair3`, `random_pair2`).
+type Draw<const N: usize, const M: usize> = fn(&mut Rng) -> ([f64; M], [f64; N], [f64; N]);
+/// Builds a pair's bodies from its variables and axes (`bodies3`, `bodies2`).
+type Bodies<const N: usize, const M: usize> =
+    fn(&[f64; M], [f64; N], [f64; N]) -> (Body<N>, Body<N>);
+
+/// The next pair from `draw` at which f is positive and smooth, skipping those where it is not.
+fn smooth_pair<const N: usize, const M: usize>(
+    rng: &mut Rng,
+    draw: Draw<N, M>,
+    bodies: Bodies<N, M>,
+) -> Sample<N, M> {
+    loop {
+        let (v, li, lj) = draw(rng);
+        let (i, j) = bodies(&v, li, lj);
+        let p = pair_term(&i, &j);
+        if positive_and_smooth(&p) {
+            return Sample { v, li, lj, i, j, p };
+        }
+    }
+}
+
 fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     let scale = g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let worst = g
@@ -81,6 +113,27 @@ fn along<const M: usize>(
     let vm: [f64; M] = std::array::from_fn(|k| v[k] - h * dv[k]);
     let (gp, gm) = (grad(&vp), grad(&vm));
     std::array::from_fn(|k| (gp[k] - gm[k]) / (2.0 * h))
+}
+
+/// Central finite differences of each of `Q` pair-term quantities with respect to each
+/// variable in turn: `out[q][k]` ≈ ∂ value_q / ∂ v_k.
+fn partials<const M: usize, const Q: usize>(
+    v: &[f64; M],
+    values: impl Fn(&[f64; M]) -> [f64; Q],
+) -> [[f64; M]; Q] {
+    let h = 1e-6;
+    let mut out = [[0.0; M]; Q];
+    for k in 0..M {
+        let mut vp = *v;
+        vp[k] += h;
+        let mut vm = *v;
+        vm[k] -= h;
+        let (pp, pm) = (values(&vp), values(&vm));
+        for q in 0..Q {
+            out[q][k] = (pp[q] - pm[q]) / (2.0 * h);
+        }
+    }
+    out
 }
 
 /// A 3D pair gradient in the variables of [`bodies3`]: torques become derivatives with
@@ -134,30 +187,15 @@ fn gradient_of_f_matches_finite_differences_3d() {
     let mut worst = 0.0f64;
     let (mut worst_u, mut n_u) = (0.0f64, 0);
     while checked < 1000 {
-        let (v, li, lj) = random_pair3(&mut rng);
-        let (i, j) = bodies3(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample { v, li, lj, i, j, p } = smooth_pair(&mut rng, random_pair3, bodies3);
         let d = pair_derivatives(&i, &j);
         let g = in_angles_3d(&v, &d.grad_f);
         let gu = in_angles_3d(&v, &d.grad_u);
-        let mut fd = [0.0; 12];
-        let mut fdu = [0.0; 12];
-        let h = 1e-6;
-        for k in 0..12 {
-            let mut vp = v;
-            vp[k] += h;
-            let mut vm = v;
-            vm[k] -= h;
-            let (ip, jp) = bodies3(&vp, li, lj);
-            let (im, jm) = bodies3(&vm, li, lj);
-            let pp = pair_term(&ip, &jp);
-            let pm = pair_term(&im, &jm);
-            fd[k] = (pp.f - pm.f) / (2.0 * h);
-            fdu[k] = (pp.u - pm.u) / (2.0 * h);
-        }
+        let [fd, fdu] = partials(&v, |x| {
+            let (i, j) = bodies3(x, li, lj);
+            let p = pair_term(&i, &j);
+            [p.f, p.u]
+        });
         let e = assert_close(&g, &fd, || {
             format!(
                 "pair {checked} (v = {v:?} li {li:?} lj {lj:?} d2 {} u {})",
@@ -183,25 +221,15 @@ fn gradient_of_f_matches_finite_differences_2d() {
     let mut checked = 0;
     let mut worst = 0.0f64;
     while checked < 1000 {
-        let (v, li, lj) = random_pair2(&mut rng);
-        let (i, j) = bodies2(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample {
+            v, li, lj, i, j, ..
+        } = smooth_pair(&mut rng, random_pair2, bodies2);
         let d = pair_derivatives(&i, &j);
         let g = in_angles_2d(&d.grad_f);
-        let h = 1e-6;
-        let mut fd = [0.0; 6];
-        for k in 0..6 {
-            let mut vp = v;
-            vp[k] += h;
-            let mut vm = v;
-            vm[k] -= h;
-            let (ip, jp) = bodies2(&vp, li, lj);
-            let (im, jm) = bodies2(&vm, li, lj);
-            fd[k] = (pair_term(&ip, &jp).f - pair_term(&im, &jm).f) / (2.0 * h);
-        }
+        let [fd] = partials(&v, |x| {
+            let (i, j) = bodies2(x, li, lj);
+            [pair_term(&i, &j).f]
+        });
         worst = worst.max(assert_close(&g, &fd, || format!("pair {checked}")));
         checked += 1;
     }
@@ -281,12 +309,7 @@ fn hessian_vector_products_match_finite_differences() {
     let mut rng = Rng::new(99);
     let (mut checked, mut worst, mut with_u) = (0, 0.0f64, 0);
     while checked < 1000 {
-        let (v, li, lj) = random_pair3(&mut rng);
-        let (i, j) = bodies3(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample { v, li, lj, i, j, p } = smooth_pair(&mut rng, random_pair3, bodies3);
         let dv: [f64; 12] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
         let ai = [v[3], v[4], v[5]];
         let aj = [v[9], v[10], v[11]];
@@ -338,12 +361,9 @@ fn hessian_vector_products_match_finite_differences() {
     };
     let (mut checked, mut worst) = (0, 0.0f64);
     while checked < 1000 {
-        let (v, li, lj) = random_pair2(&mut rng);
-        let (i, j) = bodies2(&v, li, lj);
-        let p = pair_term(&i, &j);
-        if !positive_and_smooth(&p) {
-            continue;
-        }
+        let Sample {
+            v, li, lj, i, j, ..
+        } = smooth_pair(&mut rng, random_pair2, bodies2);
         let dv: [f64; 6] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
         let dir = PairDirection {
             centre_i: [dv[0], dv[1]],

@@ -98,26 +98,19 @@ fn grid_sum_equals_all_pairs_sum() {
         assert!(ev.overlap > 0.0);
         // The same terms added in the same (i, j) order: the same bits, however the kernel
         // queue groups and delays the pairs.
-        assert_eq!(
-            ev.overlap.to_bits(),
-            all.to_bits(),
-            "{} {}",
-            ev.overlap,
-            all
-        );
+        assert_same_bits(ev.overlap, all);
         assert!(ev.pairs < m * (m - 1) / 2);
     }
     let (axes, x) = config2(&mut rng, 400, 0.6);
     let mut p = Model::<2>::new(axes, ContainerShape::Ellipsoid).unwrap();
     let ev = p.evaluate(&x, None).unwrap();
     let all = p.overlap_all_pairs(&x).unwrap();
-    assert_eq!(
-        ev.overlap.to_bits(),
-        all.to_bits(),
-        "{} {}",
-        ev.overlap,
-        all
-    );
+    assert_same_bits(ev.overlap, all);
+}
+
+#[track_caller]
+fn assert_same_bits(grid: f64, all_pairs: f64) {
+    assert_eq!(grid.to_bits(), all_pairs.to_bits(), "{grid} {all_pairs}");
 }
 
 fn fd_check(

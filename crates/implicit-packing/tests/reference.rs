@@ -7,19 +7,22 @@ use std::collections::BTreeMap;
 use testkit::reference::{self, Blm2Case, Blm3Case, scaled_error};
 
 fn bodies_3d(r: &Blm3Case) -> (Ellipsoid, Ellipsoid) {
-    let i = Body::from_quaternion(r.ci, r.li, r.qi)
-        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
-    let j = Body::from_quaternion(r.cj, r.lj, r.qj)
-        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
-    (i, j)
+    let body = |c, l, q, which| named(Body::from_quaternion(c, l, q), &r.id, r.line, which);
+    (body(r.ci, r.li, r.qi, "i"), body(r.cj, r.lj, r.qj, "j"))
 }
 
 fn bodies_2d(r: &Blm2Case) -> (Ellipse, Ellipse) {
-    let i = Body::ellipse(r.ci, r.li, r.theta_i)
-        .unwrap_or_else(|e| panic!("case {} (line {}): body i: {e}", r.id, r.line));
-    let j = Body::ellipse(r.cj, r.lj, r.theta_j)
-        .unwrap_or_else(|e| panic!("case {} (line {}): body j: {e}", r.id, r.line));
-    (i, j)
+    let body = |c, l, t, which| named(Body::ellipse(c, l, t), &r.id, r.line, which);
+    (
+        body(r.ci, r.li, r.theta_i, "i"),
+        body(r.cj, r.lj, r.theta_j, "j"),
+    )
+}
+
+/// The body, or a panic naming the case, its line and which body of the pair failed.
+#[track_caller]
+fn named<B, E: std::fmt::Display>(body: Result<B, E>, id: &str, line: usize, which: &str) -> B {
+    body.unwrap_or_else(|e| panic!("case {id} (line {line}): body {which}: {e}"))
 }
 
 #[derive(Default, Debug)]
@@ -138,16 +141,23 @@ fn check<const N: usize>(name: &str, rows: Vec<(Expected<'_, N>, implicit_packin
     );
 }
 
-/// Every case of a file through both routes of the pair term (automatic and SVD).
+/// Every case of a file, its bodies built by `bodies`, through both routes of the pair term
+/// (automatic and SVD).
 fn check_both_routes<'a, const N: usize, C>(
     name: &str,
     cases: &'a [C],
-    term: impl Fn(&C, Route) -> implicit_packing::PairTerm<N>,
+    bodies: impl Fn(&C) -> (Body<N>, Body<N>),
 ) where
     &'a C: Into<Expected<'a, N>>,
 {
     for (suffix, route) in [("", Route::Auto), ("-svd", Route::Svd)] {
-        let rows = cases.iter().map(|c| (c.into(), term(c, route))).collect();
+        let rows = cases
+            .iter()
+            .map(|c| {
+                let (i, j) = bodies(c);
+                (c.into(), pair_term_by(&i, &j, route))
+            })
+            .collect();
         check::<N>(&format!("{name}{suffix}"), rows);
     }
 }
@@ -155,17 +165,11 @@ fn check_both_routes<'a, const N: usize, C>(
 #[test]
 fn blm_3d_reference() {
     let cases = reference::blm_3d().unwrap_or_else(|e| panic!("{e}"));
-    check_both_routes("3d", &cases, |c, route| {
-        let (i, j) = bodies_3d(c);
-        pair_term_by(&i, &j, route)
-    });
+    check_both_routes("3d", &cases, bodies_3d);
 }
 
 #[test]
 fn blm_2d_reference() {
     let cases = reference::blm_2d().unwrap_or_else(|e| panic!("{e}"));
-    check_both_routes("2d", &cases, |c, route| {
-        let (i, j) = bodies_2d(c);
-        pair_term_by(&i, &j, route)
-    });
+    check_both_routes("2d", &cases, bodies_2d);
 }

@@ -14,7 +14,7 @@
 //! distance chosen as in 3D).
 
 use criterion::{Criterion, Throughput, criterion_group};
-use pw85::batch::{Pair, Pair2d, Parallelism, contact_functions, overlaps};
+use pw85::batch::{BatchPair, Pair, Pair2d, Parallelism, contact_functions, overlaps};
 use std::hint::black_box;
 use std::time::Instant;
 use testkit::Rng;
@@ -78,16 +78,16 @@ fn pairs_2d() -> Vec<Pair2d> {
         .collect()
 }
 
-fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
+/// The sum of μ² over `pairs` through `contact`, one pair at a time; a failed pair counts 0.
+fn scalar_sum<P>(pairs: &[P], contact: impl Fn(&P) -> Result<pw85::Contact, pw85::Error>) -> f64 {
     pairs
         .iter()
-        .map(|p| pw85::contact_function_2d(&p.r12, &p.q1, &p.q2).map_or(0.0, |c| c.mu2))
+        .map(|p| contact(p).map_or(0.0, |c| c.mu2))
         .sum()
 }
 
-fn batch_contact_2d(pairs: &[Pair2d], out: &mut [Result<pw85::Contact, pw85::Error>]) -> f64 {
-    contact_functions(pairs, out, Parallelism::Serial);
-    out.iter().map(|c| c.map_or(0.0, |c| c.mu2)).sum()
+fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
+    scalar_sum(pairs, |p| pw85::contact_function_2d(&p.r12, &p.q1, &p.q2))
 }
 
 fn baseline_brent(pairs: &[Pair]) -> f64 {
@@ -98,10 +98,7 @@ fn baseline_brent(pairs: &[Pair]) -> f64 {
 }
 
 fn scalar_contact(pairs: &[Pair]) -> f64 {
-    pairs
-        .iter()
-        .map(|p| pw85::contact_function(&p.r12, &p.q1, &p.q2).map_or(0.0, |c| c.mu2))
-        .sum()
+    scalar_sum(pairs, |p| pw85::contact_function(&p.r12, &p.q1, &p.q2))
 }
 
 fn scalar_overlap(pairs: &[Pair]) -> usize {
@@ -111,7 +108,8 @@ fn scalar_overlap(pairs: &[Pair]) -> usize {
         .count()
 }
 
-fn batch_contact(pairs: &[Pair], out: &mut [Result<pw85::Contact, pw85::Error>]) -> f64 {
+/// The batch path over `pairs` (of ellipsoids or of ellipses), serial.
+fn batch_contact<P: BatchPair>(pairs: &[P], out: &mut [Result<pw85::Contact, pw85::Error>]) -> f64 {
     contact_functions(pairs, out, Parallelism::Serial);
     out.iter().map(|c| c.map_or(0.0, |c| c.mu2)).sum()
 }
@@ -150,7 +148,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| scalar_contact_2d(black_box(&data_2d)))
     });
     group.bench_function("batch_contact_functions_2d", |b| {
-        b.iter(|| batch_contact_2d(black_box(&data_2d), &mut contacts))
+        b.iter(|| batch_contact(black_box(&data_2d), &mut contacts))
     });
     group.finish();
 }
@@ -202,7 +200,7 @@ fn ratios() {
     );
     let data_2d = pairs_2d();
     let contact_2d = ns_per_pair(10, || scalar_contact_2d(&data_2d));
-    let batch_2d = ns_per_pair(10, || batch_contact_2d(&data_2d, &mut contacts));
+    let batch_2d = ns_per_pair(10, || batch_contact(&data_2d, &mut contacts));
     println!("contact_function_2d          {contact_2d:8.1} ns/pair");
     println!(
         "batch contact_functions_2d   {batch_2d:8.1} ns/pair   {:5.2}x faster than scalar 2D",

@@ -22,6 +22,21 @@ fn direction(rng: &mut Rng) -> [f64; 3] {
     [r[0][0], r[1][0], r[2][0]]
 }
 
+/// Two random ellipsoids and a centre offset along a random direction, each component scaled
+/// by its own draw from `distance`.
+fn random_pair(
+    rng: &mut Rng,
+    max_aspect_decades: f64,
+    distance: (f64, f64),
+) -> (Sym3, Sym3, [f64; 3]) {
+    let (q1, q2) = (
+        ellipsoid(rng, max_aspect_decades),
+        ellipsoid(rng, max_aspect_decades),
+    );
+    let r = direction(rng).map(|x| x * rng.range(distance.0, distance.1));
+    (q1, q2, r)
+}
+
 fn rotate(q: &Sym3, r: &[[f64; 3]; 3]) -> Sym3 {
     let m = [[q[0], q[1], q[2]], [q[1], q[3], q[4]], [q[2], q[4], q[5]]];
     let e = |i: usize, j: usize| {
@@ -60,8 +75,7 @@ fn spheres_have_the_closed_form() {
 fn invariant_under_rotation_scaling_swap_and_translation() {
     let mut rng = Rng::new(2);
     for _ in 0..2000 {
-        let (q1, q2) = (ellipsoid(&mut rng, 1.0), ellipsoid(&mut rng, 1.0));
-        let r = direction(&mut rng).map(|x| x * rng.range(0.1, 4.0));
+        let (q1, q2, r) = random_pair(&mut rng, 1.0, (0.1, 4.0));
         let base = contact_function(&r, &q1, &q2).unwrap();
 
         let rot = rotation_from_quaternion(&rng.unit_quaternion()).unwrap();
@@ -164,8 +178,7 @@ fn central_difference<const K: usize>(x: [f64; K], k: usize, f: impl Fn(&[f64; K
 fn gradients_match_central_differences() {
     let mut rng = Rng::new(4);
     for _ in 0..300 {
-        let (q1, q2) = (ellipsoid(&mut rng, 0.7), ellipsoid(&mut rng, 0.7));
-        let r = direction(&mut rng).map(|x| x * rng.range(0.3, 3.0));
+        let (q1, q2, r) = random_pair(&mut rng, 0.7, (0.3, 3.0));
         let d = contact_details(&r, &q1, &q2).unwrap();
         let mu2 = |r: &[f64; 3], q1: &Sym3, q2: &Sym3| contact_function(r, q1, q2).unwrap().mu2;
         for k in 0..3 {
@@ -387,8 +400,7 @@ proptest! {
 fn refined_path_agrees_with_the_fast_path_within_its_bound() {
     let mut rng = Rng::new(6);
     for _ in 0..2000 {
-        let (q1, q2) = (ellipsoid(&mut rng, 1.5), ellipsoid(&mut rng, 1.5));
-        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2, r) = random_pair(&mut rng, 1.5, (0.05, 5.0));
         let fast = contact_function(&r, &q1, &q2).unwrap();
         let exact = pw85::contact_function_refined(&r, &q1, &q2).unwrap();
         assert!(exact.refined);
@@ -475,8 +487,7 @@ fn power_of_two_scalings_give_the_same_bits() {
     let bits = |c: pw85::Contact| (c.mu2.to_bits(), c.lambda.to_bits(), c.refined);
     for i in 0..1000 {
         let decades = [0.5, 2.0, 4.0][i % 3];
-        let (q1, q2) = (ellipsoid(&mut rng, decades), ellipsoid(&mut rng, decades));
-        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2, r) = random_pair(&mut rng, decades, (0.05, 5.0));
         let base = bits(contact_function(&r, &q1, &q2).unwrap());
         let angle = rng.range(0.0, 6.3);
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
@@ -641,8 +652,7 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
     let mut pairs_2d = Vec::new();
     for i in 0..120 {
         let decades = [0.5, 2.0, 4.0][i % 3];
-        let (q1, q2) = (ellipsoid(&mut rng, decades), ellipsoid(&mut rng, decades));
-        let r = direction(&mut rng).map(|x| x * rng.range(0.05, 5.0));
+        let (q1, q2, r) = random_pair(&mut rng, decades, (0.05, 5.0));
         let base = contact_function(&r, &q1, &q2).unwrap();
         let angle = rng.range(0.0, 6.3);
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
