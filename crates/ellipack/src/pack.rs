@@ -81,11 +81,11 @@ pub enum PackError {
 /// stick out (ids are the rows' ids in `packing.csv`, counted from 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StartDefects {
-    /// Overlapping pairs `(i, j, μ²)` (μ² < 1; `None` where PW85 gave no value).
-    pub overlapping: Vec<(usize, usize, Option<f64>)>,
+    /// Overlapping pairs `(i, j, μ²)` (μ² < 1).
+    pub overlapping: Vec<(usize, usize, f64)>,
     /// Items outside the container, each with the factor by which the container would have
-    /// to grow about its centre to hold it (`None` where no finite factor was found).
-    pub outside: Vec<(usize, Option<f64>)>,
+    /// to grow about its centre to hold it.
+    pub outside: Vec<(usize, f64)>,
 }
 
 /// How many overlapping pairs and items outside a message lists before it says "and n more".
@@ -99,10 +99,7 @@ impl std::fmt::Display for StartDefects {
                 .overlapping
                 .iter()
                 .take(LISTED)
-                .map(|&(i, j, mu2)| match mu2 {
-                    Some(m) => format!("{i} and {j} (μ² = {m:.6})"),
-                    None => format!("{i} and {j}"),
-                })
+                .map(|&(i, j, m)| format!("{i} and {j} (μ² = {m:.6})"))
                 .collect();
             if self.overlapping.len() > LISTED {
                 list.push(format!("and {} more", self.overlapping.len() - LISTED));
@@ -118,10 +115,7 @@ impl std::fmt::Display for StartDefects {
                 .outside
                 .iter()
                 .take(LISTED)
-                .map(|&(i, factor)| match factor {
-                    Some(s) => format!("{i} (the container would have to grow by {:.3e})", s - 1.0),
-                    None => format!("{i}"),
-                })
+                .map(|&(i, s)| format!("{i} (the container would have to grow by {:.3e})", s - 1.0))
                 .collect();
             if self.outside.len() > LISTED {
                 list.push(format!("and {} more", self.outside.len() - LISTED));
@@ -356,12 +350,12 @@ fn start_defects(certificate: &implicit_packing::model::Certificate) -> StartDef
         overlapping: certificate
             .overlapping
             .iter()
-            .map(|o| (o.items.0, o.items.1, Some(o.mu2)))
+            .map(|o| (o.items.0, o.items.1, o.mu2))
             .collect(),
         outside: certificate
             .outside
             .iter()
-            .map(|o| (o.item, Some(o.scale)))
+            .map(|o| (o.item, o.scale))
             .collect(),
     }
 }
@@ -382,8 +376,8 @@ pub struct OverlappingPair {
     /// The 0-based positions of the two items in the packing (rows of `packing.csv`), the
     /// smaller first.
     pub items: (usize, usize),
-    /// Their PW85 μ² (< 1 for an overlap); `None` when PW85 could not evaluate the pair.
-    pub mu2: Option<f64>,
+    /// Their PW85 μ² (< 1).
+    pub mu2: f64,
 }
 
 /// An item that is not inside the container.
@@ -442,16 +436,11 @@ fn verify_n<const N: usize>(
         .iter()
         .map(|o| OverlappingPair {
             items: o.items,
-            mu2: Some(o.mu2),
+            mu2: o.mu2,
         })
         .collect();
     // Deepest first; the stable sort keeps the certificate's (i, j) order among equals.
-    overlapping_pairs.sort_by(|a, b| match (a.mu2, b.mu2) {
-        (Some(p), Some(q)) => p.total_cmp(&q),
-        (Some(_), None) => std::cmp::Ordering::Less,
-        (None, Some(_)) => std::cmp::Ordering::Greater,
-        (None, None) => std::cmp::Ordering::Equal,
-    });
+    overlapping_pairs.sort_by(|a, b| a.mu2.total_cmp(&b.mu2));
     let mut outside: Vec<ItemOutside> = model
         .outside
         .iter()
@@ -696,7 +685,7 @@ mod tests {
         assert_eq!(v.certificate, c);
         assert_eq!(v.overlapping_pairs.len(), 1);
         assert_eq!(v.overlapping_pairs[0].items, (0, 1));
-        let mu2 = v.overlapping_pairs[0].mu2.unwrap();
+        let mu2 = v.overlapping_pairs[0].mu2;
         assert!((mu2 - 0.5625).abs() <= 1e-13, "{mu2}");
         assert_eq!(v.outside.len(), 1);
         assert_eq!(v.outside[0].item, 1);
