@@ -230,19 +230,19 @@ pub fn agreement(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
             }
             let mut disagree = 0;
             for ((r, q1, q2), (i, j)) in &pairs {
-                let v = pw85::overlap_2d(r, q1, q2).map_err(error::pw85("a 2D agreement pair"))?;
+                let v = pw85::overlap(r, q1, q2).map_err(error::pw85("a 2D agreement pair"))?;
                 if v != (implicit::measure(i, j) > 0.0) {
                     disagree += 1;
                 }
             }
             let ns_pw = ns_per_call(&pairs, repeats, |((r, q1, q2), _)| {
-                f64::from(u8::from(pw85::overlap_2d(r, q1, q2).unwrap_or(false)))
+                f64::from(u8::from(pw85::overlap(r, q1, q2).unwrap_or(false)))
             });
             let ns_im = ns_per_call(&pairs, repeats, |(_, (i, j))| implicit::measure(i, j));
             let (ns_mu, ns_f) = if full {
                 (
                     ns_per_call(&pairs, repeats, |((r, q1, q2), _)| {
-                        pw85::contact_function_2d(r, q1, q2).map_or(0.0, |c| c.mu2)
+                        pw85::contact_function(r, q1, q2).map_or(0.0, |c| c.mu2)
                     }),
                     ns_per_call(&pairs, repeats, |(_, (i, j))| implicit::term_of(i, j).f),
                 )

@@ -174,7 +174,7 @@ pub fn pair_near_contact_2d(
         tj,
     };
     let (r, q1, q2) = unit.pw85()?;
-    let mu = pw85::contact_function_2d(&r, &q1, &q2)
+    let mu = pw85::contact_function(&r, &q1, &q2)
         .map_err(error::pw85("a random pair of ellipses"))?
         .mu2
         .sqrt();

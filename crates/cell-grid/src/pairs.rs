@@ -367,7 +367,7 @@ where
     fn block(&mut self, g: &Grid<D>, a: Range<usize>, b: Range<usize>) {
         #[cfg(target_arch = "x86_64")]
         {
-            #[target_feature(enable = "avx2")]
+            #[target_feature(enable = "avx2,fma")]
             fn with_avx2<const D: usize, F, const P: bool, const R: bool>(
                 s: &mut Close<F, P, R>,
                 g: &Grid<D>,
@@ -378,9 +378,8 @@ where
             {
                 s.block_body::<D, true>(g, a, b);
             }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: `with_avx2` only needs AVX2, which the processor was just checked
-                // to have.
+            if simd::has_avx2_fma() {
+                // SAFETY: `with_avx2` only needs AVX2 and FMA, which the processor has.
                 return unsafe { with_avx2(self, g, a, b) };
             }
         }

@@ -415,7 +415,7 @@ mod tests {
         let lines: Vec<&str> = out.lines().collect();
         assert_eq!(lines[0], "case_id,mu2,lambda,overlap,error");
         let expected =
-            pw85::contact_function_2d(&[3.0, 0.0], &[1.0, 0.0, 1.0], &[1.0, 0.0, 1.0]).unwrap();
+            pw85::contact_function(&[3.0, 0.0], &[1.0, 0.0, 1.0], &[1.0, 0.0, 1.0]).unwrap();
         assert_eq!(
             lines[1],
             format!(

@@ -69,7 +69,7 @@ fn a_2d_file_goes_through_the_2d_kernel() {
         ("apart", [3.0, 0.0], [4.0, 0.0, 1.0]),
         ("close", [1.0, 0.5], [4.0, 1.0, 1.0]),
     ]) {
-        let c = pw85::contact_function_2d(&r12, &q1, &[1.0, 0.0, 1.0]).unwrap();
+        let c = pw85::contact_function(&r12, &q1, &[1.0, 0.0, 1.0]).unwrap();
         let fields: Vec<&str> = line.split(',').collect();
         assert_eq!(fields[0], id);
         assert_eq!(fields[1].parse::<f64>().unwrap(), c.mu2, "{line}");

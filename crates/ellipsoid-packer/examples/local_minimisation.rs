@@ -115,7 +115,7 @@ fn independent_check<const N: usize>(
             let (a, b) = (bodies[i].shape_matrix(), bodies[j].shape_matrix());
             let (ci, cj) = (bodies[i].centre(), bodies[j].centre());
             let mu2 = if N == 2 {
-                pw85::contact_function_2d(
+                pw85::contact_function(
                     &[cj[0] - ci[0], cj[1] - ci[1]],
                     &[a[0][0], a[0][1], a[1][1]],
                     &[b[0][0], b[0][1], b[1][1]],

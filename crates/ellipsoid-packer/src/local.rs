@@ -50,6 +50,21 @@ pub struct LocalSettings {
     pub polish_tolerance: Option<f64>,
 }
 
+crate::with_setters!(LocalSettings:
+    /// Sets [`LocalSettings::feasibility_tolerance`].
+    with_feasibility_tolerance => feasibility_tolerance: f64,
+    /// Sets [`LocalSettings::optimality_tolerance`].
+    with_optimality_tolerance => optimality_tolerance: f64,
+    /// Sets [`LocalSettings::max_outer_iterations`].
+    with_max_outer_iterations => max_outer_iterations: usize,
+    /// Sets [`LocalSettings::max_inner_iterations`].
+    with_max_inner_iterations => max_inner_iterations: usize,
+    /// Sets [`LocalSettings::inner_solver`].
+    with_inner_solver => inner_solver: InnerSolver,
+    /// Sets [`LocalSettings::polish_tolerance`].
+    with_polish_tolerance => polish_tolerance: Option<f64>,
+);
+
 impl Default for LocalSettings {
     fn default() -> Self {
         Self {
@@ -121,16 +136,14 @@ pub fn local_minimisation<const N: usize>(
     problem.evaluate(x0, None)?;
     let mut interrupted = false;
     let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
-        let options = Options {
-            feasibility_tolerance: feasibility,
-            optimality_tolerance: settings.optimality_tolerance,
-            complementarity_tolerance: feasibility,
-            max_outer_iterations: settings.max_outer_iterations,
-            max_inner_iterations: settings.max_inner_iterations,
-            inner_solver: settings.inner_solver,
-            scaling: true,
-            ..Options::default()
-        };
+        let options = Options::default()
+            .with_feasibility_tolerance(feasibility)
+            .with_optimality_tolerance(settings.optimality_tolerance)
+            .with_complementarity_tolerance(feasibility)
+            .with_max_outer_iterations(settings.max_outer_iterations)
+            .with_max_inner_iterations(settings.max_inner_iterations)
+            .with_inner_solver(settings.inner_solver)
+            .with_scaling(true);
         let adapter = Adapter::new(problem, centre_bound::<N>(x0));
         auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
             if interrupted || observe(progress) {

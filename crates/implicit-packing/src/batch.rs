@@ -62,7 +62,7 @@ impl<const N: usize> Kernel<N> for WithGradient {
     #[inline]
     fn four(bodies: &[Body<N>], w: &[Waiting<N>; LANES]) -> [Option<Term<N>>; LANES] {
         #[cfg(target_arch = "x86_64")]
-        if has_lanes() {
+        if simd::has_avx2_fma() {
             // SAFETY: the processor has AVX2 and FMA, just checked.
             return unsafe { avx::terms(bodies, w) };
         }
@@ -80,20 +80,13 @@ impl<const N: usize> Kernel<N> for ValueOnly {
     #[inline]
     fn four(bodies: &[Body<N>], w: &[Waiting<N>; LANES]) -> [Option<f64>; LANES] {
         #[cfg(target_arch = "x86_64")]
-        if has_lanes() {
+        if simd::has_avx2_fma() {
             // SAFETY: the processor has AVX2 and FMA, just checked.
             return unsafe { avx::values(bodies, w) };
         }
         let _ = (bodies, w);
         [None; LANES]
     }
-}
-
-/// Whether this processor runs the four-lane kernel.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-fn has_lanes() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// Collects the pairs that need the kernel and solves them four at a time.
@@ -202,7 +195,7 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
 mod avx {
     use super::{LANES, Term, Waiting};
     use crate::derivatives::{GradientParts, PairGradient, direct_gradient};
-    use crate::lanes::{F64x4, Mask4, Real};
+    use crate::lanes::{F64x4, Mask4, Real, lanes_of};
     use crate::pair::{BodyOf, DIRECT_CONDITION_LIMIT, epsilon_from_extremes, frame_factor};
     use crate::projection::{
         DIRECT_B2_LIMIT, DIRECT_MAX_ITERATIONS, DirectProjection, direct_start, halley_at, norm2,
@@ -212,7 +205,7 @@ mod avx {
     /// Four values, one per lane, from `f(lane)`.
     #[inline(always)]
     fn gather(f: impl Fn(usize) -> f64) -> F64x4 {
-        F64x4::from_array([f(0), f(1), f(2), f(3)])
+        lanes_of([f(0), f(1), f(2), f(3)])
     }
 
     #[inline(always)]
@@ -587,9 +580,7 @@ mod tests {
                 waiting[p % 4].push(Waiting { i, j, line });
             }
         }
-        let has_lanes = cfg!(target_arch = "x86_64")
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma");
+        let has_lanes = simd::has_avx2_fma();
         for (kind, list) in waiting.iter().enumerate() {
             let (mut answered, mut nonzero, mut values) = (0, 0, 0);
             for chunk in list.chunks_exact(LANES) {

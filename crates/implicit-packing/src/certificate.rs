@@ -93,7 +93,7 @@ pub fn contact<const N: usize>(i: &Body<N>, j: &Body<N>) -> Result<pw85::Contact
         pw85::contact_function(&[d(0), d(1), d(2)], &sym(&mi), &sym(&mj))
     } else {
         let sym = |m: &[[f64; N]; N]| [at(m, 0, 0), at(m, 0, 1), at(m, 1, 1)];
-        pw85::contact_function_2d(&[d(0), d(1)], &sym(&mi), &sym(&mj))
+        pw85::contact_function(&[d(0), d(1)], &sym(&mi), &sym(&mj))
     }
 }
 

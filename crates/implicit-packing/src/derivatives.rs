@@ -352,12 +352,11 @@ pub fn pair_gradient<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGrad
     if bounding_spheres_apart(i, j) {
         return (0.0, PairGradient::ZERO);
     }
-    crate::linalg::multiversion!(
-        pair_gradient_impl::<N>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>)
+    simd::multiversion!(call pair_gradient_impl::<N>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>)
     )
 }
 
-/// [`pair_gradient`], compiled twice (see `linalg::multiversion`): everything on its fast path
+/// [`pair_gradient`], compiled twice (see `simd::multiversion`): everything on its fast path
 /// is `#[inline(always)]` so that it is compiled with the caller's instruction set.
 #[inline(always)]
 fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>) {

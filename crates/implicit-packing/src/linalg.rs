@@ -18,35 +18,6 @@
 //! 13 (1992). J. Demmel et al., *Computing the singular value decomposition with high relative
 //! accuracy*, Linear Algebra Appl. 299 (1999). Z. Drmač, *A QR-preconditioned QR SVD method*, 1997.
 
-/// Evaluates `$f::<N>($args)` compiled with AVX2 and FMA when the processor has them, else for
-/// the baseline x86-64 (SSE2); `$f` must be `#[inline(always)]` (and so must what it calls on
-/// its hot path) to be compiled with the caller's instruction set.
-///
-/// Why: the kernels are chains of dependent 3×3 products; the AVX encoding's three-operand
-/// instructions remove the register copies that the two-operand SSE2 form needs. The
-/// arithmetic is the same: no fused multiply–add is introduced (Rust does not contract
-/// `a * b + c`), so both builds give the same bits. The same scheme as `pw85`'s `dispatch`.
-macro_rules! multiversion {
-    ($f:ident::<$n:ident>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty) => {{
-        #[cfg(target_arch = "x86_64")]
-        {
-            #[target_feature(enable = "avx2,fma")]
-            fn with_avx2<const $n: usize>($($arg: $ty),*) -> $ret {
-                $f::<$n>($($arg),*)
-            }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                // SAFETY: `with_avx2` only needs AVX2 and FMA, and the processor was just
-                // checked to have both.
-                return unsafe { with_avx2::<$n>($($arg),*) };
-            }
-        }
-        $f::<$n>($($arg),*)
-    }};
-}
-pub(crate) use multiversion;
-
 use crate::lanes::Real;
 
 /// Dot product.

@@ -435,10 +435,10 @@ pub fn overlap_measure<const N: usize>(i: &Body<N>, j: &Body<N>) -> f64 {
     if bounding_spheres_apart(i, j) {
         return 0.0;
     }
-    crate::linalg::multiversion!(overlap_measure_impl::<N>(i: &Body<N>, j: &Body<N>) -> f64)
+    simd::multiversion!(call overlap_measure_impl::<N>(i: &Body<N>, j: &Body<N>) -> f64)
 }
 
-/// [`overlap_measure`], compiled twice (see `linalg::multiversion`).
+/// [`overlap_measure`], compiled twice (see `simd::multiversion`).
 #[inline(always)]
 fn overlap_measure_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> f64 {
     let line = centre_line(i, j);

@@ -59,7 +59,7 @@ const REDUCTION_LIMIT: f64 = 1e5;
 pub(crate) fn sin_cos3(angles: [f64; 3]) -> [(f64, f64); 3] {
     #[cfg(target_arch = "x86_64")]
     {
-        if avx::available() && angles.iter().all(|a| a.abs() <= REDUCTION_LIMIT) {
+        if simd::has_avx2_fma() && angles.iter().all(|a| a.abs() <= REDUCTION_LIMIT) {
             // SAFETY: AVX2 and FMA were just detected.
             return unsafe { avx::sin_cos3(angles) };
         }
@@ -71,10 +71,6 @@ pub(crate) fn sin_cos3(angles: [f64; 3]) -> [(f64, f64); 3] {
 mod avx {
     use super::{COS, PIO2, SIN};
     use core::arch::x86_64::*;
-
-    pub(super) fn available() -> bool {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
 
     /// `p(z) = c0 + z c1 + … + z⁵ c5` by Horner's rule, fused.
     #[inline]
@@ -187,7 +183,7 @@ mod tests {
             }
         }
         #[cfg(target_arch = "x86_64")]
-        if avx::available() {
+        if simd::has_avx2_fma() {
             // The reduction and the polynomials really run (not only the fallback).
             assert_eq!(worst, 1);
         }

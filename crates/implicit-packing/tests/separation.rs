@@ -159,10 +159,9 @@ fn certified_separated_pairs_have_zero_term_and_gradient_2d() {
         let dir = [t.cos(), t.sin()];
         let i = Ellipse::ellipse([0.0; 2], [a[0], a[1]], rng.range(-3.2, 3.2)).unwrap();
         let j0 = Ellipse::ellipse(dir, [b[0], b[1]], rng.range(-3.2, 3.2)).unwrap();
-        let mu2 =
-            pw85::contact_function_2d(&dir, &sym2(&i.shape_matrix()), &sym2(&j0.shape_matrix()))
-                .unwrap()
-                .mu2;
+        let mu2 = pw85::contact_function(&dir, &sym2(&i.shape_matrix()), &sym2(&j0.shape_matrix()))
+            .unwrap()
+            .mu2;
         let target = 1.0 + 10f64.powf(-rng.range(0.0, 13.0));
         let s = (target / mu2).sqrt();
         let j = j0.with_centre([dir[0] * s, dir[1] * s]).unwrap();

@@ -66,7 +66,7 @@ fn pairs_2d() -> Vec<Pair2d> {
             let q2 = ellipse(&mut rng);
             let angle = std::f64::consts::TAU * rng.uniform();
             let dir = [angle.cos(), angle.sin()];
-            let unit = pw85::contact_function_2d(&dir, &q1, &q2)
+            let unit = pw85::contact_function(&dir, &q1, &q2)
                 .expect("valid pair")
                 .mu2;
             Pair2d {
@@ -87,7 +87,7 @@ fn scalar_sum<P>(pairs: &[P], contact: impl Fn(&P) -> Result<pw85::Contact, pw85
 }
 
 fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
-    scalar_sum(pairs, |p| pw85::contact_function_2d(&p.r12, &p.q1, &p.q2))
+    scalar_sum(pairs, |p| pw85::contact_function(&p.r12, &p.q1, &p.q2))
 }
 
 fn baseline_brent(pairs: &[Pair]) -> f64 {

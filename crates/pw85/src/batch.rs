@@ -15,12 +15,12 @@ use crate::contact::{
     Prepared, Scale4, check_positive_definite, depth_weighted, odds_amplification, odds_solution,
     oriented, positive_definite4, refine,
 };
-use crate::dispatch::multiversion;
 use crate::error::Argument;
 use crate::lanes::{LANES, V4, coefficients4, maximise4};
 use crate::poly::RationalForm;
 use crate::sym::{Sym2, Sym3};
 use crate::{Contact, Error};
+use simd::multiversion;
 
 /// One pair of ellipsoids: r12 = c2 − c1 and the two quadratic forms.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,11 +130,13 @@ impl BatchPair for Pair {
 impl BatchPair for Pair2d {
     fn contacts(pairs: &[Self], out: &mut [Result<Contact, Error>]) {
         by_fours(pairs, out, contact_x4_2d, |p| {
-            crate::contact_function_2d(&p.r12, &p.q1, &p.q2)
+            crate::contact::contact_function_2d(&p.r12, &p.q1, &p.q2)
         });
     }
     fn verdicts(pairs: &[Self], out: &mut [Result<bool, Error>]) {
-        each(pairs, out, |p| crate::overlap_2d(&p.r12, &p.q1, &p.q2));
+        each(pairs, out, |p| {
+            crate::overlap::overlap_2d(&p.r12, &p.q1, &p.q2)
+        });
     }
 }
 
@@ -162,7 +164,7 @@ fn split<P: Sync, R: Send>(
     }
 }
 
-/// The contact function ([`crate::contact_function`], [`crate::contact_function_2d`]) of every
+/// The contact function ([`crate::contact_function`], 2D forms) of every
 /// pair, into `out[i]` for `pairs[i]`: four pairs at a time, in lock-step (the results are the
 /// scalar function's, to the bit), on the calling thread or on all cores. The ellipses'
 /// coefficients are degree-elevated to the same Bernstein form, so both dimensions share the
@@ -178,7 +180,7 @@ pub fn contact_functions<P: BatchPair>(
     split(pairs, out, parallelism, P::contacts);
 }
 
-/// The verdict ([`crate::overlap`], [`crate::overlap_2d`]) of every pair, into `out[i]` for
+/// The verdict ([`crate::overlap`], 2D forms) of every pair, into `out[i]` for
 /// `pairs[i]`. The verdict usually stops after one or two evaluations, so there is little
 /// latency to hide: each chunk is a plain loop.
 ///
@@ -222,7 +224,7 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
             _ => None,
         };
         let Some(prepared) = prepared else {
-            out[k] = crate::contact_function_2d(&p.r12, &p.q1, &p.q2);
+            out[k] = crate::contact::contact_function_2d(&p.r12, &p.q1, &p.q2);
             continue;
         };
         let (r, b) = (prepared.rational, prepared.bound);
@@ -239,7 +241,7 @@ fn contact_x4_2d_portable<const FMA: bool>(pairs: &[Pair2d], out: &mut [Result<C
     solve_x4::<FMA>(
         &lanes,
         out,
-        |k| crate::contact_function_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
+        |k| crate::contact::contact_function_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
         |k| crate::contact::exact_coefficients_2d(&pairs[k].r12, &pairs[k].q1, &pairs[k].q2),
     );
 }

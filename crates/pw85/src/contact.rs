@@ -31,10 +31,11 @@
 
 use crate::arith::{Arith, Dd, DdT, Mag};
 use crate::arith::{is_positive, select_gt, select_sign};
-use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
+use crate::form::QuadraticForm;
 use crate::poly::{OddsForm, OddsSearch, RationalForm, Search, coefficients_2d, pencil3};
 use crate::sym::{Sym2, Sym3, mat_vec};
+use simd::multiversion;
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
 ///
@@ -129,8 +130,21 @@ pub struct ContactDetails {
 /// assert!((c.lambda - 0.5).abs() < 1e-15);
 /// # Ok::<(), pw85::Error>(())
 /// ```
+///
+/// The same call on ellipses (`r12: [f64; 2]`, forms `[f64; 3]`) is the contact function
+/// of two ellipses: the form's type ([`QuadraticForm`]) chooses the dimension.
 #[inline]
-pub fn contact_function(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
+pub fn contact_function<Q: QuadraticForm>(
+    r12: &Q::Vector,
+    q1: &Q,
+    q2: &Q,
+) -> Result<Contact, Error> {
+    Q::contact(r12, q1, q2)
+}
+
+/// [`contact_function`] on two ellipsoids.
+#[inline]
+pub(crate) fn contact_function_3d(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
     contact_function_dispatched(r12, q1, q2, true)
 }
 
@@ -360,7 +374,7 @@ impl Prepared {
     }
 }
 
-out_of_line! {
+multiversion! {
     /// [`Prepared::contact`] on the normalised form, for pairs whose coefficients are too
     /// large or too small to be solved as they are (ellipsoids a million times smaller or
     /// larger than unit size, say).
@@ -368,7 +382,7 @@ out_of_line! {
         prepared: &Prepared,
         scale: Scale,
         exact: impl FnOnce() -> RationalForm,
-    ) -> Result<Contact, Error> => normalised_contact_in;
+    ) -> Result<Contact, Error> => out_of_line normalised_contact_in;
 }
 
 #[inline(always)]
@@ -381,7 +395,7 @@ fn normalised_contact_in<const FMA: bool>(
     Ok(prepared.finish::<FMA>(scale, solution, exact))
 }
 
-out_of_line! {
+multiversion! {
     /// [`Prepared::contact`] where the odds iteration gave up: the λ iteration on the
     /// normalised form.
     #[cold]
@@ -389,7 +403,7 @@ out_of_line! {
         prepared: &Prepared,
         scale: Scale,
         exact: impl FnOnce() -> RationalForm,
-    ) -> Result<Contact, Error> => lambda_contact_in;
+    ) -> Result<Contact, Error> => out_of_line lambda_contact_in;
 }
 
 #[inline(always)]
@@ -402,7 +416,7 @@ fn lambda_contact_in<const FMA: bool>(
     Ok(prepared.finish::<FMA>(scale, solution, exact))
 }
 
-out_of_line! {
+multiversion! {
     /// The rare path: re-solve with double-double coefficients. Kept out of line so that the
     /// common path stays small.
     #[cold]
@@ -410,7 +424,7 @@ out_of_line! {
         prepared: &Prepared,
         exact: impl FnOnce() -> RationalForm,
         fallback: Scale,
-    ) -> Contact => refine_in;
+    ) -> Contact => out_of_line refine_in;
 }
 
 #[inline(always)]
@@ -440,7 +454,7 @@ multiversion! {
     /// The contact function of two ellipses: `r12` ∈ ℝ², `q1`, `q2` stored as Q11, Q12, Q22.
     /// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
     /// version).
-    pub fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
+    pub(crate) fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
         => fused contact_function_2d_portable;
 }
 

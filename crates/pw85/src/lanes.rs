@@ -173,64 +173,57 @@ impl EndsLanes for Ends4 {
     }
     #[inline(always)]
     fn lanes(self) -> [f64; 4] {
-        // Left to itself the optimiser splits the four-lane expressions into one scalar chain
-        // per lane read (more instructions than the vector form); materialising the result
-        // keeps each operation one vector instruction. ([`Ends4Avx`] is a vector type and
-        // needs no such help: there this barrier would only add instructions.)
-        core::hint::black_box(self).0.0
+        self.0.0
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::Ends4Avx;
+pub(crate) use avx::{Ends4Avx, M4Avx};
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use super::EndsLanes;
-    use crate::arith::Arith;
+    use super::{EndsLanes, LANES, Lane4};
+    use crate::arith::{Arith, Fused};
     use core::arch::x86_64::{
-        __m256d, _mm_cvtsd_f64, _mm_unpackhi_pd, _mm256_add_pd, _mm256_addsub_pd, _mm256_and_pd,
-        _mm256_blend_pd, _mm256_castpd256_pd128, _mm256_castsi256_pd, _mm256_extractf128_pd,
-        _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set1_pd, _mm256_setr_epi64x,
+        _mm_cvtsd_f64, _mm_unpackhi_pd, _mm256_and_pd, _mm256_blend_pd, _mm256_castpd256_pd128,
+        _mm256_castsi256_pd, _mm256_extractf128_pd, _mm256_set1_pd, _mm256_setr_epi64x,
     };
     use core::ops::{Add, Mul, Sub};
+    use simd::{F64x4, Mask4};
 
     /// [`super::Ends4`] as one AVX register, lanes [x(Q1), Σ|terms|(Q1), x(Q2), Σ|terms|(Q2)]:
     /// written with `[f64; 4]` the optimiser splits the lanes into scalars and re-packs them
     /// into 128-bit halves with shuffles and stack spills; as a vector type every operation
-    /// is one instruction. In this
-    /// layout a − b is ADDSUBPD, which subtracts in the even (value) lanes and adds in the odd
-    /// (magnitude) ones: the subtraction of the `f64` formula and the addition of the `Mag`
-    /// one, each with its own rounding, so the results are the same bits as [`super::Ends4`].
+    /// is one instruction. In this layout a − b is ADDSUBPD ([`F64x4::sub_add`]), which
+    /// subtracts in the even (value) lanes and adds in the odd (magnitude) ones: the
+    /// subtraction of the `f64` formula and the addition of the `Mag` one, each with its own
+    /// rounding, so the results are the same bits as [`super::Ends4`].
     ///
-    /// Values of this type are only created in the AVX2 + FMA build of a dispatched function
-    /// (`FMA = true` in [`crate::dispatch::multiversion`]), after the processor was checked to
-    /// have AVX2 and FMA: that is what makes the intrinsics below sound.
+    /// Created only in the AVX2 + FMA build of a dispatched function (`FMA = true` in
+    /// [`simd::multiversion`]), as every [`F64x4`].
     #[derive(Clone, Copy, Debug)]
-    pub(crate) struct Ends4Avx(__m256d);
+    pub(crate) struct Ends4Avx(F64x4);
 
     impl Add for Ends4Avx {
         type Output = Self;
         #[inline(always)]
         fn add(self, o: Self) -> Self {
-            // SAFETY: AVX is available wherever an `Ends4Avx` exists (see the type).
-            Self(unsafe { _mm256_add_pd(self.0, o.0) })
+            Self(self.0 + o.0)
         }
     }
     impl Sub for Ends4Avx {
         type Output = Self;
+        #[allow(clippy::suspicious_arithmetic_impl)] // see the type
         #[inline(always)]
         fn sub(self, o: Self) -> Self {
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_addsub_pd(self.0, o.0) })
+            Self(self.0.sub_add(o.0))
         }
     }
     impl Mul for Ends4Avx {
         type Output = Self;
         #[inline(always)]
         fn mul(self, o: Self) -> Self {
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_mul_pd(self.0, o.0) })
+            Self(self.0 * o.0)
         }
     }
     impl Arith for Ends4Avx {
@@ -246,17 +239,17 @@ mod avx {
     impl EndsLanes for Ends4Avx {
         #[inline(always)]
         fn of(a: f64, b: f64) -> Self {
-            debug_assert!(crate::dispatch::has_avx2_fma());
+            debug_assert!(simd::has_avx2_fma());
             // Two broadcasts, a blend and a mask: as `_mm256_setr_pd(a, |a|, b, |b|)` the
             // optimiser rebuilt the lanes from the finiteness probe's vector loads with
             // lane permutations and a stack round trip, on the path to every coefficient.
-            // SAFETY: only called in the AVX2 build (see the type).
+            // SAFETY: only called in the AVX2 + FMA build (see the type).
             Self(unsafe {
                 let both = _mm256_blend_pd::<0b1100>(_mm256_set1_pd(a), _mm256_set1_pd(b));
-                _mm256_and_pd(
+                F64x4::from_raw_unchecked(_mm256_and_pd(
                     both,
                     _mm256_castsi256_pd(_mm256_setr_epi64x(-1, i64::MAX, -1, i64::MAX)),
-                )
+                ))
             })
         }
         #[inline(always)]
@@ -265,71 +258,29 @@ mod avx {
             // are on the critical path of every call).
             // SAFETY: as in `of`.
             unsafe {
-                let low = _mm256_castpd256_pd128(self.0);
-                let high = _mm256_extractf128_pd::<1>(self.0);
+                let low = _mm256_castpd256_pd128(self.0.raw());
+                let high = _mm256_extractf128_pd::<1>(self.0.raw());
                 let odd = |x| _mm_cvtsd_f64(_mm_unpackhi_pd(x, x));
                 [_mm_cvtsd_f64(low), _mm_cvtsd_f64(high), odd(low), odd(high)]
             }
         }
         #[inline(always)]
         fn swapped(self) -> Self {
-            // SAFETY: as in `of`. The 128-bit halves hold the two ends.
-            Self(unsafe { _mm256_permute2f128_pd::<0x01>(self.0, self.0) })
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-mod avx4 {
-    use super::{LANES, Lane4};
-    use crate::arith::{Arith, Fused};
-    use core::arch::x86_64::*;
-    use core::ops::{Add, Div, Mul, Neg, Sub};
-
-    /// [`super::V4`] as one AVX register, for the four-lane solve of the AVX2 + FMA build:
-    /// written with `[f64; 4]` the optimiser keeps much of the lane-wise code in scalars
-    /// (callgrind counts almost as many instructions per pair as the scalar call).
-    /// Every operation is the IEEE operation of `f64` lane by lane (FMA: one rounding, as
-    /// `f64::mul_add`; comparisons ordered, false for NaN), so the results are the same bits.
-    ///
-    /// Values of this type are only created in the AVX2 + FMA build of a dispatched function
-    /// (`FMA = true` in [`crate::dispatch::multiversion`]), after the processor was checked to
-    /// have AVX2 and FMA: that is what makes the intrinsics below sound.
-    #[derive(Clone, Copy, Debug)]
-    pub(crate) struct V4Avx(__m256d);
-
-    macro_rules! binary {
-        ($trait:ident, $method:ident, $intrinsic:ident) => {
-            impl $trait for V4Avx {
-                type Output = Self;
-                #[inline(always)]
-                fn $method(self, o: Self) -> Self {
-                    // SAFETY: AVX is available wherever a `V4Avx` exists (see the type).
-                    Self(unsafe { $intrinsic(self.0, o.0) })
-                }
-            }
-        };
-    }
-    binary!(Add, add, _mm256_add_pd);
-    binary!(Sub, sub, _mm256_sub_pd);
-    binary!(Mul, mul, _mm256_mul_pd);
-    binary!(Div, div, _mm256_div_pd);
-
-    impl Neg for V4Avx {
-        type Output = Self;
-        #[inline(always)]
-        fn neg(self) -> Self {
-            // SAFETY: as in `add`. Flipping the sign bit is what `-x` does.
-            Self(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+            // The 128-bit halves hold the two ends.
+            Self(self.0.swap_halves())
         }
     }
 
-    impl Arith for V4Avx {
+    // [`super::V4`]'s arithmetic on [`F64x4`], for the four-lane solve of the AVX2 + FMA
+    // build: written with `[f64; 4]` the optimiser keeps much of the lane-wise code in
+    // scalars (callgrind counts almost as many instructions per pair as the scalar call).
+
+    impl Arith for F64x4 {
         #[inline(always)]
         fn lift(x: f64) -> Self {
-            debug_assert!(crate::dispatch::has_avx2_fma());
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_set1_pd(x) })
+            debug_assert!(simd::has_avx2_fma());
+            // SAFETY: lane values are only created in the AVX2 + FMA build.
+            unsafe { F64x4::splat_unchecked(x) }
         }
         #[inline(always)]
         fn to_f64(self) -> f64 {
@@ -337,28 +288,27 @@ mod avx4 {
         }
     }
 
-    impl Fused for V4Avx {
+    impl Fused for F64x4 {
         #[inline(always)]
         fn fused_mul_add(self, b: Self, c: Self) -> Self {
-            // SAFETY: FMA is available wherever a `V4Avx` exists (see the type).
-            Self(unsafe { _mm256_fmadd_pd(self.0, b.0, c.0) })
+            self.mul_add(b, c)
         }
     }
 
     /// [`super::M4`] as one AVX register: magnitudes, a − b evaluated as |a| + |b| (the
     /// [`crate::arith::Mag`] arithmetic on four pairs).
     #[derive(Clone, Copy, Debug)]
-    pub(crate) struct M4Avx(__m256d);
+    pub(crate) struct M4Avx(F64x4);
 
     impl M4Avx {
         /// |x| lane-wise.
         #[inline(always)]
         pub(crate) fn of(x: [f64; LANES]) -> Self {
-            Self(V4Avx::from_array(x).abs().0)
+            Self(<F64x4 as Lane4>::from_array(x).abs())
         }
         #[inline(always)]
         pub(crate) fn to_array(self) -> [f64; LANES] {
-            V4Avx(self.0).to_array()
+            self.0.to_array()
         }
     }
 
@@ -366,7 +316,7 @@ mod avx4 {
         type Output = Self;
         #[inline(always)]
         fn add(self, o: Self) -> Self {
-            Self((V4Avx(self.0) + V4Avx(o.0)).0)
+            Self(self.0 + o.0)
         }
     }
     impl Sub for M4Avx {
@@ -375,20 +325,20 @@ mod avx4 {
         #[allow(clippy::suspicious_arithmetic_impl)]
         #[inline(always)]
         fn sub(self, o: Self) -> Self {
-            Self((V4Avx(self.0) + V4Avx(o.0)).0)
+            Self(self.0 + o.0)
         }
     }
     impl Mul for M4Avx {
         type Output = Self;
         #[inline(always)]
         fn mul(self, o: Self) -> Self {
-            Self((V4Avx(self.0) * V4Avx(o.0)).0)
+            Self(self.0 * o.0)
         }
     }
     impl Arith for M4Avx {
         #[inline(always)]
         fn lift(x: f64) -> Self {
-            Self(V4Avx::lift(x.abs()).0)
+            Self(F64x4::lift(x.abs()))
         }
         #[inline(always)]
         fn to_f64(self) -> f64 {
@@ -396,81 +346,74 @@ mod avx4 {
         }
     }
 
-    /// A comparison as an all-ones / all-zeros lane mask.
-    macro_rules! compare {
-        ($method:ident, $predicate:ident) => {
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self::Mask {
-                // SAFETY: as in `add`.
-                Self(unsafe { _mm256_cmp_pd::<$predicate>(self.0, o.0) })
-            }
-        };
-    }
-
-    impl Lane4 for V4Avx {
-        type Mask = V4Avx;
+    impl Lane4 for F64x4 {
+        type Mask = Mask4;
         #[inline(always)]
         fn from_array(a: [f64; LANES]) -> Self {
-            debug_assert!(crate::dispatch::has_avx2_fma());
-            // SAFETY: as in `add`; `a` holds four doubles.
-            Self(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+            debug_assert!(simd::has_avx2_fma());
+            // SAFETY: lane values are only created in the AVX2 + FMA build.
+            unsafe { F64x4::from_array_unchecked(a) }
         }
         #[inline(always)]
         fn to_array(self) -> [f64; LANES] {
-            let mut out = [0.0; LANES];
-            // SAFETY: as in `add`; `out` has room for four doubles.
-            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
-            out
+            self.to_array()
         }
         #[inline(always)]
         fn abs(self) -> Self {
-            // SAFETY: as in `add`. Clearing the sign bit is what `f64::abs` does.
-            Self(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+            self.abs()
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
-            // SAFETY: as in `add` (correctly rounded, as `f64::sqrt`).
-            Self(unsafe { _mm256_sqrt_pd(self.0) })
-        }
-        compare!(gt, _CMP_GT_OQ);
-        compare!(ge, _CMP_GE_OQ);
-        compare!(lt, _CMP_LT_OQ);
-        compare!(le, _CMP_LE_OQ);
-        compare!(eq, _CMP_EQ_OQ);
-        #[inline(always)]
-        fn or_else(self, mask: Self::Mask, other: Self) -> Self {
-            // SAFETY: as in `add`. BLENDVPD takes its second operand where the mask is set.
-            Self(unsafe { _mm256_blendv_pd(other.0, self.0, mask.0) })
+            self.sqrt()
         }
         #[inline(always)]
-        fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask {
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_and_pd(a.0, b.0) })
+        fn gt(self, o: Self) -> Mask4 {
+            self.gt(o)
         }
         #[inline(always)]
-        fn or(a: Self::Mask, b: Self::Mask) -> Self::Mask {
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_or_pd(a.0, b.0) })
+        fn ge(self, o: Self) -> Mask4 {
+            self.ge(o)
         }
         #[inline(always)]
-        fn not(a: Self::Mask) -> Self::Mask {
-            // SAFETY: as in `add`.
-            Self(unsafe { _mm256_xor_pd(a.0, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) })
+        fn lt(self, o: Self) -> Mask4 {
+            self.lt(o)
         }
         #[inline(always)]
-        fn mask(b: [bool; LANES]) -> Self::Mask {
-            Self::from_array(b.map(|x| f64::from_bits(if x { u64::MAX } else { 0 })))
+        fn le(self, o: Self) -> Mask4 {
+            self.le(o)
         }
         #[inline(always)]
-        fn bools(m: Self::Mask) -> [bool; LANES] {
-            // SAFETY: as in `add`.
-            let bits = unsafe { _mm256_movemask_pd(m.0) };
-            core::array::from_fn(|k| bits >> k & 1 == 1)
+        fn eq(self, o: Self) -> Mask4 {
+            self.eq(o)
         }
         #[inline(always)]
-        fn all(m: Self::Mask) -> bool {
-            // SAFETY: as in `add`.
-            unsafe { _mm256_movemask_pd(m.0) == 0b1111 }
+        fn or_else(self, mask: Mask4, other: Self) -> Self {
+            F64x4::select(mask, self, other)
+        }
+        #[inline(always)]
+        fn and(a: Mask4, b: Mask4) -> Mask4 {
+            a & b
+        }
+        #[inline(always)]
+        fn or(a: Mask4, b: Mask4) -> Mask4 {
+            a | b
+        }
+        #[inline(always)]
+        fn not(a: Mask4) -> Mask4 {
+            !a
+        }
+        #[inline(always)]
+        fn mask(b: [bool; LANES]) -> Mask4 {
+            // SAFETY: lane values are only created in the AVX2 + FMA build.
+            unsafe { Mask4::from_bools_unchecked(b) }
+        }
+        #[inline(always)]
+        fn bools(m: Mask4) -> [bool; LANES] {
+            m.to_bools()
+        }
+        #[inline(always)]
+        fn all(m: Mask4) -> bool {
+            m.all()
         }
     }
 }
@@ -487,7 +430,7 @@ impl V4 {
     }
 }
 
-/// The lane type of the four-lane solve: [`V4`] in the portable build, `V4Avx` (one 256-bit
+/// The lane type of the four-lane solve: [`V4`] in the portable build, [`simd::F64x4`] (one 256-bit
 /// register, x86-64 only) in the AVX2 + FMA build. Every operation is lane-wise and rounds as
 /// the `f64` operation does, so both give the scalar path's bits.
 pub(crate) trait Lane4:
@@ -705,11 +648,11 @@ pub(crate) fn coefficients4<const FMA: bool>(
 ) -> (crate::poly::Coefficients<V4>, ([V4; 3], [V4; 4])) {
     #[cfg(target_arch = "x86_64")]
     if FMA {
-        use avx4::{M4Avx, V4Avx};
+        use simd::F64x4;
         let value = crate::poly::pencil3_lifted(
-            r.map(|x| V4Avx::from_array(x.0)),
-            a.map(|x| V4Avx::from_array(x.0)),
-            b.map(|x| V4Avx::from_array(x.0)),
+            r.map(|x| <F64x4 as Lane4>::from_array(x.0)),
+            a.map(|x| <F64x4 as Lane4>::from_array(x.0)),
+            b.map(|x| <F64x4 as Lane4>::from_array(x.0)),
         )
         .coefficients;
         let bound = crate::poly::pencil3_lifted(
@@ -718,7 +661,7 @@ pub(crate) fn coefficients4<const FMA: bool>(
             b.map(|x| M4Avx::of(x.0)),
         )
         .coefficients;
-        let v4 = |x: V4Avx| V4(x.to_array());
+        let v4 = |x: F64x4| V4(x.to_array());
         let m4 = |x: M4Avx| V4(x.to_array());
         return (
             crate::poly::Coefficients {
@@ -753,7 +696,7 @@ pub(crate) fn maximise4<const FMA: bool>(
 ) -> (V4, [V4; 3], [bool; LANES]) {
     #[cfg(target_arch = "x86_64")]
     if FMA {
-        return maximise4_in::<FMA, avx4::V4Avx>(alpha, beta, u0);
+        return maximise4_in::<FMA, simd::F64x4>(alpha, beta, u0);
     }
     maximise4_in::<FMA, V4>(alpha, beta, u0)
 }
@@ -766,7 +709,7 @@ mod tests {
     #[test]
     fn avx_ends_equal_portable_ends_bit_for_bit() {
         use crate::poly::coefficients_with_bound;
-        if !crate::dispatch::has_avx2_fma() {
+        if !simd::has_avx2_fma() {
             return;
         }
         let mut x = 0.123_f64;

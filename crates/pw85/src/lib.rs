@@ -18,7 +18,9 @@
 //!   and pairs within 1e-13 of tangency; [`contact_details`] adds the contact point, the common
 //!   normal and the gradient of μ².
 //! - [`overlap`] — the verdict alone, stopping as soon as it is certain.
-//! - [`contact_function_2d`], [`overlap_2d`] — the same for ellipses.
+//! - The same two calls on ellipses: `r12: [f64; 2]` and forms `[f64; 3]` (Q11, Q12, Q22).
+//!   The form's type ([`QuadraticForm`]: the bare arrays, or the checked [`Form3`] and
+//!   [`Form2`]) decides the dimension.
 //! - [`batch`] — slices of pairs of either dimension, four at a time, on one thread or on all
 //!   cores (`Parallelism`; feature `rayon`).
 //! - [`shape`] — quadratic forms from semi-axes and a rotation (quaternion, matrix, the angles
@@ -58,9 +60,9 @@ pub mod baseline;
 mod baseline;
 pub mod batch;
 mod contact;
-mod dispatch;
 mod error;
 mod extreme;
+mod form;
 #[cfg(feature = "nalgebra")]
 pub mod interop;
 mod lanes;
@@ -78,11 +80,12 @@ pub mod sym;
 mod sym;
 
 pub use contact::{
-    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function, contact_function_2d,
+    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function,
     contact_function_refined,
 };
 pub use error::{Argument, Error};
-pub use overlap::{overlap, overlap_2d};
+pub use form::{Form2, Form3, QuadraticForm};
+pub use overlap::overlap;
 pub use shape::spheroid;
 pub use sym::{Sym2, Sym3};
 

@@ -24,8 +24,8 @@ use crate::contact::{
     Scale, Side, check_inputs_finite, check_positive_definite, check_positive_definite_2d,
     clearly_positive_definite, orient,
 };
-use crate::dispatch::{multiversion, out_of_line};
 use crate::error::{Argument, Error};
+use crate::form::QuadraticForm;
 use crate::poly::{
     OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at,
 };
@@ -33,6 +33,7 @@ use crate::sym::{
     Sym2, Sym3, adjugate_generic, det_generic, frobenius_generic, mixed_adjugate_generic,
     outer_generic, quadratic_form_generic,
 };
+use simd::multiversion;
 
 /// Rounding-error factor of the short expression trees of the axis test (at most about six
 /// roundings deep; 10 u as in the contact function's coefficients).
@@ -43,30 +44,36 @@ const SPHERE_MARGIN: f64 = 1e-12;
 /// Iterations of the bounded search before handing over to the full contact function.
 const MAX_ITERATIONS: u32 = 12;
 
+/// Whether two ellipsoids (or ellipses) overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
+/// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
+///
+/// Stops as soon as the answer is certain: the projections on the centre line disjoint (no
+/// overlap), the segment between the centres covered by the two ellipsoids' radial extents
+/// (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
+/// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
+/// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
+/// pencil, pay for the full [`crate::contact_function`].
+///
+/// # Errors
+/// As [`crate::contact_function`].
+///
+/// # Example
+/// ```
+/// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
+/// // Side by side, 0.15 apart across their thin direction: they overlap...
+/// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
+/// // ...and 0.25 apart they do not.
+/// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+#[inline]
+pub fn overlap<Q: QuadraticForm>(r12: &Q::Vector, q1: &Q, q2: &Q) -> Result<bool, Error> {
+    Q::overlap(r12, q1, q2)
+}
+
 multiversion! {
-    /// Whether two ellipsoids overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
-    /// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
-    ///
-    /// Stops as soon as the answer is certain: the projections on the centre line disjoint (no
-    /// overlap), the segment between the centres covered by the two ellipsoids' radial extents
-    /// (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
-    /// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
-    /// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
-    /// pencil, pay for the full [`crate::contact_function`].
-    ///
-    /// # Errors
-    /// As [`crate::contact_function`].
-    ///
-    /// # Example
-    /// ```
-    /// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
-    /// // Side by side, 0.15 apart across their thin direction: they overlap...
-    /// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
-    /// // ...and 0.25 apart they do not.
-    /// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
-    /// # Ok::<(), pw85::Error>(())
-    /// ```
-    pub fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
+    /// [`overlap`] on two ellipsoids.
+    pub(crate) fn overlap_3d(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
         => fused overlap_portable;
 }
 
@@ -110,7 +117,7 @@ fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Re
     undecided::<FMA>(r12, q1, q2, Some(extents))
 }
 
-out_of_line! {
+multiversion! {
     /// The verdict on a pair the axis test left open: the contact-point test at the λ̂ the
     /// axis test's extents give (if they are in its range), then the bounded search.
     ///
@@ -123,7 +130,7 @@ out_of_line! {
         q1: &Sym3,
         q2: &Sym3,
         extents: Option<[f64; 2]>,
-    ) -> Result<bool, Error> => undecided_in;
+    ) -> Result<bool, Error> => out_of_line undecided_in;
 }
 
 #[inline(always)]
@@ -152,12 +159,12 @@ fn undecided_in<const FMA: bool>(
     searched::<FMA>(r12, q1, q2)
 }
 
-out_of_line! {
+multiversion! {
     /// The bounded search, and the full contact function if that does not decide either
     /// (one pair in 160 on the bench), out of line so that the contact-point test keeps its
     /// registers.
     #[cold]
-    fn searched(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> => searched_in;
+    fn searched(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> => out_of_line searched_in;
 }
 
 #[inline(always)]
@@ -201,11 +208,8 @@ fn largest_diagonal(q: &Sym3) -> f64 {
 }
 
 multiversion! {
-    /// Whether two ellipses overlap, with the arguments of [`crate::contact_function_2d`].
-    ///
-    /// # Errors
-    /// As [`crate::contact_function_2d`].
-    pub fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error>
+    /// [`overlap`] on two ellipses.
+    pub(crate) fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error>
         => fused overlap_2d_portable;
 }
 
@@ -244,7 +248,7 @@ fn overlap_2d_portable<const FMA: bool>(
     };
     match bounded_search::<FMA>(&fast.to_f64(), &bound) {
         Some(verdict) => Ok(verdict),
-        None => Ok(crate::contact_function_2d(r12, q1, q2)?.mu2 < 1.0),
+        None => Ok(crate::contact::contact_function_2d(r12, q1, q2)?.mu2 < 1.0),
     }
 }
 
@@ -790,7 +794,7 @@ mod tests {
             });
             let mut builds = vec![stage_verdicts::<false>(&r, &q1, &q2)];
             #[cfg(target_arch = "x86_64")]
-            if crate::dispatch::has_avx2_fma() {
+            if simd::has_avx2_fma() {
                 builds.push(stage_verdicts::<true>(&r, &q1, &q2));
             }
             for (axis, point) in builds {

@@ -3,10 +3,7 @@
 
 use proptest::prelude::*;
 use pw85::shape::{from_axes_angle_2d, from_axes_quaternion, rotation_from_quaternion};
-use pw85::{
-    Argument, Error, Sym3, contact_details, contact_function, contact_function_2d, overlap,
-    overlap_2d,
-};
+use pw85::{Argument, Error, Sym3, contact_details, contact_function, overlap};
 use testkit::Rng;
 
 /// An ellipsoid with semi-axes spread over `max_aspect_decades` decades, built by pw85 itself
@@ -230,7 +227,7 @@ fn two_d_equals_the_3d_embedding() {
             from_axes_angle_2d(&b, tb).unwrap(),
         );
         let r = [rng.range(-5.0, 5.0), rng.range(-5.0, 5.0)];
-        let c2 = contact_function_2d(&r, &q1, &q2).unwrap();
+        let c2 = contact_function(&r, &q1, &q2).unwrap();
         // Any common extent along z leaves μ² unchanged: Q(λ) is block diagonal.
         let z = rng.range(0.1, 2.0);
         let e = |q: &[f64; 3]| [q[0], q[1], 0.0, q[2], 0.0, z];
@@ -238,7 +235,7 @@ fn two_d_equals_the_3d_embedding() {
         assert!(rel(c2.mu2, c3.mu2) < 1e-13, "{} vs {}", c2.mu2, c3.mu2);
         assert!((c2.lambda - c3.lambda).abs() < 1e-7);
         if (c2.mu2 - 1.0).abs() > 1e-12 {
-            assert_eq!(overlap_2d(&r, &q1, &q2).unwrap(), c2.mu2 < 1.0);
+            assert_eq!(overlap(&r, &q1, &q2).unwrap(), c2.mu2 < 1.0);
         }
     }
 }
@@ -339,7 +336,7 @@ fn bad_input_gives_typed_errors() {
         Some((Argument::Q2, 2))
     );
     assert_eq!(
-        not_positive_definite(&contact_function_2d(
+        not_positive_definite(&contact_function(
             &[1.0, 0.0],
             &[1.0, 1.0, 1.0],
             &[1.0, 0.0, 1.0]
@@ -493,7 +490,7 @@ fn power_of_two_scalings_give_the_same_bits() {
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
         let e2 = from_axes_angle_2d(&[0.3, 0.2], -angle).unwrap();
         let r2 = [r[0], r[1]];
-        let base_2d = bits(contact_function_2d(&r2, &e1, &e2).unwrap());
+        let base_2d = bits(contact_function(&r2, &e1, &e2).unwrap());
         for k in [-60, -24, -11, -5, 5, 11, 24, 60] {
             let nu = 2f64.powi(k);
             let (r, q1, q2) = scaled(nu, r, q1, q2);
@@ -504,7 +501,7 @@ fn power_of_two_scalings_give_the_same_bits() {
             );
             let (r2, e1, e2) = scaled(nu, r2, e1, e2);
             assert_eq!(
-                bits(contact_function_2d(&r2, &e1, &e2).unwrap()),
+                bits(contact_function(&r2, &e1, &e2).unwrap()),
                 base_2d,
                 "2D, ν = 2^{k}"
             );
@@ -512,7 +509,7 @@ fn power_of_two_scalings_give_the_same_bits() {
     }
 }
 
-/// The 2D batch (lane-wise solve shared with 3D) equals `contact_function_2d` bit for bit,
+/// The 2D batch (lane-wise solve shared with 3D) equals `contact_function` on ellipses bit for bit,
 /// typed errors, coincident centres, refinements and extreme shapes included.
 #[test]
 fn batch_2d_equals_scalar_bit_for_bit() {
@@ -543,12 +540,12 @@ fn batch_2d_equals_scalar_bit_for_bit() {
     let verdicts = verdicts(&pairs);
     let (mut refined, mut errors) = (0, 0);
     for ((p, b), v) in pairs.iter().zip(&batch).zip(&verdicts) {
-        let s = contact_function_2d(&p.r12, &p.q1, &p.q2);
+        let s = contact_function(&p.r12, &p.q1, &p.q2);
         refined += usize::from(s.is_ok_and(|c| c.refined));
         errors += usize::from(s.is_err());
         assert_eq!(format!("{s:?}"), format!("{b:?}"), "{p:?}");
         assert_eq!(
-            format!("{:?}", overlap_2d(&p.r12, &p.q1, &p.q2)),
+            format!("{:?}", overlap(&p.r12, &p.q1, &p.q2)),
             format!("{v:?}")
         );
     }
@@ -658,7 +655,7 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
         let e1 = from_axes_angle_2d(&[1.0, 10f64.powf(-decades)], angle).unwrap();
         let e2 = from_axes_angle_2d(&[0.3, 0.2], -angle).unwrap();
         let r2 = [r[0], r[1]];
-        let base_2d = contact_function_2d(&r2, &e1, &e2).unwrap();
+        let base_2d = contact_function(&r2, &e1, &e2).unwrap();
         for k in [
             -500, -400, -300, -241, -200, -120, 120, 200, 241, 300, 400, 500,
         ] {
@@ -685,8 +682,8 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
                 &format!("2D {what}"),
                 base_2d,
                 0,
-                contact_function_2d(&rs2, &a2, &b2),
-                overlap_2d(&rs2, &a2, &b2),
+                contact_function(&rs2, &a2, &b2),
+                overlap(&rs2, &a2, &b2),
             );
             pairs.push(pw85::batch::Pair {
                 r12: rs,
@@ -735,8 +732,8 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
                 &format!("2D {what}"),
                 base_2d,
                 2 * k,
-                contact_function_2d(&rs2, &e1, &e2),
-                overlap_2d(&rs2, &e1, &e2),
+                contact_function(&rs2, &e1, &e2),
+                overlap(&rs2, &e1, &e2),
             );
             pairs.push(pw85::batch::Pair { r12: rs, q1, q2 });
             pairs_2d.push(pw85::batch::Pair2d {
@@ -767,7 +764,7 @@ fn every_power_of_two_scaling_across_the_double_range_is_exact() {
             "batch verdict {k}"
         );
         let p2 = &pairs_2d[k];
-        let scalar_2d = contact_function_2d(&p2.r12, &p2.q1, &p2.q2).unwrap();
+        let scalar_2d = contact_function(&p2.r12, &p2.q1, &p2.q2).unwrap();
         assert_eq!(
             batch_2d[k].unwrap().mu2.to_bits(),
             scalar_2d.mu2.to_bits(),
@@ -812,7 +809,7 @@ fn spheres_at_the_edges_of_the_double_range() {
         );
         assert_eq!(overlap(&r, &q, &q).unwrap(), exact < 1.0);
         let q2d = [q[0], 0.0, q[0]];
-        let c = contact_function_2d(&[distance, 0.0], &q2d, &q2d).unwrap();
+        let c = contact_function(&[distance, 0.0], &q2d, &q2d).unwrap();
         assert!(
             rel(c.mu2, exact) < 1e-13,
             "2D radius {radius:e}: μ² = {}",
@@ -851,7 +848,7 @@ fn size_ratios_up_to_1e150_keep_mu2_exact() {
             assert!(!overlap(&r, &q1, &q2).unwrap());
         }
         let (b2, s2) = ([1.0, 0.0, 1.0], [rho * rho, 0.0, rho * rho]);
-        let c = contact_function_2d(&[3.0, 0.0], &b2, &s2).unwrap();
+        let c = contact_function(&[3.0, 0.0], &b2, &s2).unwrap();
         assert!(rel(c.mu2, exact) < 1e-13, "2D 10^-{k}: μ² = {}", c.mu2);
     }
 }
@@ -929,7 +926,7 @@ proptest! {
         }
         let r2 = [x[0], x[1]];
         let (e1, e2) = ([x[3], x[4], x[5]], [x[9], x[10], x[11]]);
-        if let Ok(c) = contact_function_2d(&r2, &e1, &e2) {
+        if let Ok(c) = contact_function(&r2, &e1, &e2) {
             prop_assert!(c.mu2 >= 0.0 && (0.0..=1.0).contains(&c.lambda));
         }
     }
