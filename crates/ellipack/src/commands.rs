@@ -28,6 +28,7 @@ pub struct PackArgs {
     pub seed: Option<u64>,
     pub threads: Option<usize>,
     pub resume: bool,
+    pub shard: Option<ellipack::pack::Shard>,
 }
 
 pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
@@ -67,6 +68,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         seed: args.seed,
         threads: args.threads,
         resume_from,
+        shard: args.shard,
     };
 
     let interrupted = Arc::new(AtomicBool::new(false));
@@ -194,6 +196,40 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// `ellipack merge`: the best certified packing of `folders` into `out`.
+pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>> {
+    let outcome = ellipack::merge::merge(folders, out)?;
+    for (k, c) in outcome.candidates.iter().enumerate() {
+        println!(
+            "{} {}: density {:.6}{}",
+            if k == outcome.best { "*" } else { " " },
+            c.folder.display(),
+            c.density,
+            if c.certified {
+                ""
+            } else {
+                " (not certified: skipped)"
+            }
+        );
+    }
+    let best = &outcome.candidates[outcome.best];
+    if outcome.written {
+        println!("wrote {} (from {})", out.display(), best.folder.display());
+    } else {
+        println!(
+            "{} already holds the best packing: left as it was",
+            out.display()
+        );
+    }
+    if let Some(Published::InPlace(_)) = outcome.published {
+        eprintln!(
+            "note: the files in {} were replaced one by one, not swapped in as a set",
+            out.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// The arguments of `ellipack verify`.

@@ -14,6 +14,7 @@ pub mod error;
 pub mod folder;
 pub mod instances;
 pub mod measure;
+pub mod merge;
 pub mod output;
 pub mod pack;
 pub mod packing;

@@ -58,6 +58,26 @@ enum Command {
         /// Start from the packing already in the output folder.
         #[arg(long)]
         resume: bool,
+        /// Run shard K of N of the multi-start (`--shard 2/8`, K from 0): the N shards of one
+        /// seed try disjoint starts, and each reproduces exactly. Combine their folders with
+        /// `ellipack merge`.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<ellipack::pack::Shard>,
+    },
+    /// Keep the best certified packing of several runs of one scene (the shards of a
+    /// multi-start, or repeated runs): every input is verified again, packings of different
+    /// scenes are refused, and a certified packing already in the output folder takes part, so
+    /// it is never replaced by a worse one.
+    ///
+    /// Exit status: 0 the best certified packing is in the output folder; 1 an error (an
+    /// unreadable input, different scenes, no certified input), nothing written.
+    Merge {
+        /// Packing folders (each with packing.csv and summary.json).
+        #[arg(required = true)]
+        folders: Vec<PathBuf>,
+        /// The folder to hold the best packing (created if needed).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Re-check a packing independently (PW85 verdicts on every close pair, exact
     /// containment) and print its certificate. Exits with failure if any pair overlaps or any
@@ -160,6 +180,15 @@ fn parse_container_kind(name: &str) -> Result<ContainerKind, String> {
     })
 }
 
+fn parse_shard(text: &str) -> Result<ellipack::pack::Shard, String> {
+    let parse = |part: &str| part.trim().parse::<usize>().ok();
+    let (k, n) = text
+        .split_once('/')
+        .and_then(|(k, n)| Some((parse(k)?, parse(n)?)))
+        .ok_or_else(|| format!("`{text}` is not a shard: write K/N, e.g. 0/4"))?;
+    ellipack::pack::Shard::new(k, n).map_err(|e| e.to_string())
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum CriterionArg {
     Contact,
@@ -186,6 +215,7 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             seed,
             threads,
             resume,
+            shard,
         } => commands::pack(commands::PackArgs {
             scene,
             instance,
@@ -194,7 +224,9 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             seed,
             threads,
             resume,
+            shard,
         })?,
+        Command::Merge { folders, out } => commands::merge(&folders, &out)?,
         Command::Verify {
             packing,
             summary,
@@ -227,7 +259,10 @@ fn run_table(command: Command) -> Result<ExitCode, Error> {
             criterion,
         } => contact(input, output, criterion),
         Command::Measure { input, output } => measure(input, output),
-        Command::Pack { .. } | Command::Verify { .. } | Command::Instances => Ok(ExitCode::SUCCESS),
+        Command::Pack { .. }
+        | Command::Verify { .. }
+        | Command::Merge { .. }
+        | Command::Instances => Ok(ExitCode::SUCCESS),
     }
 }
 

@@ -1,8 +1,8 @@
 //! A packing run: scene → model → multi-start → certified packing and its summary; and the
 //! independent check of a packing read back from files.
 //!
-//! The numerical work lives in `implicit-packing` (the model, the augmented-Lagrangian local
-//! minimisation, the repair and the multi-start); this module translates between the scene and
+//! The numerical work lives in `ellipsoid-packer` (starts, local minimisation with repair, the
+//! multi-start) on the model of `implicit-packing`; this module translates between the scene and
 //! file formats of the command line and the model's variables `[c_1, Ω_1, …, c_m, Ω_m, dims]`
 //! (Ω = θ in 2D, the angles [φ, θ, ψ] of eq. 2 in 3D), with containers centred at the origin.
 
@@ -12,7 +12,7 @@ use crate::packing::{
 };
 use crate::scene::Scene;
 use ellipsoid_packer::local::LocalSettings;
-pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer};
+pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::starts::lattice_start;
 use implicit_packing::Body;
@@ -212,6 +212,8 @@ pub struct RunOptions {
     pub threads: Option<usize>,
     /// A packing of the same items to start from (resuming a run).
     pub resume_from: Option<Packing>,
+    /// This run's part of a multi-start spread over several runs (else the whole).
+    pub shard: Option<Shard>,
 }
 
 /// The outcome of [`run`].
@@ -314,6 +316,7 @@ fn run_n<const N: usize>(
     settings.threads = threads;
     settings.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
     settings.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
+    settings.shard = options.shard.unwrap_or(Shard::WHOLE);
     let result = multistart(axes, kind, &x0, &settings, observer)?;
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(&result.best.certificate);
@@ -329,6 +332,11 @@ fn run_n<const N: usize>(
         density_before: result.best.density_before_repair,
     });
     summary.start_kept = result.start_kept;
+    summary.shard = options.shard.map(|shard| crate::packing::ShardOrigin {
+        index: shard.index(),
+        count: shard.count(),
+        seed: settings.seed,
+    });
     Ok(RunOutcome {
         packing,
         summary,

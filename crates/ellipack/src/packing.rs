@@ -688,6 +688,21 @@ pub struct Summary {
     /// certified lattice start), which was written as it was.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub start_kept: bool,
+    /// The shard of a multi-start spread over several runs that found this packing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardOrigin>,
+}
+
+/// Which shard of which multi-start a packing came from (`ellipack pack --shard K/N`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShardOrigin {
+    /// The shard's number K, from 0.
+    pub index: usize,
+    /// The number of shards N.
+    pub count: usize,
+    /// The multi-start's seed, shared by its shards.
+    pub seed: u64,
 }
 
 /// The repair that made the solver's point certifiable: every centre and the container were
@@ -720,6 +735,7 @@ impl Summary {
             certificate,
             repair: None,
             start_kept: false,
+            shard: None,
         }
     }
 }

@@ -30,6 +30,14 @@ pub enum Error {
         "stopped before the first local minimisation, and the start is not a certified packing"
     )]
     StoppedBeforeStart,
+    /// A shard number that is not below the number of shards.
+    #[error("shard {index} of {count} does not exist: shards are numbered 0 to count − 1")]
+    Shard {
+        /// The shard asked for.
+        index: usize,
+        /// The number of shards.
+        count: usize,
+    },
     /// A thread of the run panicked (a bug: please report it with the scene).
     #[error("a start of the multi-start panicked")]
     StartPanicked,

@@ -1,0 +1,247 @@
+//! `ellipack merge`: the best certified packing of several runs of one scene (the shards of a
+//! multi-start spread over machines, or repeated runs), re-verified, into one folder.
+//!
+//! Every input is read and verified again (PW85 verdicts on every close pair, exact
+//! containment): a folder's own summary is not trusted. Inputs must be packings of the same
+//! items in the same kind of container; a packing already in the output folder takes part
+//! too, so a merge never replaces a better certified packing with a worse one.
+
+use crate::folder::{FolderError, Published, RUN_FILES, Staging};
+use crate::pack::{PackError, verify};
+use crate::packing::{CSV_FILE, ContainerKind, Items, Packing, PackingError, read_packing_dir};
+use std::path::{Path, PathBuf};
+
+/// Why a merge wrote nothing.
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    /// No input folder was given.
+    #[error("nothing to merge: give at least one packing folder")]
+    NoInputs,
+    /// An input (or the output folder's packing) could not be read.
+    #[error("{folder}: {source}")]
+    Read {
+        /// The folder.
+        folder: PathBuf,
+        /// What was wrong with its files.
+        #[source]
+        source: PackingError,
+    },
+    /// An input could not be verified (its items do not form a valid model).
+    #[error("{folder}: cannot verify: {source}")]
+    Verify {
+        /// The folder.
+        folder: PathBuf,
+        /// Why.
+        #[source]
+        source: PackError,
+    },
+    /// Two folders hold packings of different scenes.
+    #[error("{other} is not a packing of the same scene as {first}: {difference}")]
+    DifferentScenes {
+        /// The first input.
+        first: PathBuf,
+        /// The folder that differs.
+        other: PathBuf,
+        /// How they differ.
+        difference: String,
+    },
+    /// No input is a certified packing.
+    #[error("none of the {inputs} packings is certified: nothing to keep")]
+    NoneCertified {
+        /// How many inputs were read.
+        inputs: usize,
+    },
+    /// The output folder could not be created.
+    #[error("cannot create the output folder {path}: {source}")]
+    OutputFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the file system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The output folder could not be written.
+    #[error(transparent)]
+    Folder(#[from] FolderError),
+    /// A file of the best packing could not be copied into the output folder.
+    #[error("cannot copy {path}: {source}")]
+    Copy {
+        /// The file.
+        path: PathBuf,
+        /// What the file system said.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// One packing read for a merge, with its verification.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// Its folder.
+    pub folder: PathBuf,
+    /// Its density, computed from its files.
+    pub density: f64,
+    /// Whether it verified: no overlapping pair, no item outside.
+    pub certified: bool,
+}
+
+/// What a merge did.
+#[derive(Debug)]
+pub struct MergeOutcome {
+    /// Every input, in the order given, then the output folder's own packing if it had one.
+    pub candidates: Vec<Candidate>,
+    /// The index in `candidates` of the packing kept.
+    pub best: usize,
+    /// Whether the output folder was written (false when it already held the best packing).
+    pub written: bool,
+    /// How the files were published, when written.
+    pub published: Option<Published>,
+}
+
+/// The items and container kind that make two packings packings of the same scene.
+#[derive(Debug, PartialEq)]
+struct SceneKey {
+    kind: ContainerKind,
+    /// Every item's semi-axes, as bits, sorted: the items as a multiset.
+    axes: Vec<Vec<u64>>,
+}
+
+impl SceneKey {
+    fn of(packing: &Packing) -> Self {
+        let mut axes: Vec<Vec<u64>> = match packing.items() {
+            Items::Ellipses(items) => items
+                .iter()
+                .map(|e| e.semi_axes.iter().map(|a| a.to_bits()).collect())
+                .collect(),
+            Items::Ellipsoids(items) => items
+                .iter()
+                .map(|e| e.semi_axes.iter().map(|a| a.to_bits()).collect())
+                .collect(),
+        };
+        axes.sort_unstable();
+        Self {
+            kind: packing.container().kind(),
+            axes,
+        }
+    }
+
+    /// How `other` differs from this key, if it does.
+    fn difference(&self, other: &SceneKey) -> Option<String> {
+        if self.kind != other.kind {
+            return Some(format!("container {} against {}", other.kind, self.kind));
+        }
+        if self.axes.len() != other.axes.len() {
+            return Some(format!(
+                "{} items against {}",
+                other.axes.len(),
+                self.axes.len()
+            ));
+        }
+        (self.axes != other.axes).then(|| "the items' semi-axes differ".to_string())
+    }
+}
+
+/// Reads and verifies `folder`.
+fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
+    let (packing, _) = read_packing_dir(folder).map_err(|source| MergeError::Read {
+        folder: folder.to_path_buf(),
+        source,
+    })?;
+    let certificate = verify(&packing).map_err(|source| MergeError::Verify {
+        folder: folder.to_path_buf(),
+        source,
+    })?;
+    let key = SceneKey::of(&packing);
+    Ok((
+        Candidate {
+            folder: folder.to_path_buf(),
+            density: packing.density(),
+            certified: certificate.is_certified(),
+        },
+        key,
+    ))
+}
+
+/// Merges the packings in `inputs` into `out`: verifies each, refuses packings of different
+/// scenes, and writes the densest certified one's files (those `ellipack pack` writes) into
+/// `out`, swapped in as a set. A certified packing already in `out` of the same scene takes
+/// part: if it is the densest, nothing is written.
+///
+/// # Errors
+/// [`MergeError`]: an unreadable input, different scenes, no certified input, or an output
+/// folder that cannot be written. Nothing is written then.
+pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError> {
+    let Some(first_folder) = inputs.first() else {
+        return Err(MergeError::NoInputs);
+    };
+    let mut candidates = Vec::with_capacity(inputs.len() + 1);
+    let mut first_key: Option<SceneKey> = None;
+    let existing = out.join(CSV_FILE).exists();
+    let output_is_input = inputs.iter().any(|i| same_folder(i, out));
+    let folders = inputs
+        .iter()
+        .map(PathBuf::as_path)
+        .chain((existing && !output_is_input).then_some(out));
+    for folder in folders {
+        let (c, key) = candidate(folder)?;
+        match &first_key {
+            None => first_key = Some(key),
+            Some(first) => {
+                if let Some(difference) = first.difference(&key) {
+                    return Err(MergeError::DifferentScenes {
+                        first: first_folder.clone(),
+                        other: folder.to_path_buf(),
+                        difference,
+                    });
+                }
+            }
+        }
+        candidates.push(c);
+    }
+    let best = candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.certified)
+        .fold(None::<usize>, |best, (k, c)| match best {
+            Some(b) if candidates[b].density >= c.density => Some(b),
+            _ => Some(k),
+        })
+        .ok_or(MergeError::NoneCertified {
+            inputs: candidates.len(),
+        })?;
+    if same_folder(&candidates[best].folder, out) {
+        return Ok(MergeOutcome {
+            candidates,
+            best,
+            written: false,
+            published: None,
+        });
+    }
+    std::fs::create_dir_all(out).map_err(|source| MergeError::OutputFolder {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let staging = Staging::begin(out)?;
+    for name in RUN_FILES {
+        let from = candidates[best].folder.join(name);
+        if from.is_file() {
+            std::fs::copy(&from, staging.path().join(name))
+                .map_err(|source| MergeError::Copy { path: from, source })?;
+        }
+    }
+    let published = staging.commit()?;
+    Ok(MergeOutcome {
+        candidates,
+        best,
+        written: true,
+        published: Some(published),
+    })
+}
+
+/// Whether two paths name the same existing folder.
+fn same_folder(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
