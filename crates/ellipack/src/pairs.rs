@@ -112,16 +112,8 @@ pub struct PairTable {
 /// [`Error::Empty`] without rows. A cell that is not a number is not an error of the file: that
 /// row carries the message.
 pub fn read_pairs(text: &str, source_name: &str) -> Result<PairTable, Error> {
-    let (layout, mut reader) = open(text.as_bytes(), source_name)?;
-    let mut rows = Vec::new();
-    while let Some(row) = reader.next_row()? {
-        rows.push(row);
-    }
-    if rows.is_empty() {
-        return Err(Error::Empty {
-            source_name: source_name.to_string(),
-        });
-    }
+    let (layout, reader) = open(text.as_bytes(), source_name)?;
+    let rows = reader.read_all()?;
     Ok(PairTable { layout, rows })
 }
 
