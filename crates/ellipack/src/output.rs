@@ -95,19 +95,14 @@ impl OutputFile {
             path: path.to_path_buf(),
             source,
         };
+        // The shell's streams and devices are written where they are, without a temporary file.
+        let direct = |sink| OutputFile {
+            path: path.to_path_buf(),
+            sink,
+        };
         match descriptor(path) {
-            Some(Descriptor::Stdout) => {
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Stdout(io::stdout()),
-                });
-            }
-            Some(Descriptor::Stderr) => {
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Stderr(io::stderr()),
-                });
-            }
+            Some(Descriptor::Stdout) => return Ok(direct(Sink::Stdout(io::stdout()))),
+            Some(Descriptor::Stderr) => return Ok(direct(Sink::Stderr(io::stderr()))),
             Some(Descriptor::Other) => {
                 // Appending continues where the shell's redirection stands instead of
                 // writing over it from offset 0.
@@ -115,10 +110,7 @@ impl OutputFile {
                     .append(true)
                     .open(path)
                     .map_err(io)?;
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Direct(file),
-                });
+                return Ok(direct(Sink::Direct(file)));
             }
             None => {}
         }
@@ -134,10 +126,7 @@ impl OutputFile {
                     .write(true)
                     .open(path)
                     .map_err(io)?;
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Direct(device),
-                });
+                return Ok(direct(Sink::Direct(device)));
             }
             Ok(m) => (
                 std::fs::canonicalize(path).map_err(io)?,

@@ -222,19 +222,7 @@ impl Body<3> {
         semi_axes: [f64; 3],
         q: [f64; 4],
     ) -> Result<Self, Error> {
-        Self::checked(centre, semi_axes, || {
-            // The quaternion of a body built alone belongs to no item of a packing.
-            rotation_from_quaternion(q).map_err(|e| match e {
-                Error::InvalidQuaternion {
-                    quaternion, norm2, ..
-                } => Error::InvalidQuaternion {
-                    item: None,
-                    quaternion,
-                    norm2,
-                },
-                other => other,
-            })
-        })
+        Self::checked(centre, semi_axes, || rotation_from_quaternion(q))
     }
 
     /// The rotation as a unit quaternion `(w, x, y, z)` with `w ≥ 0`.
