@@ -95,39 +95,31 @@ impl std::fmt::Display for StartDefects {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let mut parts = Vec::new();
         if !self.overlapping.is_empty() {
-            let mut list: Vec<String> = self
-                .overlapping
-                .iter()
-                .take(LISTED)
-                .map(|&(i, j, m)| format!("{i} and {j} (μ² = {m:.6})"))
-                .collect();
-            if self.overlapping.len() > LISTED {
-                list.push(format!("and {} more", self.overlapping.len() - LISTED));
-            }
-            parts.push(format!(
-                "{} overlapping pairs: items {}",
-                self.overlapping.len(),
-                list.join(", ")
-            ));
+            let list = listed(&self.overlapping, |&(i, j, m)| {
+                format!("{i} and {j} (μ² = {m:.6})")
+            });
+            let n = self.overlapping.len();
+            parts.push(format!("{n} overlapping pairs: items {list}"));
         }
         if !self.outside.is_empty() {
-            let mut list: Vec<String> = self
-                .outside
-                .iter()
-                .take(LISTED)
-                .map(|&(i, s)| format!("{i} (the container would have to grow by {:.3e})", s - 1.0))
-                .collect();
-            if self.outside.len() > LISTED {
-                list.push(format!("and {} more", self.outside.len() - LISTED));
-            }
-            parts.push(format!(
-                "{} items outside the container: {}",
-                self.outside.len(),
-                list.join(", ")
-            ));
+            let list = listed(&self.outside, |&(i, s)| {
+                format!("{i} (the container would have to grow by {:.3e})", s - 1.0)
+            });
+            let n = self.outside.len();
+            parts.push(format!("{n} items outside the container: {list}"));
         }
         write!(f, "{}", parts.join("; "))
     }
+}
+
+/// The first [`LISTED`] of `items`, shown by `show` and separated by commas, and how many more
+/// there are.
+fn listed<T>(items: &[T], show: impl Fn(&T) -> String) -> String {
+    let mut list: Vec<String> = items.iter().take(LISTED).map(show).collect();
+    if items.len() > LISTED {
+        list.push(format!("and {} more", items.len() - LISTED));
+    }
+    list.join(", ")
 }
 
 /// Converts a time limit in seconds, refusing what is not positive or beyond a [`Duration`]

@@ -177,13 +177,9 @@ fn temporary_files_of_killed_runs_are_removed() {
 #[cfg(unix)]
 #[test]
 fn a_symbolic_link_to_the_output_folder_stays_a_link() {
-    let dir = temp_dir("link");
-    let real = dir.join("real");
-    std::fs::create_dir(&real).unwrap();
+    let (dir, real, scene_path) = out_and_scene("link", false, false);
     let link = dir.join("link");
     std::os::unix::fs::symlink(&real, &link).unwrap();
-    let scene_path = dir.join("scene.toml");
-    std::fs::write(&scene_path, scene(false, false)).unwrap();
     pack(&scene_path, &link);
     assert!(is_symlink(&link));
     assert!(real.join("packing.csv").exists());
