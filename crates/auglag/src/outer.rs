@@ -33,14 +33,14 @@
 use std::time::Instant;
 
 use crate::error::{Error, Evaluation};
-use crate::inner::{InnerOutcome, InnerSettings, InnerStatus, Smooth};
+use crate::inner::{self, InnerOutcome, InnerSettings, InnerStatus, Method, Smooth};
 use crate::lagrangian::AugmentedLagrangian;
 use crate::options::{InnerSolver, Options};
 use crate::problem::Problem;
-use crate::projected_qn::{self, LbfgsWorkspace};
+use crate::projected_qn::LbfgsWorkspace;
 use crate::projection::{norm_inf, project};
 use crate::report::{Control, Event, Progress, Report, Solution, StopReason};
-use crate::spg::{self, SpgWorkspace};
+use crate::spg::SpgWorkspace;
 
 /// Floor of the scale factors, so that a huge initial gradient cannot switch a function off.
 const MIN_SCALE: f64 = 1e-8;
@@ -414,26 +414,19 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
         };
         let f: &mut dyn Smooth = &mut self.al;
         let bounds = (&self.lower[..], &self.upper[..]);
-        match &mut self.inner {
-            InnerWorkspace::Spg(ws) => spg::minimize(
-                f,
-                &mut self.x,
-                &mut self.grad,
-                bounds,
-                &settings,
-                ws,
-                &mut monitor,
-            ),
-            InnerWorkspace::Lbfgs(ws) => projected_qn::minimize(
-                f,
-                &mut self.x,
-                &mut self.grad,
-                bounds,
-                &settings,
-                ws,
-                &mut monitor,
-            ),
-        }
+        let method: &mut dyn Method = match &mut self.inner {
+            InnerWorkspace::Spg(ws) => ws,
+            InnerWorkspace::Lbfgs(ws) => ws,
+        };
+        inner::minimize(
+            f,
+            &mut self.x,
+            &mut self.grad,
+            bounds,
+            &settings,
+            method,
+            &mut monitor,
+        )
     }
 
     /// Step 2 and the measures of steps 3 and of the stopping test, at the current x.

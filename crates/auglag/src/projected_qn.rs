@@ -32,11 +32,8 @@
 //!   optimization", SIAM J. Sci. Comput. 16(5), 1190–1208, 1995 (L-BFGS-B, the method this one
 //!   simplifies: no generalized Cauchy point, the active set comes from the ε-rule instead).
 
-use crate::inner::{
-    ARMIJO, InnerOutcome, InnerSettings, InnerStatus, MAX_BACKTRACKS, Monitor, Smooth, backtrack,
-    descends_by_gradients,
-};
-use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
+use crate::inner::{Acceptance, InnerStatus, Iterate, Method, Smooth, line_search};
+use crate::projection::{dot, norm_inf};
 
 /// Upper limit ε̄ of the ε-active-set rule.
 const ACTIVE_EPSILON: f64 = 1e-3;
@@ -236,73 +233,44 @@ impl LbfgsWorkspace {
     }
 }
 
-/// Minimises `f` on [lower, upper] from `x` (already in the box). On return `x`, `grad` and the
-/// outcome's value describe the last (and best: the method is monotone) iterate.
-pub(crate) fn minimize<S: Smooth + ?Sized>(
-    f: &mut S,
-    x: &mut [f64],
-    grad: &mut [f64],
-    bounds: (&[f64], &[f64]),
-    settings: &InnerSettings,
-    ws: &mut LbfgsWorkspace,
-    monitor: &mut Monitor<'_>,
-) -> InnerOutcome {
-    let (lower, upper) = bounds;
-    ws.reset();
-    let mut outcome = match InnerOutcome::start(f, x, grad) {
-        Ok(outcome) => outcome,
-        Err(outcome) => return outcome,
-    };
-    let mut value = outcome.value;
-    let mut pg = projected_gradient_norm(x, grad, lower, upper);
-    let mut k = 0;
-    loop {
-        let interrupt = || monitor(k, x, value, pg, f.evaluations());
-        if let Some(done) = outcome.at_iteration(k, value, pg, settings, interrupt) {
-            return done;
-        }
-        ws.mark_free(x, grad, lower, upper, pg);
-        let new_value = match step(f, (x, grad, value, pg), bounds, settings, ws) {
-            Ok(v) => v,
-            Err(status) => {
-                outcome.status = status;
-                return outcome;
-            }
-        };
-        ws.push_pair(x, grad);
-        x.copy_from_slice(&ws.x_trial);
-        grad.copy_from_slice(&ws.g_trial);
-        value = new_value;
-        pg = projected_gradient_norm(x, grad, lower, upper);
-        k += 1;
+impl Method for LbfgsWorkspace {
+    fn begin(&mut self, _value: f64, _pg: f64) {
+        self.reset();
+    }
+
+    fn step(&mut self, f: &mut dyn Smooth, at: Iterate<'_>) -> Result<f64, InnerStatus> {
+        self.mark_free(at.x, at.grad, at.lower, at.upper, at.projected_gradient);
+        step(f, at, self)
+    }
+
+    fn accept(&mut self, _k: usize, x: &[f64], grad: &[f64], _value: f64) {
+        self.push_pair(x, grad);
+    }
+
+    fn trial(&self) -> (&[f64], &[f64]) {
+        (&self.x_trial, &self.g_trial)
     }
 }
-
-/// The current iterate: x, ∇F(x), F(x) and ‖P(x − ∇F(x)) − x‖∞.
-type Iterate<'a> = (&'a [f64], &'a [f64], f64, f64);
 
 /// One iteration's direction and search; falls back once to a projected-gradient direction.
 fn step<S: Smooth + ?Sized>(
     f: &mut S,
     at: Iterate<'_>,
-    bounds: (&[f64], &[f64]),
-    settings: &InnerSettings,
     ws: &mut LbfgsWorkspace,
 ) -> Result<f64, InnerStatus> {
-    let (lower, upper) = bounds;
-    let (x, grad) = (at.0, at.1);
+    let (x, grad, lower, upper) = (at.x, at.grad, at.lower, at.upper);
     let mut quasi_newton = direction(x, grad, lower, upper, ws);
     if dot(grad, &ws.direction) >= 0.0 {
         ws.reset();
         quasi_newton = false;
         direction(x, grad, lower, upper, ws);
     }
-    match projected_search(f, at, bounds, settings, ws) {
+    match projected_search(f, at, ws) {
         Err(InnerStatus::Stalled | InnerStatus::NonFinite) if quasi_newton => {
             // A poor quasi-Newton model, not a stationary point: retry along the gradient.
             ws.reset();
             direction(x, grad, lower, upper, ws);
-            projected_search(f, at, bounds, settings, ws)
+            projected_search(f, at, ws)
         }
         other => other,
     }
@@ -326,51 +294,20 @@ fn direction(
 fn projected_search<S: Smooth + ?Sized>(
     f: &mut S,
     at: Iterate<'_>,
-    bounds: (&[f64], &[f64]),
-    settings: &InnerSettings,
     ws: &mut LbfgsWorkspace,
 ) -> Result<f64, InnerStatus> {
-    let (lower, upper) = bounds;
-    let (x, grad, value, pg) = at;
-    let slope = dot(grad, &ws.direction);
+    let slope = dot(at.grad, &ws.direction);
     if slope >= 0.0 {
         return Err(InnerStatus::Stalled);
     }
-    let d_norm = norm_inf(&ws.direction);
-    let x_scale = norm_inf(x).max(1.0);
-    let mut alpha: f64 = 1.0;
-    let mut last_finite = true;
-    for _ in 0..MAX_BACKTRACKS {
-        if f.evaluations() >= settings.max_evaluations {
-            return Err(InnerStatus::MaxEvaluations);
-        }
-        let mut decrease = 0.0;
-        for (i, t) in ws.x_trial.iter_mut().enumerate() {
-            *t = clamp(x[i] + alpha * ws.direction[i], lower[i], upper[i]);
-            decrease += grad[i] * (*t - x[i]);
-        }
-        let trial = f.value_grad(&ws.x_trial, &mut ws.g_trial);
-        last_finite = trial.is_finite() && all_finite(&ws.g_trial);
-        if last_finite && decrease < 0.0 && trial <= value + ARMIJO * decrease {
-            return Ok(trial);
-        }
-        if last_finite
-            && descends_by_gradients((value, x, grad), (trial, &ws.x_trial, &ws.g_trial))
-            && projected_gradient_norm(&ws.x_trial, &ws.g_trial, lower, upper) < pg
-        {
-            return Ok(trial);
-        }
-        let f_for_interp = if last_finite { trial } else { f64::NAN };
-        alpha = backtrack(alpha, value, slope, f_for_interp, 0.1, 0.5);
-        if alpha * d_norm <= f64::EPSILON * x_scale {
-            break;
-        }
-    }
-    Err(if last_finite {
-        InnerStatus::Stalled
-    } else {
-        InnerStatus::NonFinite
-    })
+    let trial = (&mut ws.x_trial[..], &mut ws.g_trial[..]);
+    line_search(
+        f,
+        at,
+        (&ws.direction, slope),
+        Acceptance::ProjectedPath,
+        trial,
+    )
 }
 
 #[cfg(test)]

@@ -23,11 +23,8 @@
 //! - J. Barzilai, J. M. Borwein, "Two-point step size gradient methods", IMA J. Numer. Anal. 8,
 //!   141–148, 1988.
 
-use crate::inner::{
-    ARMIJO, InnerOutcome, InnerSettings, InnerStatus, MAX_BACKTRACKS, Monitor, Smooth, backtrack,
-    descends_by_gradients,
-};
-use crate::projection::{all_finite, clamp, dot, norm_inf, projected_gradient_norm};
+use crate::inner::{Acceptance, InnerStatus, Iterate, Method, Smooth, line_search};
+use crate::projection::{clamp, dot};
 
 /// Buffers of the SPG method, allocated once and reused by every inner solve.
 #[derive(Debug, Clone)]
@@ -38,6 +35,8 @@ pub(crate) struct SpgWorkspace {
     /// Last M accepted values for the GLL reference value (a ring buffer).
     history: Vec<f64>,
     step_bounds: (f64, f64),
+    /// λ of the current iteration.
+    lambda: f64,
 }
 
 impl SpgWorkspace {
@@ -49,74 +48,52 @@ impl SpgWorkspace {
             g_trial: vec![0.0; n],
             history: vec![f64::NEG_INFINITY; memory.max(1)],
             step_bounds,
+            lambda: 1.0,
         }
     }
 }
 
-/// Minimises `f` on [lower, upper] from `x` (already in the box). On return `x`, `grad` and the
-/// outcome's value describe the last iterate.
-pub(crate) fn minimize<S: Smooth + ?Sized>(
-    f: &mut S,
-    x: &mut [f64],
-    grad: &mut [f64],
-    bounds: (&[f64], &[f64]),
-    settings: &InnerSettings,
-    ws: &mut SpgWorkspace,
-    monitor: &mut Monitor<'_>,
-) -> InnerOutcome {
-    let (lower, upper) = bounds;
-    let (step_min, step_max) = ws.step_bounds;
-    let mut outcome = match InnerOutcome::start(f, x, grad) {
-        Ok(outcome) => outcome,
-        Err(outcome) => return outcome,
-    };
-    let mut value = outcome.value;
-    ws.history.iter_mut().for_each(|h| *h = f64::NEG_INFINITY);
-    ws.history[0] = value;
-    let mut pg = projected_gradient_norm(x, grad, lower, upper);
-    let mut step = if pg > 0.0 {
-        (1.0 / pg).clamp(step_min, step_max)
-    } else {
-        1.0
-    };
-    let mut k = 0;
-    loop {
-        let interrupt = || monitor(k, x, value, pg, f.evaluations());
-        if let Some(done) = outcome.at_iteration(k, value, pg, settings, interrupt) {
-            return done;
-        }
-        for (((d, &xi), &gi), (&l, &u)) in ws
+impl Method for SpgWorkspace {
+    fn begin(&mut self, value: f64, pg: f64) {
+        self.history.iter_mut().for_each(|h| *h = f64::NEG_INFINITY);
+        self.history[0] = value;
+        let (step_min, step_max) = self.step_bounds;
+        self.lambda = if pg > 0.0 {
+            (1.0 / pg).clamp(step_min, step_max)
+        } else {
+            1.0
+        };
+    }
+
+    fn step(&mut self, f: &mut dyn Smooth, at: Iterate<'_>) -> Result<f64, InnerStatus> {
+        for (((d, &xi), &gi), (&l, &u)) in self
             .direction
             .iter_mut()
-            .zip(x.iter())
-            .zip(grad.iter())
-            .zip(lower.iter().zip(upper))
+            .zip(at.x)
+            .zip(at.grad)
+            .zip(at.lower.iter().zip(at.upper))
         {
-            *d = clamp(xi - step * gi, l, u) - xi;
+            *d = clamp(xi - self.lambda * gi, l, u) - xi;
         }
-        let slope = dot(grad, &ws.direction);
-        let reference = ws.history.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let search = Search {
-            value,
-            slope,
-            reference,
-            projected_gradient: pg,
-        };
-        let new_value = match line_search(f, (x, grad), &search, bounds, settings, ws) {
-            Ok(v) => v,
-            Err(status) => {
-                outcome.status = status;
-                return outcome;
-            }
-        };
-        step = spectral_step(x, grad, ws);
-        x.copy_from_slice(&ws.x_trial);
-        grad.copy_from_slice(&ws.g_trial);
-        value = new_value;
-        k += 1;
-        let slot = k % ws.history.len();
-        ws.history[slot] = value;
-        pg = projected_gradient_norm(x, grad, lower, upper);
+        let slope = dot(at.grad, &self.direction);
+        let reference = self
+            .history
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
+        let trial = (&mut self.x_trial[..], &mut self.g_trial[..]);
+        let acceptance = Acceptance::Nonmonotone { reference };
+        line_search(f, at, (&self.direction, slope), acceptance, trial)
+    }
+
+    fn accept(&mut self, k: usize, x: &[f64], grad: &[f64], value: f64) {
+        self.lambda = spectral_step(x, grad, self);
+        let slot = (k + 1) % self.history.len();
+        self.history[slot] = value;
+    }
+
+    fn trial(&self) -> (&[f64], &[f64]) {
+        (&self.x_trial, &self.g_trial)
     }
 }
 
@@ -136,71 +113,4 @@ fn spectral_step(x: &[f64], grad: &[f64], ws: &SpgWorkspace) -> f64 {
     } else {
         (ss / sy).clamp(step_min, step_max)
     }
-}
-
-/// What the line search needs to know about the current iterate.
-struct Search {
-    /// F(x).
-    value: f64,
-    /// ∇F(x)ᵀd < 0.
-    slope: f64,
-    /// The GLL reference max of the last M values.
-    reference: f64,
-    /// ‖P(x − ∇F(x)) − x‖∞, for the rounding-level acceptance.
-    projected_gradient: f64,
-}
-
-/// GLL backtracking along `ws.direction`; on success returns F at the accepted point, which is
-/// left in `ws.x_trial` with its gradient in `ws.g_trial`.
-fn line_search<S: Smooth + ?Sized>(
-    f: &mut S,
-    (x, grad): (&[f64], &[f64]),
-    search: &Search,
-    bounds: (&[f64], &[f64]),
-    settings: &InnerSettings,
-    ws: &mut SpgWorkspace,
-) -> Result<f64, InnerStatus> {
-    let (lower, upper) = bounds;
-    let d_norm = norm_inf(&ws.direction);
-    let x_scale = norm_inf(x).max(1.0);
-    let mut alpha: f64 = 1.0;
-    let mut last_finite = true;
-    for _ in 0..MAX_BACKTRACKS {
-        if f.evaluations() >= settings.max_evaluations {
-            return Err(InnerStatus::MaxEvaluations);
-        }
-        for ((((t, &xi), &di), &l), &u) in ws
-            .x_trial
-            .iter_mut()
-            .zip(x)
-            .zip(&ws.direction)
-            .zip(lower)
-            .zip(upper)
-        {
-            // Rounding in x + αd may step a hair outside the box; the clamp keeps feasibility exact.
-            *t = clamp(xi + alpha * di, l, u);
-        }
-        let trial = f.value_grad(&ws.x_trial, &mut ws.g_trial);
-        last_finite = trial.is_finite() && all_finite(&ws.g_trial);
-        if last_finite && trial <= search.reference + ARMIJO * alpha * search.slope {
-            return Ok(trial);
-        }
-        if last_finite
-            && descends_by_gradients((search.value, x, grad), (trial, &ws.x_trial, &ws.g_trial))
-            && projected_gradient_norm(&ws.x_trial, &ws.g_trial, lower, upper)
-                < search.projected_gradient
-        {
-            return Ok(trial);
-        }
-        let f_for_interp = if last_finite { trial } else { f64::NAN };
-        alpha = backtrack(alpha, search.value, search.slope, f_for_interp, 0.1, 0.9);
-        if alpha * d_norm <= f64::EPSILON * x_scale {
-            break;
-        }
-    }
-    Err(if last_finite {
-        InnerStatus::Stalled
-    } else {
-        InnerStatus::NonFinite
-    })
 }

@@ -469,12 +469,15 @@ fn exchange_unsupported(e: &std::io::Error) -> bool {
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> PathBuf {
+    /// A fresh folder of this process in the system's temporary folder, and an empty output
+    /// folder `out` in it.
+    fn temp(name: &str) -> (PathBuf, PathBuf) {
         let dir =
             std::env::temp_dir().join(format!("ellipack-folder-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(dir.join("out")).unwrap();
-        dir
+        let out = dir.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        (dir, out)
     }
 
     fn names(dir: &Path) -> Vec<String> {
@@ -488,8 +491,7 @@ mod tests {
 
     #[test]
     fn a_commit_replaces_our_files_and_keeps_the_users() {
-        let dir = temp("commit");
-        let out = dir.join("out");
+        let (dir, out) = temp("commit");
         std::fs::write(out.join(CSV_FILE), "old").unwrap();
         std::fs::write(out.join(PNG_FILE), "old picture").unwrap();
         std::fs::write(out.join("notes.txt"), "mine").unwrap();
@@ -510,8 +512,7 @@ mod tests {
 
     #[test]
     fn a_failure_before_the_commit_leaves_the_folder_as_it_was() {
-        let dir = temp("failure");
-        let out = dir.join("out");
+        let (dir, out) = temp("failure");
         std::fs::write(out.join(CSV_FILE), "old").unwrap();
         std::fs::write(out.join(SUMMARY_FILE), "old summary").unwrap();
         let write_set = |into: &Path| -> Result<(), String> {
@@ -530,8 +531,7 @@ mod tests {
 
     #[test]
     fn leftovers_of_killed_runs_are_removed_and_a_retired_set_is_put_back() {
-        let dir = temp("leftovers");
-        let out = dir.join("out");
+        let (dir, out) = temp("leftovers");
         // A process id above Linux's limit (2²²) never runs.
         let dead = 999_999_999u32;
         std::fs::write(out.join(format!(".{CSV_FILE}.tmp-{dead}")), "half").unwrap();
@@ -556,8 +556,8 @@ mod tests {
 
     #[test]
     fn in_place_the_run_files_are_replaced_and_stale_ones_removed() {
-        let dir = temp("inplace");
-        let out = dir.join("out").canonicalize().unwrap();
+        let (dir, out) = temp("inplace");
+        let out = out.canonicalize().unwrap();
         std::fs::write(out.join(CSV_FILE), "old").unwrap();
         std::fs::write(out.join(XYZ_FILE), "old xyz").unwrap();
         std::fs::write(out.join("notes.txt"), "mine").unwrap();
@@ -575,8 +575,7 @@ mod tests {
 
     #[test]
     fn a_failed_swap_still_delivers_the_run_files() {
-        let dir = temp("fallback");
-        let out = dir.join("out");
+        let (dir, out) = temp("fallback");
         std::fs::write(out.join(PNG_FILE), "old picture").unwrap();
         // A user's folder that cannot be carried over: a file of the same name is in its way
         // in the staging folder.
@@ -600,8 +599,7 @@ mod tests {
 
     #[test]
     fn a_large_folder_of_the_users_gets_the_run_files_in_place() {
-        let dir = temp("large");
-        let out = dir.join("out");
+        let (dir, out) = temp("large");
         std::fs::create_dir(out.join("data")).unwrap();
         for k in 0..=MAX_CARRIED_ENTRIES {
             std::fs::write(out.join("data").join(k.to_string()), "").unwrap();
@@ -628,8 +626,8 @@ mod tests {
 
     #[test]
     fn the_two_rename_swap_works_where_exchange_does_not() {
-        let dir = temp("renames");
-        let (out, staging) = (dir.join("out"), dir.join("staged"));
+        let (dir, out) = temp("renames");
+        let staging = dir.join("staged");
         std::fs::write(out.join(CSV_FILE), "old").unwrap();
         std::fs::create_dir(&staging).unwrap();
         std::fs::write(staging.join(CSV_FILE), "new").unwrap();

@@ -95,19 +95,14 @@ impl OutputFile {
             path: path.to_path_buf(),
             source,
         };
+        // The shell's streams and devices are written where they are, without a temporary file.
+        let direct = |sink| OutputFile {
+            path: path.to_path_buf(),
+            sink,
+        };
         match descriptor(path) {
-            Some(Descriptor::Stdout) => {
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Stdout(io::stdout()),
-                });
-            }
-            Some(Descriptor::Stderr) => {
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Stderr(io::stderr()),
-                });
-            }
+            Some(Descriptor::Stdout) => return Ok(direct(Sink::Stdout(io::stdout()))),
+            Some(Descriptor::Stderr) => return Ok(direct(Sink::Stderr(io::stderr()))),
             Some(Descriptor::Other) => {
                 // Appending continues where the shell's redirection stands instead of
                 // writing over it from offset 0.
@@ -115,10 +110,7 @@ impl OutputFile {
                     .append(true)
                     .open(path)
                     .map_err(io)?;
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Direct(file),
-                });
+                return Ok(direct(Sink::Direct(file)));
             }
             None => {}
         }
@@ -134,10 +126,7 @@ impl OutputFile {
                     .write(true)
                     .open(path)
                     .map_err(io)?;
-                return Ok(OutputFile {
-                    path: path.to_path_buf(),
-                    sink: Sink::Direct(device),
-                });
+                return Ok(direct(Sink::Direct(device)));
             }
             Ok(m) => (
                 std::fs::canonicalize(path).map_err(io)?,
@@ -259,57 +248,69 @@ fn temporary_sibling(path: &Path) -> PathBuf {
 mod tests {
     use super::*;
 
+    /// A fresh folder of this process in the system's temporary folder, removed with all it
+    /// holds when dropped (also when a test fails).
+    struct TempDir(PathBuf);
+
+    impl std::ops::Deref for TempDir {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn temp(name: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("ellipack-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+
+    /// How many entries `dir` holds.
+    fn entries(dir: &Path) -> usize {
+        std::fs::read_dir(dir).unwrap().count()
+    }
+
     #[test]
     fn writes_and_replaces() {
-        let dir = std::env::temp_dir().join(format!("ellipack-output-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = temp("output");
         let path = dir.join("a.csv");
         write_atomically(&path, b"one").unwrap();
         write_atomically(&path, b"two").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"two");
-        assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            1,
-            "no temporary file left"
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(entries(&dir), 1, "no temporary file left");
     }
 
     #[test]
     fn an_output_dropped_before_commit_leaves_nothing_behind() {
-        let dir = std::env::temp_dir().join(format!("ellipack-guard-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = temp("guard");
         let path = dir.join("a.csv");
         std::fs::write(&path, b"old").unwrap();
         {
             let mut file = OutputFile::create(&path).unwrap();
             file.write_all(&[b'x'; 100_000]).unwrap();
-            assert_eq!(
-                std::fs::read_dir(&dir).unwrap().count(),
-                2,
-                "temporary file"
-            );
+            assert_eq!(entries(&dir), 2, "temporary file");
         }
         assert_eq!(std::fs::read(&path).unwrap(), b"old");
-        assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            1,
-            "temporary file removed"
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(entries(&dir), 1, "temporary file removed");
     }
 
     #[test]
     fn a_directory_is_not_replaced() {
-        let dir = std::env::temp_dir().join(format!("ellipack-outdir-{}", std::process::id()));
+        let dir = temp("outdir");
         std::fs::create_dir_all(dir.join("sub")).unwrap();
         let err = write_atomically(&dir.join("sub"), b"x")
             .unwrap_err()
             .to_string();
         assert!(err.contains("is a directory"), "{err}");
         assert!(dir.join("sub").is_dir());
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
-        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(entries(&dir), 1);
     }
 
     #[test]

@@ -95,39 +95,31 @@ impl std::fmt::Display for StartDefects {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let mut parts = Vec::new();
         if !self.overlapping.is_empty() {
-            let mut list: Vec<String> = self
-                .overlapping
-                .iter()
-                .take(LISTED)
-                .map(|&(i, j, m)| format!("{i} and {j} (μ² = {m:.6})"))
-                .collect();
-            if self.overlapping.len() > LISTED {
-                list.push(format!("and {} more", self.overlapping.len() - LISTED));
-            }
-            parts.push(format!(
-                "{} overlapping pairs: items {}",
-                self.overlapping.len(),
-                list.join(", ")
-            ));
+            let list = listed(&self.overlapping, |&(i, j, m)| {
+                format!("{i} and {j} (μ² = {m:.6})")
+            });
+            let n = self.overlapping.len();
+            parts.push(format!("{n} overlapping pairs: items {list}"));
         }
         if !self.outside.is_empty() {
-            let mut list: Vec<String> = self
-                .outside
-                .iter()
-                .take(LISTED)
-                .map(|&(i, s)| format!("{i} (the container would have to grow by {:.3e})", s - 1.0))
-                .collect();
-            if self.outside.len() > LISTED {
-                list.push(format!("and {} more", self.outside.len() - LISTED));
-            }
-            parts.push(format!(
-                "{} items outside the container: {}",
-                self.outside.len(),
-                list.join(", ")
-            ));
+            let list = listed(&self.outside, |&(i, s)| {
+                format!("{i} (the container would have to grow by {:.3e})", s - 1.0)
+            });
+            let n = self.outside.len();
+            parts.push(format!("{n} items outside the container: {list}"));
         }
         write!(f, "{}", parts.join("; "))
     }
+}
+
+/// The first [`LISTED`] of `items`, shown by `show` and separated by commas, and how many more
+/// there are.
+fn listed<T>(items: &[T], show: impl Fn(&T) -> String) -> String {
+    let mut list: Vec<String> = items.iter().take(LISTED).map(show).collect();
+    if items.len() > LISTED {
+        list.push(format!("and {} more", items.len() - LISTED));
+    }
+    list.join(", ")
 }
 
 /// Converts a time limit in seconds, refusing what is not positive or beyond a [`Duration`]
@@ -378,28 +370,17 @@ pub fn verify(packing: &Packing) -> Result<CertificateCounts, PackError> {
     verify_detailed(packing).map(|v| v.certificate)
 }
 
-/// Two items whose interiors overlap.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OverlappingPair {
-    /// The 0-based positions of the two items in the packing (rows of `packing.csv`), the
-    /// smaller first.
-    pub items: (usize, usize),
-    /// Their PW85 μ² (< 1).
-    pub mu2: f64,
-}
+/// Two items whose interiors overlap: `items` are their 0-based positions in the packing (rows
+/// of `packing.csv`), the smaller first, and `mu2` their PW85 μ² (< 1).
+pub type OverlappingPair = implicit_packing::certificate::Overlap;
 
-/// An item that is not inside the container.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ItemOutside {
-    /// The 0-based position of the item in the packing (its row of `packing.csv`).
-    pub item: usize,
-    /// By how much it sticks out, as a scale factor t > 1: the item lies inside the
-    /// container scaled by t about the container's centre, and in no smaller scaling. For a
-    /// ball of radius r, t·r is the largest distance of a point of the item from the centre;
-    /// for a box, the worst of (|cₖ| + sₖ) / Lₖ over the axes (cₖ the item's centre relative to
-    /// the container's, sₖ its half extent along axis k, Lₖ the half side).
-    pub scale: f64,
-}
+/// An item that is not inside the container: `item` is its 0-based position in the packing (its
+/// row of `packing.csv`), and `scale` by how much it sticks out, as a scale factor t > 1: the
+/// item lies inside the container scaled by t about the container's centre, and in no smaller
+/// scaling. For a ball of radius r, t·r is the largest distance of a point of the item from the
+/// centre; for a box, the worst of (|cₖ| + sₖ) / Lₖ over the axes (cₖ the item's centre relative
+/// to the container's, sₖ its half extent along axis k, Lₖ the half side).
+pub type ItemOutside = implicit_packing::certificate::Outside;
 
 /// [`verify`]'s certificate with the offenders it counts.
 #[derive(Clone, Debug, PartialEq)]
@@ -439,24 +420,10 @@ fn verify_n<const N: usize>(
     let x = variables_of::<N>(packing, axes, kind)?;
     let model = problem.certify(&x)?;
     let certificate = certificate_of(&model);
-    let mut overlapping_pairs: Vec<OverlappingPair> = model
-        .overlapping
-        .iter()
-        .map(|o| OverlappingPair {
-            items: o.items,
-            mu2: o.mu2,
-        })
-        .collect();
+    let mut overlapping_pairs = model.overlapping;
     // Deepest first; the stable sort keeps the certificate's (i, j) order among equals.
     overlapping_pairs.sort_by(|a, b| a.mu2.total_cmp(&b.mu2));
-    let mut outside: Vec<ItemOutside> = model
-        .outside
-        .iter()
-        .map(|o| ItemOutside {
-            item: o.item,
-            scale: o.scale,
-        })
-        .collect();
+    let mut outside = model.outside;
     outside.sort_by(|a, b| b.scale.total_cmp(&a.scale));
     Ok(Verification {
         certificate,
@@ -662,18 +629,12 @@ mod tests {
 
     #[test]
     fn verify_rejects_an_overlapping_pair_and_an_item_outside() {
-        let items = Items::Ellipses(vec![
-            EllipseItem {
-                center: [0.0, 0.0],
-                semi_axes: [1.0, 1.0],
-                theta: 0.0,
-            },
-            EllipseItem {
-                center: [1.5, 0.0],
-                semi_axes: [1.0, 1.0],
-                theta: 0.0,
-            },
-        ]);
+        let unit_disc_at = |x| EllipseItem {
+            center: [x, 0.0],
+            semi_axes: [1.0, 1.0],
+            theta: 0.0,
+        };
+        let items = Items::Ellipses(vec![unit_disc_at(0.0), unit_disc_at(1.5)]);
         let packing = Packing::new(
             Container::Circle {
                 center: [0.0, 0.0],

@@ -135,8 +135,7 @@ pub fn write_svg(
     packing: &Packing,
     options: &RenderOptions,
 ) -> Result<(), RenderError> {
-    let text = svg_string(packing, options).map_err(|e| rename(e, path))?;
-    Ok(crate::output::write_atomically(path, text.as_bytes())?)
+    write_picture(path, svg_string(packing, options).map(String::into_bytes))
 }
 
 /// Writes [`png_bytes`] to `path` atomically.
@@ -148,7 +147,12 @@ pub fn write_png(
     packing: &Packing,
     options: &RenderOptions,
 ) -> Result<(), RenderError> {
-    let bytes = png_bytes(packing, options).map_err(|e| rename(e, path))?;
+    write_picture(path, png_bytes(packing, options))
+}
+
+/// Writes a drawn picture to `path` atomically; a drawing error is told against `path`.
+fn write_picture(path: &Path, drawn: Result<Vec<u8>, RenderError>) -> Result<(), RenderError> {
+    let bytes = drawn.map_err(|e| rename(e, path))?;
     Ok(crate::output::write_atomically(path, &bytes)?)
 }
 

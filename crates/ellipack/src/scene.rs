@@ -920,23 +920,21 @@ fn plain_types(message: &str) -> String {
             "expected a table",
         );
     }
-    if let Some(number) = message
-        .strip_prefix("invalid type: integer `")
-        .and_then(|rest| rest.strip_suffix("` as i128, expected an integer"))
-    {
-        return format!(
-            "{} is out of range: a whole number here is at most 9223372036854775807",
-            crate::table::short_text(number)
-        );
-    }
-    if let Some(number) = message
-        .strip_prefix("invalid value: integer `")
-        .and_then(|rest| rest.strip_suffix("`, expected an integer"))
-    {
-        return format!(
-            "{} is out of range: a whole number here is at most 9223372036854775807",
-            crate::table::short_text(number)
-        );
+    // toml reports an integer beyond i64 in one of these two forms, depending on the path.
+    let out_of_range = [
+        ("invalid type: integer `", "` as i128, expected an integer"),
+        ("invalid value: integer `", "`, expected an integer"),
+    ];
+    for (prefix, suffix) in out_of_range {
+        if let Some(number) = message
+            .strip_prefix(prefix)
+            .and_then(|rest| rest.strip_suffix(suffix))
+        {
+            return format!(
+                "{} is out of range: a whole number here is at most 9223372036854775807",
+                crate::table::short_text(number)
+            );
+        }
     }
     message
 }

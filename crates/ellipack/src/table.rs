@@ -192,6 +192,23 @@ impl<R: std::io::Read> NumericReader<R> {
     pub fn rows_read(&self) -> usize {
         self.index
     }
+
+    /// Reads every remaining row.
+    ///
+    /// # Errors
+    /// As [`next_row`](Self::next_row), or [`Error::Empty`] when there is no row.
+    pub fn read_all(mut self) -> Result<Vec<NumericRow>, Error> {
+        let mut all = Vec::new();
+        while let Some(row) = self.next_row()? {
+            all.push(row);
+        }
+        if all.is_empty() {
+            return Err(Error::Empty {
+                source_name: self.source_name,
+            });
+        }
+        Ok(all)
+    }
 }
 
 /// Reads the named numeric columns of every row. `source_name` names the input in messages.
@@ -208,17 +225,7 @@ pub fn read_numeric_rows(
 ) -> Result<Vec<NumericRow>, Error> {
     let mut reader = csv_reader(text.as_bytes());
     let header = read_header(&mut reader, source_name)?;
-    let mut rows = NumericReader::new(reader, &header, source_name, columns)?;
-    let mut all = Vec::new();
-    while let Some(row) = rows.next_row()? {
-        all.push(row);
-    }
-    if all.is_empty() {
-        return Err(Error::Empty {
-            source_name: source_name.to_string(),
-        });
-    }
-    Ok(all)
+    NumericReader::new(reader, &header, source_name, columns)?.read_all()
 }
 
 /// A cell as quoted in a message: on one line (control characters escaped, as `\n`) and cut

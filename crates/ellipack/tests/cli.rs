@@ -3,7 +3,7 @@
 use testkit::table::Table;
 
 mod common;
-use common::{assert_success, ellipack, on_input, pack_into, temp_dir, utf8};
+use common::{assert_success, ellipack, folder_with, on_input, pack_into, run, temp_dir, utf8};
 
 #[test]
 fn contact_accepts_the_reference_file_as_it_is() {
@@ -38,15 +38,11 @@ fn contact_accepts_the_reference_file_as_it_is() {
         assert!(err < 1e-13, "case {}: {mu2} vs {}", case.id, case.mu2);
         assert_eq!(cell("error"), "", "no error");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn overlap_criterion_writes_only_the_verdict() {
-    let output = ellipack()
-        .args(["contact", "--criterion", "overlap"])
-        .output()
-        .unwrap();
+    let output = run(&["contact", "--criterion", "overlap"]);
     // One example pair is not positive definite: the documented status of failed rows.
     assert_eq!(output.status.code(), Some(3));
     let text = utf8(output.stdout);
@@ -70,12 +66,8 @@ fn malformed_file_is_an_error_naming_the_line() {
     assert!(!output.status.success());
     let stderr = utf8(output.stderr);
     assert!(stderr.contains("missing r12_z"), "{stderr}");
-    let output = ellipack()
-        .args(["contact", "--input", "/no/such/file.csv"])
-        .output()
-        .unwrap();
+    let output = run(&["contact", "--input", "/no/such/file.csv"]);
     assert!(!output.status.success());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Relative error, or absolute error where the reference is below 1e-2 (the bound of the
@@ -137,17 +129,18 @@ fn measure_accepts_both_reference_files_as_they_are() {
     }
 }
 
+/// Six ellipsoids in a ball, two local minimisations on one thread.
+const SIX_IN_A_BALL: &str = "dimension = 3\nseed = 2\n[container]\nkind = \"ball\"\n\
+    [[shapes]]\ncount = 6\nsemi_axes = [1.0, 0.75, 0.5]\n\
+    [solver]\ntime_limit = 30.0\nlocal_minimisations = 2\nthreads = 1\n";
+
+/// A scene whose semi-axis on line 6 is negative.
+const NEGATIVE_SEMI_AXIS: &str = "dimension = 2\n[container]\nkind = \"ellipse\"\n\
+    [[shapes]]\ncount = 3\nsemi_axes = [2.0, -1.0]\n";
+
 #[test]
 fn pack_writes_a_certified_packing_that_verify_accepts() {
-    let dir = temp_dir("pack");
-    let scene = dir.join("scene.toml");
-    std::fs::write(
-        &scene,
-        "dimension = 3\nseed = 2\n[container]\nkind = \"ball\"\n[[shapes]]\ncount = 6\n\
-         semi_axes = [1.0, 0.75, 0.5]\n[solver]\ntime_limit = 30.0\nlocal_minimisations = 2\n\
-         threads = 1\n",
-    )
-    .unwrap();
+    let (dir, scene) = folder_with("pack", "scene.toml", SIX_IN_A_BALL);
     let out = dir.join("out");
     let run = pack_into(&scene, &out);
     assert_success(&run);
@@ -179,36 +172,25 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         verify.status.success() && text.contains("certified"),
         "{text}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn pack_rejects_a_bad_scene_naming_key_and_line() {
-    let dir = temp_dir("badscene");
-    let scene = dir.join("bad.toml");
-    std::fs::write(
-        &scene,
-        "dimension = 2\n[container]\nkind = \"ellipse\"\n[[shapes]]\ncount = 3\nsemi_axes = [2.0, -1.0]\n",
-    )
-    .unwrap();
-    let run = pack_into(&scene, &dir.join("o"));
-    assert!(!run.status.success());
-    let stderr = utf8(run.stderr);
+    let (dir, scene) = folder_with("badscene", "bad.toml", NEGATIVE_SEMI_AXIS);
+    let refused = pack_into(&scene, &dir.join("o"));
+    assert!(!refused.status.success());
+    let stderr = utf8(refused.stderr);
     assert!(
         stderr.contains("bad.toml: line 6") && stderr.contains("semi_axes"),
         "{stderr}"
     );
-    let run = ellipack()
-        .args(["pack", "--instance", "no-such"])
-        .output()
-        .unwrap();
-    assert!(!run.status.success());
+    let unknown = run(&["pack", "--instance", "no-such"]);
+    assert!(!unknown.status.success());
     assert!(
-        String::from_utf8(run.stderr)
+        String::from_utf8(unknown.stderr)
             .unwrap()
             .contains("unknown instance")
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[cfg(unix)]
@@ -249,5 +231,4 @@ fn ctrl_c_writes_the_best_packing_so_far() {
         "{}",
         String::from_utf8_lossy(&verify.stdout)
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -3,11 +3,11 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::os::unix::fs::{FileTypeExt, PermissionsExt};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 
 mod common;
-use common::{ellipack, is_symlink, names, on_input, temp_dir, utf8};
+use common::{ellipack, folder_with, is_symlink, names, on_input, run, temp_dir, utf8};
 
 const HEADER_3D: &str =
     "case_id,r12_x,r12_y,r12_z,q1_0,q1_1,q1_2,q1_3,q1_4,q1_5,q2_0,q2_1,q2_2,q2_3,q2_4,q2_5";
@@ -18,14 +18,6 @@ fn refused_on(command: &str, input: &Path) -> String {
     let out = on_input(&[command], input);
     assert_eq!(out.status.code(), Some(1));
     utf8(out.stderr)
-}
-
-/// A fresh test folder `name` holding `file` with `text`: (the folder, the file).
-fn folder_with(name: &str, file: &str, text: impl AsRef<[u8]>) -> (PathBuf, PathBuf) {
-    let dir = temp_dir(name);
-    let input = dir.join(file);
-    std::fs::write(&input, text).unwrap();
-    (dir, input)
 }
 
 fn pairs_3d(rows: usize) -> String {
@@ -53,7 +45,7 @@ fn write_to(command: &str, input: &Path, output: &Path) -> std::process::Output 
 
 #[test]
 fn a_2d_file_goes_through_the_2d_kernel() {
-    let (dir, input) = folder_with(
+    let (_dir, input) = folder_with(
         "2d",
         "ellipses.csv",
         "q2_2,case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,note\n\
@@ -92,7 +84,6 @@ fn a_2d_file_goes_through_the_2d_kernel() {
         stderr.contains("line 1") && stderr.contains("missing q1_3") && stderr.contains("r12_z"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -117,15 +108,11 @@ fn the_output_may_not_be_the_input() {
         }
     }
     assert_eq!(names(&dir), ["hard.csv", "link.csv", "pairs.csv"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn dev_null_stays_a_character_device() {
-    let out = ellipack()
-        .args(["contact", "--output", "/dev/null"])
-        .output()
-        .unwrap();
+    let out = run(&["contact", "--output", "/dev/null"]);
     assert_eq!(out.status.code(), Some(3), "one example row fails");
     let kind = std::fs::metadata("/dev/null").unwrap().file_type();
     assert!(kind.is_char_device(), "/dev/null is still a device");
@@ -165,7 +152,6 @@ fn dev_stdout_is_written_through() {
         "{text}"
     );
     assert_eq!(names(&dir), ["pairs.csv", "redirected.csv"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -200,7 +186,6 @@ fn a_fifo_is_written_into() {
     assert_eq!(text.lines().count(), 6);
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
     assert_eq!(names(&dir), ["pairs.csv", "results.fifo"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -224,7 +209,6 @@ fn a_symlink_is_kept_and_its_target_written() {
     assert_eq!(out.status.code(), Some(0), "{out:?}");
     assert!(is_symlink(&dangling));
     assert_eq!(std::fs::read_to_string(&fresh).unwrap().lines().count(), 3);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -238,7 +222,6 @@ fn a_replaced_file_keeps_its_mode() {
     assert_eq!(std::fs::read_to_string(&output).unwrap().lines().count(), 3);
     let mode = std::fs::metadata(&output).unwrap().permissions().mode() & 0o777;
     assert_eq!(mode, 0o640);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -257,7 +240,6 @@ fn a_failure_midway_leaves_no_temporary_file_and_the_old_output() {
     assert!(stderr.contains("line 20002"), "{stderr}");
     assert_eq!(std::fs::read_to_string(&output).unwrap(), "old");
     assert_eq!(names(&dir), ["pairs.csv", "results.csv"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -284,12 +266,11 @@ fn a_closed_pipe_ends_quietly() {
         assert_eq!(out.status.code(), Some(0), "{stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn duplicate_columns_are_errors_naming_the_column() {
-    let (dir, input) = folder_with(
+    let (_dir, input) = folder_with(
         "duplicate",
         "pairs.csv",
         format!("{HEADER_3D},q1_4\n0,3,0,0,1,0,0,1,0,1,1,0,0,1,0,1,7\n"),
@@ -306,12 +287,11 @@ fn duplicate_columns_are_errors_naming_the_column() {
         stderr.contains("column `theta_j` appears twice"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn the_exit_status_says_whether_rows_failed() {
-    let (dir, input) = folder_with("status", "pairs.csv", pairs_3d(3));
+    let (_dir, input) = folder_with("status", "pairs.csv", pairs_3d(3));
     let status = |command: &str| on_input(&[command], &input).status.code();
     assert_eq!(status("contact"), Some(0), "every row fine");
     std::fs::write(
@@ -337,8 +317,7 @@ fn the_exit_status_says_whether_rows_failed() {
     assert_eq!(status("measure"), Some(3));
     std::fs::write(&input, "nothing,here\n1,2\n").unwrap();
     assert_eq!(status("measure"), Some(1));
-    let help = ellipack().args(["contact", "--help"]).output().unwrap();
+    let help = run(&["contact", "--help"]);
     let help = utf8(help.stdout);
     assert!(help.contains("Exit status") && help.contains("3"), "{help}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,7 +7,7 @@ use ellipack::packing::{CertificateCounts, Summary, read_packing_dir, write_file
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{assert_success, ellipack, is_symlink, names, pack_into, temp_dir};
+use common::{TempDir, assert_success, ellipack, is_symlink, names, pack_into, temp_dir};
 
 /// A small 2D scene: five ellipses, two local minimisations.
 fn scene(pictures: bool, xyz: bool) -> String {
@@ -23,7 +23,7 @@ fn pack(scene_path: &Path, out: &Path) {
 }
 
 /// A test folder holding `out/` and `scene.toml` (the scene of [`scene`]).
-fn out_and_scene(name: &str, pictures: bool, xyz: bool) -> (PathBuf, PathBuf, PathBuf) {
+fn out_and_scene(name: &str, pictures: bool, xyz: bool) -> (TempDir, PathBuf, PathBuf) {
     let dir = temp_dir(name);
     let out = dir.join("out");
     std::fs::create_dir(&out).unwrap();
@@ -99,7 +99,6 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
         ["out"],
         "no staging folder left beside the output"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -153,12 +152,11 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
     pack(&scene_path, &out);
     assert!(!leftover.exists(), "the leftover staging folder is removed");
     assert_whole_run(&out);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn temporary_files_of_killed_runs_are_removed() {
-    let (dir, out, scene_path) = out_and_scene("temp", false, false);
+    let (_dir, out, scene_path) = out_and_scene("temp", false, false);
     for file in ["packing.csv", "summary.json", "packing.png"] {
         std::fs::write(out.join(format!(".{file}.tmp-999999999")), "half written").unwrap();
     }
@@ -174,24 +172,18 @@ fn temporary_files_of_killed_runs_are_removed() {
         ]
     );
     assert_whole_run(&out);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[cfg(unix)]
 #[test]
 fn a_symbolic_link_to_the_output_folder_stays_a_link() {
-    let dir = temp_dir("link");
-    let real = dir.join("real");
-    std::fs::create_dir(&real).unwrap();
+    let (dir, real, scene_path) = out_and_scene("link", false, false);
     let link = dir.join("link");
     std::os::unix::fs::symlink(&real, &link).unwrap();
-    let scene_path = dir.join("scene.toml");
-    std::fs::write(&scene_path, scene(false, false)).unwrap();
     pack(&scene_path, &link);
     assert!(is_symlink(&link));
     assert!(real.join("packing.csv").exists());
     assert_whole_run(&link);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -222,5 +214,4 @@ fn a_run_killed_at_any_moment_leaves_one_whole_run() {
     }
     pack(&scene_path, &out);
     assert_eq!(names(&dir), ["out", "scene.toml"], "leftovers removed");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -76,7 +76,6 @@ fn csv_and_json_round_trips_are_exact() {
         assert_eq!(p2, p, "{}", p.container().kind());
         assert_eq!(s2, summary);
         assert_eq!(common::names(&dir).len(), 3, "only the three files");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
 
@@ -387,7 +386,6 @@ fn files_that_disagree_are_an_error() {
     std::fs::remove_file(dir.join("summary.json")).unwrap();
     let e = packing::read_packing_dir(&dir).unwrap_err().to_string();
     assert!(e.contains("summary.json"), "{e}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -89,7 +89,6 @@ fn stops_on(signal: &str) {
     assert!(stdout.contains("(interrupted)"), "{signal}: {stdout}");
     let (certified, report) = verify(&out);
     assert!(certified, "{signal}: {report}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -146,7 +145,6 @@ fn a_time_limit_inside_the_first_local_minimisation_still_writes_a_certified_pac
     );
     assert!(verify(&out).0);
     assert!(density(&out) > 0.85);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -176,7 +174,6 @@ fn an_unwritable_output_folder_is_refused_before_the_run() {
         )),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -217,7 +214,6 @@ fn a_time_limit_beyond_any_clock_is_an_error_not_a_panic() {
         assert!(stderr.contains("solver.time_limit"), "{limit}: {stderr}");
         assert!(!stderr.contains("panicked"), "{limit}: {stderr}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A certified packing of 30 ellipses in `dir/out` after a few local minimisations.
@@ -259,7 +255,6 @@ fn resume_never_writes_a_worse_packing_than_its_start() {
     assert!(density(&out) >= start);
     // At least the run stopped before its first local minimisation keeps its start.
     assert!(kept, "a short resumed run keeps its start and says so");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Rewrites row `row` of `packing.csv` with the centre `(x, y)`.
@@ -309,7 +304,6 @@ fn resume_refuses_a_start_with_overlapping_items_or_items_outside() {
         stderr.contains("1 items outside the container: 7 (the container would have to grow by"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -350,5 +344,4 @@ fn resume_refuses_a_folder_of_another_container_or_other_items() {
         std::fs::read_to_string(out.join("packing.csv")).unwrap(),
         packing_before
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,10 +1,10 @@
 //! `ellipack verify` end to end: it names the offending items by their `id`, says by how much
 //! an item sticks out, and checks a hand-made packing with only a container.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
-use common::{ellipack, temp_dir, utf8};
+use common::{TempDir, ellipack, temp_dir, utf8};
 
 fn verify(args: &[&str], dir: &Path) -> (bool, String, String) {
     let out = ellipack()
@@ -22,7 +22,7 @@ fn verify_packing(dir: &Path, kind: &str, size: &str) -> (bool, String, String) 
 }
 
 /// A fresh test folder holding `packing.csv` with the text `csv`.
-fn folder_with_packing(name: &str, csv: &str) -> PathBuf {
+fn folder_with_packing(name: &str, csv: &str) -> TempDir {
     let dir = temp_dir(name);
     std::fs::write(dir.join("packing.csv"), csv).unwrap();
     dir
@@ -49,7 +49,6 @@ fn verify_names_overlapping_pairs_and_items_outside_by_id() {
     let (p3, p7) = (text.find(&line3), text.find(&line7));
     assert!(p3.is_some() && p7.is_some() && p3 < p7, "{text}");
     assert!(text.contains("NOT certified"), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -71,15 +70,15 @@ fn verify_lists_twenty_offenders_and_counts_the_rest() {
     assert!(text.contains("25 overlapping pairs"), "{text}");
     assert_eq!(text.matches(": μ² = ").count(), 20, "{text}");
     assert!(text.contains("… and 5 more"), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Two prolate spheroids along x, 3 apart, each reaching 2.5 from the origin.
+const TWO_SPHEROIDS: &str =
+    "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,-1.5,0,0,1,0.5,0.5,1,0,0,0\n1,1.5,0,0,1,0.5,0.5,1,0,0,0\n";
 
 #[test]
 fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
-    let dir = folder_with_packing(
-        "hand",
-        "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,-1.5,0,0,1,0.5,0.5,1,0,0,0\n1,1.5,0,0,1,0.5,0.5,1,0,0,0\n",
-    );
+    let dir = folder_with_packing("hand", TWO_SPHEROIDS);
     let (ok, text, err) = verify_packing(&dir, "ball", "2.5");
     assert!(ok, "{text}{err}");
     assert!(
@@ -109,7 +108,6 @@ fn a_hand_made_packing_verifies_with_the_container_on_the_command_line() {
         "{text}"
     );
     assert!(text.contains("  1: t = "), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -146,7 +144,6 @@ fn a_hand_made_packing_verifies_with_a_minimal_summary() {
         !ok && err.contains("packing.csv") && err.contains("summary.json") && err.contains('4'),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -187,7 +184,6 @@ fn verify_without_a_container_says_how_to_give_one() {
     );
     let (ok, _, err) = verify_packing(&dir, "circle", "-5");
     assert!(!ok && err.contains("radius must be positive"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -202,7 +198,6 @@ fn duplicate_ids_are_an_error_naming_the_id_and_both_lines() {
         err.contains("packing.csv: line 4: id 10 is already the id of line 2"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

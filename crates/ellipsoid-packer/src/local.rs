@@ -125,14 +125,7 @@ pub fn local_minimisation<const N: usize>(
     settings: &LocalSettings,
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<LocalResult, Error> {
-    if x0.len() != problem.var_count() {
-        return Err(implicit_packing::Error::LengthMismatch {
-            what: "initial point",
-            expected: problem.var_count(),
-            found: x0.len(),
-        }
-        .into());
-    }
+    check_start(problem, x0)?;
     problem.evaluate(x0, None)?;
     let mut interrupted = false;
     let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
@@ -171,6 +164,19 @@ pub fn local_minimisation<const N: usize>(
     Ok(best.result)
 }
 
+/// `LengthMismatch` unless the start `x` has one entry per variable of `problem`.
+fn check_start<const N: usize>(problem: &Model<N>, x: &[f64]) -> Result<(), Error> {
+    if x.len() == problem.var_count() {
+        return Ok(());
+    }
+    Err(implicit_packing::Error::LengthMismatch {
+        what: "initial point",
+        expected: problem.var_count(),
+        found: x.len(),
+    }
+    .into())
+}
+
 /// The start `x` as a result of its own, without minimising, when it is certified as it is
 /// (no overlap, every item inside): a lattice start is, and so is a packing read back from a
 /// finished run. `Ok(Err(certificate))` says what is wrong with a start that is not.
@@ -186,14 +192,7 @@ pub fn certified_start<const N: usize>(
     problem: &mut Model<N>,
     x: &[f64],
 ) -> Result<Result<LocalResult, Certificate>, Error> {
-    if x.len() != problem.var_count() {
-        return Err(implicit_packing::Error::LengthMismatch {
-            what: "initial point",
-            expected: problem.var_count(),
-            found: x.len(),
-        }
-        .into());
-    }
+    check_start(problem, x)?;
     let certificate = problem.certify(x)?;
     if !certificate.is_feasible() {
         return Ok(Err(certificate));

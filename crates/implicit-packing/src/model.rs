@@ -695,7 +695,8 @@ fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3
     spin
 }
 
-#[cfg(not(feature = "rayon"))]
+/// Σf over the close pairs and their number; the gradient of Σf is added to `out`, with each
+/// body's torque left in `torques`.
 fn pair_sum_gradient<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
@@ -704,15 +705,26 @@ fn pair_sum_gradient<const N: usize>(
 ) -> Result<(f64, usize), Error> {
     torques.clear();
     torques.resize(bodies.len(), [0.0; 3]);
-    let mut sum = 0.0;
-    let mut emit = |i: usize, j: usize, &(f, ref g): &Term<N>| {
-        if f > 0.0 {
-            sum += f;
-            add_pair(out, torques, i, j, g);
+    #[cfg(not(feature = "rayon"))]
+    {
+        let mut sum = 0.0;
+        let mut emit = |i: usize, j: usize, &(f, ref g): &Term<N>| {
+            if f > 0.0 {
+                sum += f;
+                add_pair(out, torques, i, j, g);
+            }
+        };
+        let count = through_kernel::<N, WithGradient>((list, centres), bodies, &mut emit)?;
+        Ok((sum, count))
+    }
+    #[cfg(feature = "rayon")]
+    {
+        let (sum, count, terms) = pair_gradients((list, centres), bodies)?;
+        for (i, j, g) in &terms {
+            add_pair(out, torques, *i, *j, g);
         }
-    };
-    let count = through_kernel::<N, WithGradient>((list, centres), bodies, &mut emit)?;
-    Ok((sum, count))
+        Ok((sum, count))
+    }
 }
 
 /// A task's share of the rayon pair sum: `Σf`, the pair count and the non-zero terms.
@@ -730,15 +742,14 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
     }
 }
 
+/// Σf, the pair count and the non-zero pair terms with their gradients, in the order of the
+/// pairs, gathered by rayon tasks; the caller scatters them serially, so that the result does
+/// not depend on the thread count beyond summation order.
 #[cfg(feature = "rayon")]
-fn pair_sum_gradient<const N: usize>(
+fn pair_gradients<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
-    torques: &mut Vec<[f64; 3]>,
-    out: &mut [f64],
-) -> Result<(f64, usize), Error> {
-    // Each task collects its non-zero pair gradients; they are scattered serially, so the
-    // result does not depend on the thread count beyond summation order.
+) -> Result<Kept<N>, Error> {
     // Each task's queue is flushed before its terms are merged, so that they stay in the
     // order of the pairs.
     let (mut acc, mut queue) = list
@@ -765,13 +776,7 @@ fn pair_sum_gradient<const N: usize>(
         )
         .map_err(grid_error)?;
     queue.flush(bodies, &mut keep(&mut acc));
-    let (sum, count, terms) = acc;
-    torques.clear();
-    torques.resize(bodies.len(), [0.0; 3]);
-    for (i, j, g) in &terms {
-        add_pair(out, torques, *i, *j, g);
-    }
-    Ok((sum, count))
+    Ok(acc)
 }
 
 /// A body from its variables `[c, Ω]` (crate-built rotation, orthogonal by construction).

@@ -147,9 +147,19 @@ impl<const N: usize> Body<N> {
         let mut semi_axes = self.semi_axes;
         centre.iter_mut().for_each(|x| *x *= nu);
         semi_axes.iter_mut().for_each(|x| *x *= nu);
+        Self::checked(centre, semi_axes, || Ok(self.rotation))
+    }
+
+    /// A body from a checked centre and checked semi-axes, then the rotation `rotation` makes
+    /// (which may refuse its own input): the checks of every public constructor, in their order.
+    fn checked(
+        centre: [f64; N],
+        semi_axes: [f64; N],
+        rotation: impl FnOnce() -> Result<[[f64; N]; N], Error>,
+    ) -> Result<Self, Error> {
         check_centre(None, &centre)?;
         check_semi_axes(None, &semi_axes)?;
-        Ok(Body::assemble(centre, semi_axes, self.rotation))
+        Ok(Body::assemble(centre, semi_axes, rotation()?))
     }
 
     /// The shape matrix `M = Q P Qᵀ` of `{x : (x − c)ᵀ M⁻¹ (x − c) ≤ 1}`.
@@ -183,10 +193,10 @@ impl<const N: usize> Body<N> {
 impl Body<2> {
     /// An ellipse with centre `c`, semi-axes `(a, b)` along the columns of `Q(θ)` (eq. 1).
     pub fn ellipse(centre: [f64; 2], semi_axes: [f64; 2], theta: f64) -> Result<Self, Error> {
-        check_centre(None, &centre)?;
-        check_semi_axes(None, &semi_axes)?;
-        check_angles(None, &[theta])?;
-        Ok(Body::assemble(centre, semi_axes, rotation_2d(theta)))
+        Self::checked(centre, semi_axes, || {
+            check_angles(None, &[theta])?;
+            Ok(rotation_2d(theta))
+        })
     }
 }
 
@@ -197,10 +207,10 @@ impl Body<3> {
         semi_axes: [f64; 3],
         angles: [f64; 3],
     ) -> Result<Self, Error> {
-        check_centre(None, &centre)?;
-        check_semi_axes(None, &semi_axes)?;
-        check_angles(None, &angles)?;
-        Ok(Body::assemble(centre, semi_axes, rotation_3d(angles)))
+        Self::checked(centre, semi_axes, || {
+            check_angles(None, &angles)?;
+            Ok(rotation_3d(angles))
+        })
     }
 
     /// An ellipsoid whose rotation is the quaternion `(w, x, y, z)` (Hamilton, active).
@@ -212,19 +222,7 @@ impl Body<3> {
         semi_axes: [f64; 3],
         q: [f64; 4],
     ) -> Result<Self, Error> {
-        check_centre(None, &centre)?;
-        check_semi_axes(None, &semi_axes)?;
-        let rotation = rotation_from_quaternion(q).map_err(|e| match e {
-            Error::InvalidQuaternion {
-                quaternion, norm2, ..
-            } => Error::InvalidQuaternion {
-                item: None,
-                quaternion,
-                norm2,
-            },
-            other => other,
-        })?;
-        Ok(Body::assemble(centre, semi_axes, rotation))
+        Self::checked(centre, semi_axes, || rotation_from_quaternion(q))
     }
 
     /// The rotation as a unit quaternion `(w, x, y, z)` with `w ≥ 0`.

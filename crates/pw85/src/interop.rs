@@ -1,5 +1,6 @@
 //! Conversions between nalgebra matrices and the PW85 storage (feature `nalgebra`).
 
+use crate::contact::check_finite;
 use crate::error::{Argument, Error};
 use crate::sym::{Sym2, Sym3};
 use nalgebra::{Matrix2, Matrix3};
@@ -15,7 +16,7 @@ pub const SYMMETRY_TOLERANCE: f64 = 1e-12;
 /// [`Error::NonFinite`] for a NaN or infinite entry; [`Error::NotSymmetric`] otherwise when
 /// Mᵢⱼ and Mⱼᵢ differ by more than the tolerance.
 pub fn sym3_from_matrix(m: &Matrix3<f64>, argument: Argument) -> Result<Sym3, Error> {
-    check(m.as_slice(), argument)?;
+    check_finite(argument, m.as_slice())?;
     let scale = m.amax();
     for (i, j) in [(0, 1), (0, 2), (1, 2)] {
         if (m[(i, j)] - m[(j, i)]).abs() > SYMMETRY_TOLERANCE * scale {
@@ -46,7 +47,7 @@ pub fn matrix_from_sym3(q: &Sym3) -> Matrix3<f64> {
 /// # Errors
 /// As [`sym3_from_matrix`].
 pub fn sym2_from_matrix(m: &Matrix2<f64>, argument: Argument) -> Result<Sym2, Error> {
-    check(m.as_slice(), argument)?;
+    check_finite(argument, m.as_slice())?;
     if (m[(0, 1)] - m[(1, 0)]).abs() > SYMMETRY_TOLERANCE * m.amax() {
         return Err(Error::NotSymmetric {
             argument,
@@ -60,17 +61,6 @@ pub fn sym2_from_matrix(m: &Matrix2<f64>, argument: Argument) -> Result<Sym2, Er
 /// The full symmetric matrix of a PW85-stored 2×2 one.
 pub fn matrix_from_sym2(q: &Sym2) -> Matrix2<f64> {
     Matrix2::new(q[0], q[1], q[1], q[2])
-}
-
-fn check(entries: &[f64], argument: Argument) -> Result<(), Error> {
-    match entries.iter().position(|x| !x.is_finite()) {
-        Some(index) => Err(Error::NonFinite {
-            argument,
-            index,
-            value: entries[index],
-        }),
-        None => Ok(()),
-    }
 }
 
 #[cfg(test)]

@@ -85,17 +85,59 @@ pub fn ellipsoids(n_side: usize, ball: bool, seed: u64) -> Packing {
     Packing::new(container, Items::Ellipsoids(items)).unwrap()
 }
 
+/// A fresh directory for one test, removed with all it holds when dropped (also when the test
+/// fails).
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TempDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A fresh directory for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
+pub fn temp_dir(name: &str) -> TempDir {
     let dir = std::env::temp_dir().join(format!("ellipack-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
 }
 
 /// The `ellipack` binary built for these tests.
 pub fn ellipack() -> Command {
     Command::new(env!("CARGO_BIN_EXE_ellipack"))
+}
+
+/// `ellipack <args>`, run to its end.
+pub fn run(args: &[&str]) -> Output {
+    ellipack().args(args).output().unwrap()
+}
+
+/// A fresh test folder `name` holding `file` with `text`: (the folder, the file).
+pub fn folder_with(name: &str, file: &str, text: impl AsRef<[u8]>) -> (TempDir, PathBuf) {
+    let dir = temp_dir(name);
+    let path = dir.join(file);
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
 }
 
 /// The names in `dir`, sorted, so that tests can compare a folder's whole listing.
