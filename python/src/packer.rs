@@ -7,7 +7,9 @@ use ellipack::pack::{MultiStartProgress, Observer, RunOptions, run, time_limit_o
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
 use ellipack::scene::Scene;
 use numpy::{PyArray1, PyArray2};
-use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
@@ -365,7 +367,16 @@ fn progress_dict<'py>(py: Python<'py>, p: &MultiStartProgress) -> PyResult<Bound
 pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
     let (packing, summary) = py
         .detach(|| ellipack::packing::read_packing_dir(&folder))
-        .map_err(value_error)?;
+        .map_err(|e| match &e {
+            // A file that cannot be read is an OSError, as Python's own `open` raises.
+            ellipack::packing::PackingError::Read { source, .. }
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                PyFileNotFoundError::new_err(e.to_string())
+            }
+            ellipack::packing::PackingError::Read { .. } => PyOSError::new_err(e.to_string()),
+            _ => value_error(e),
+        })?;
     Ok(PyPacking {
         packing,
         summary,
