@@ -23,6 +23,7 @@ import os
 from typing import Any, Callable, NamedTuple, Optional, Tuple, Union
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _ellipack
 from ._ellipack import Packing, read_packing, verify
@@ -156,7 +157,14 @@ def _output_shape(args: list, width: int) -> tuple:
     return (width,) if n is None else (n, width)
 
 
-def contact_function(r12, q1, q2, out=None, *, threads=None):
+def contact_function(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Tuple[Any, Any]:
     """The PW85 contact function mu^2 of two ellipsoids and its maximiser lambda.
 
     ``r12 = c2 - c1``; ``q1``, ``q2`` are the quadratic forms ``[Q11, Q12, Q13, Q22, Q23, Q33]``.
@@ -173,7 +181,14 @@ def contact_function(r12, q1, q2, out=None, *, threads=None):
     return _pair("contact3", r12, q1, q2, 3, out, threads)
 
 
-def contact_function_2d(r12, q1, q2, out=None, *, threads=None):
+def contact_function_2d(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Tuple[Any, Any]:
     """The contact function of two ellipses: as :func:`contact_function` with r12 (2,) or
     (n, 2) and q1, q2 ``[Q11, Q12, Q22]`` (3,) or (n, 3)."""
     return _pair("contact2", r12, q1, q2, 2, out, threads)
@@ -192,7 +207,14 @@ def _verdict(kind, r12, q1, q2, dim, out, threads):
     return out
 
 
-def overlap(r12, q1, q2, out=None, *, threads=None):
+def overlap(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
     """Whether two ellipsoids overlap (mu^2 < 1), decided without computing mu^2 to full
     precision (early exit): the same verdict as ``contact_function(...)[0] < 1``.
 
@@ -202,7 +224,14 @@ def overlap(r12, q1, q2, out=None, *, threads=None):
     return _verdict("overlap3", r12, q1, q2, 3, out, threads)
 
 
-def overlap_2d(r12, q1, q2, out=None, *, threads=None):
+def overlap_2d(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
     """Whether two ellipses overlap: :func:`overlap` in 2D."""
     return _verdict("overlap2", r12, q1, q2, 2, out, threads)
 
@@ -227,7 +256,9 @@ class ContactDetails(NamedTuple):
     """d mu^2 / d q2, as grad_q1."""
 
 
-def contact_details(r12, q1, q2, *, threads=None) -> ContactDetails:
+def contact_details(
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, *, threads: Optional[int] = None
+) -> ContactDetails:
     """mu^2, lambda, the contact point, the common normal and the gradients of mu^2 with
     respect to r12, q1 and q2 (see :class:`ContactDetails`). Shapes as
     :func:`contact_function`."""
@@ -239,7 +270,14 @@ def contact_details(r12, q1, q2, *, threads=None) -> ContactDetails:
     )
 
 
-def f_neg(lambda_, r12, q1, q2, *, threads=None):
+def f_neg(
+    lambda_: npt.ArrayLike,
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
     """-f(lambda) = -lambda (1 - lambda) r12^T Q(lambda)^-1 r12, Q(lambda) = (1 - lambda) Q1 +
     lambda Q2: the function whose minimum over [0, 1] is -mu^2 (pypw85's ``f_neg``, for use
     with a scalar minimiser). ``lambda_`` in [0, 1], a number or shape (n,)."""
@@ -250,7 +288,14 @@ def f_neg(lambda_, r12, q1, q2, *, threads=None):
     return r[..., 0] if r.ndim > 1 else float(r[0])
 
 
-def spheroid(a, c, n, out=None, *, threads=None):
+def spheroid(
+    a: npt.ArrayLike,
+    c: npt.ArrayLike,
+    n: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
     """The quadratic form of the spheroid with equatorial semi-axis ``a``, polar semi-axis
     ``c`` and axis of revolution ``n`` (normalised here): Q = a^2 I + (c^2 - a^2) n n^T.
 
@@ -261,14 +306,26 @@ def spheroid(a, c, n, out=None, *, threads=None):
     return _evaluate("spheroid", args, 6, out, threads)
 
 
-def from_axes_quaternion(axes, quaternion, out=None, *, threads=None):
+def from_axes_quaternion(
+    axes: npt.ArrayLike,
+    quaternion: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and quaternions (w, x, y, z) (4,) or
     (n, 4), normalised here. Returns shape (6,) or (n, 6)."""
     args = [("axes", axes, 3), ("quaternion", quaternion, 4)]
     return _evaluate("axes_quaternion", args, 6, out, threads)
 
 
-def from_axes_rotation(axes, rotation, out=None, *, threads=None):
+def from_axes_rotation(
+    axes: npt.ArrayLike,
+    rotation: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and rotation matrices (3, 3) or
     (n, 3, 3) whose column k is the direction of semi-axis k (orthogonal within 1e-6,
     determinant +1). Returns shape (6,) or (n, 6)."""
@@ -279,7 +336,13 @@ def from_axes_rotation(axes, rotation, out=None, *, threads=None):
     return _evaluate("axes_rotation", args, 6, out, threads)
 
 
-def from_axes_angle_2d(axes, theta, out=None, *, threads=None):
+def from_axes_angle_2d(
+    axes: npt.ArrayLike,
+    theta: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
     """The ellipse's Q = R(theta) diag(a^2, b^2) R(theta)^T, R(theta) = [[cos, -sin], [sin,
     cos]], for semi-axes (2,) or (n, 2) and angles (radians), a number or shape (n,). Returns
     ``[Q11, Q12, Q22]``, shape (3,) or (n, 3)."""
@@ -305,7 +368,16 @@ class OverlapMeasure(NamedTuple):
     it is not unique (the hard case)."""
 
 
-def overlap_measure(ci, ai, oi, cj, aj, oj, *, threads=None) -> OverlapMeasure:
+def overlap_measure(
+    ci: npt.ArrayLike,
+    ai: npt.ArrayLike,
+    oi: npt.ArrayLike,
+    cj: npt.ArrayLike,
+    aj: npt.ArrayLike,
+    oj: npt.ArrayLike,
+    *,
+    threads: Optional[int] = None,
+) -> OverlapMeasure:
     """The overlap measure (f, U, d2, eps, X) of body i against body j (not symmetric in i, j).
 
     3D: centres ``ci``, ``cj`` (3,) or (n, 3), semi-axes ``ai``, ``aj`` (3,) or (n, 3),
@@ -414,7 +486,9 @@ def pack(
         close()
 
 
-def packing_from_arrays(container: dict, centres, semi_axes, orientations) -> Packing:
+def packing_from_arrays(
+    container: dict, centres: npt.ArrayLike, semi_axes: npt.ArrayLike, orientations: npt.ArrayLike
+) -> Packing:
     """A :class:`Packing` of your own items, e.g. to :func:`verify` it or ``write`` it.
 
     ``container``: as summary.json has it, e.g. ``{"kind": "ball", "radius": 5.0}`` or
