@@ -138,35 +138,79 @@ fn in_own_units(v: &[f64], dim: usize, centres: [usize; 2], axes: [usize; 2]) ->
     out
 }
 
-fn evaluate_3d(v: &[f64]) -> Result<String, String> {
-    let v = &in_own_units(v, 3, [0, 10], [3, 13])[..];
+/// A body of a row that the model refuses: which one (`ellipsoid i`, `ellipse j`, …) and why.
+#[derive(Debug, thiserror::Error)]
+#[error("{body}: {source}")]
+pub struct BodyError {
+    /// `ellipsoid i`, `ellipsoid j`, `ellipse i` or `ellipse j`.
+    pub body: &'static str,
+    /// The model's reason.
+    #[source]
+    pub source: implicit_packing::Error,
+}
+
+/// The pair term of one row of the 3D layout (the values of [`COLUMNS_3D`], in that order),
+/// evaluated exactly as `ellipack measure` evaluates it: in the units of the larger body,
+/// centred on body i, so the result does not depend on the units of the row.
+///
+/// # Errors
+/// [`BodyError`] naming the body the model refuses (a semi-axis that is not positive and
+/// finite, a zero or non-finite quaternion, a non-finite centre).
+pub fn pair_term_3d(row: &[f64; 20]) -> Result<PairTerm<3>, BodyError> {
+    let v = &in_own_units(row, 3, [0, 10], [3, 13])[..];
     let i = Body::from_quaternion(
         [v[0], v[1], v[2]],
         [v[3], v[4], v[5]],
         [v[6], v[7], v[8], v[9]],
     )
-    .map_err(|e| format!("ellipsoid i: {}", body_message(&e)))?;
+    .map_err(|source| BodyError {
+        body: "ellipsoid i",
+        source,
+    })?;
     let j = Body::from_quaternion(
         [v[10], v[11], v[12]],
         [v[13], v[14], v[15]],
         [v[16], v[17], v[18], v[19]],
     )
-    .map_err(|e| format!("ellipsoid j: {}", body_message(&e)))?;
-    Ok(fields(&pair_term(&i, &j)))
+    .map_err(|source| BodyError {
+        body: "ellipsoid j",
+        source,
+    })?;
+    Ok(pair_term(&i, &j))
+}
+
+/// The pair term of one row of the 2D layout (the values of [`COLUMNS_2D`], in that order),
+/// as [`pair_term_3d`].
+///
+/// # Errors
+/// [`BodyError`] naming the ellipse the model refuses.
+pub fn pair_term_2d(row: &[f64; 10]) -> Result<PairTerm<2>, BodyError> {
+    let v = &in_own_units(row, 2, [0, 5], [2, 7])[..];
+    let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4]).map_err(|source| BodyError {
+        body: "ellipse i",
+        source,
+    })?;
+    let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9]).map_err(|source| BodyError {
+        body: "ellipse j",
+        source,
+    })?;
+    Ok(pair_term(&i, &j))
+}
+
+/// The row's values as the array of its layout (the reader gives one value per column).
+fn row_of<const K: usize>(v: &[f64]) -> Result<&[f64; K], String> {
+    v.try_into()
+        .map_err(|_| format!("{} values where the layout has {K}", v.len()))
+}
+
+fn evaluate_3d(v: &[f64]) -> Result<String, String> {
+    let term = pair_term_3d(row_of(v)?).map_err(|e| e.to_string())?;
+    Ok(fields(&term))
 }
 
 fn evaluate_2d(v: &[f64]) -> Result<String, String> {
-    let v = &in_own_units(v, 2, [0, 5], [2, 7])[..];
-    let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4])
-        .map_err(|e| format!("ellipse i: {}", body_message(&e)))?;
-    let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9])
-        .map_err(|e| format!("ellipse j: {}", body_message(&e)))?;
-    Ok(fields(&pair_term(&i, &j)))
-}
-
-/// Why a body was refused (implicit-packing's message, numbers written short).
-fn body_message(e: &implicit_packing::Error) -> String {
-    e.to_string()
+    let term = pair_term_2d(row_of(v)?).map_err(|e| e.to_string())?;
+    Ok(fields(&term))
 }
 
 /// The output fields of one pair term, without the leading case_id and trailing error.

@@ -513,6 +513,39 @@ pub(crate) fn inputs_finite_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<b
     Ok(false)
 }
 
+/// The function whose maximum over λ is μ² (theory eqs. 10–11):
+///
+/// ```text
+/// f(λ) = λ (1 − λ) r12ᵀ Q(λ)⁻¹ r12,   Q(λ) = (1 − λ) Q1 + λ Q2,   0 ≤ λ ≤ 1,
+/// ```
+///
+/// evaluated from the Bernstein form of its numerator and denominator (eq. 15), which loses
+/// no digits to cancellation. The PW85 library's `f_neg` is −f.
+///
+/// # Errors
+/// As [`contact_function`], and [`Error::LambdaOutOfRange`] unless 0 ≤ λ ≤ 1.
+///
+/// # Example
+/// ```
+/// // Two unit spheres 3 apart: f(λ) = λ (1 − λ) · 9, largest at λ = ½.
+/// let q = [1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
+/// let f = pw85::objective(0.25, &[3.0, 0.0, 0.0], &q, &q)?;
+/// assert!((f - 0.25 * 0.75 * 9.0).abs() < 1e-15);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+pub fn objective(lambda: f64, r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<f64, Error> {
+    if !(0.0..=1.0).contains(&lambda) {
+        return Err(Error::LambdaOutOfRange { value: lambda });
+    }
+    check_finite(Argument::R12, r12)?;
+    check_finite(Argument::Q1, q1)?;
+    check_finite(Argument::Q2, q2)?;
+    crate::extreme::check_positive_definite_balanced(Argument::Q1, q1)?;
+    crate::extreme::check_positive_definite_balanced(Argument::Q2, q2)?;
+    let (r, a, b) = crate::extreme::uniformly_rescaled(r12, q1, q2);
+    Ok(RationalForm::new(&r, &a, &b).f(lambda))
+}
+
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
 /// [`ContactDetails`]). Costs one contact function and a 3×3 matrix–vector product.
 ///

@@ -76,6 +76,11 @@ pub enum Error {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// A λ outside [0, 1] given to [`crate::objective`].
+    LambdaOutOfRange {
+        /// The λ given.
+        value: f64,
+    },
 }
 
 impl fmt::Display for Error {
@@ -108,6 +113,9 @@ impl fmt::Display for Error {
                 "semi-axis {index} must be a positive finite length, got {value:e}"
             ),
             Error::InvalidRotation { reason } => write!(f, "invalid rotation: {reason}"),
+            Error::LambdaOutOfRange { value } => {
+                write!(f, "λ must lie in [0, 1], got {value:e}")
+            }
         }
     }
 }

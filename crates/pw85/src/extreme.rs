@@ -51,6 +51,23 @@ const fn pow2(e: i32) -> f64 {
     f64::from_bits(((e + 1023) as u64) << 52)
 }
 
+/// `r12` and the forms scaled by 2^−k and 4^−k, with k chosen so that the largest form entry
+/// lies in [1, 4): a uniform scaling, under which f(λ) and μ² are invariant, that brings
+/// ordinary pairs of any size into the fast path's window.
+pub(crate) fn uniformly_rescaled(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> ([f64; 3], Sym3, Sym3) {
+    let largest = q1.iter().chain(q2).fold(0.0_f64, |m, x| m.max(x.abs()));
+    let k = if largest > 0.0 && largest.is_finite() {
+        exponent(largest).div_euclid(2)
+    } else {
+        0
+    };
+    (
+        r12.map(|x| scale_by_power_of_two(x, -k)),
+        q1.map(|x| scale_by_power_of_two(x, -2 * k)),
+        q2.map(|x| scale_by_power_of_two(x, -2 * k)),
+    )
+}
+
 /// x · 2^e, exact unless the result overflows (±∞) or is subnormal (rounded once, as a
 /// product into that range is).
 fn scale_by_power_of_two(x: f64, e: i32) -> f64 {

@@ -81,7 +81,7 @@ mod sym;
 
 pub use contact::{
     Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function,
-    contact_function_refined,
+    contact_function_refined, objective,
 };
 pub use error::{Argument, Error};
 pub use form::{Form2, Form3, QuadraticForm};

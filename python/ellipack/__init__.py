@@ -1,0 +1,509 @@
+"""ellipack from Python: the PW85 contact function, the implicit-variable overlap measure and
+the certified ellipse/ellipsoid packer, over NumPy arrays.
+
+Conventions
+-----------
+An ellipsoid with centre c is {x : (x - c)^T Q^-1 (x - c) <= 1}. Its quadratic form Q is stored
+as its upper triangle row by row: ``[Q11, Q12, Q13, Q22, Q23, Q33]`` (shape ``(6,)``), an
+ellipse's as ``[Q11, Q12, Q22]`` (shape ``(3,)``). Semi-axis k lies along column k of the
+rotation, Q = R diag(a^2, b^2, c^2) R^T. Quaternions are (w, x, y, z), Hamilton active rotations.
+
+Vectorised functions take one row (``(3,)``, ``(6,)``) or n rows (``(n, 3)``, ``(n, 6)``) per
+argument; a single row is broadcast against the n rows of the others. Inputs are converted to
+float64 (integers too) and copied when not C-contiguous. ``threads=1`` (the default) computes on
+the calling thread, ``threads=0`` on every core, ``threads=k`` on k threads; the GIL is released
+during the computation. Bad input raises ValueError naming the row; wrong shapes raise
+ValueError, non-numeric dtypes TypeError.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Callable, NamedTuple, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _ellipack
+from ._ellipack import Packing, read_packing, verify
+
+__version__ = _ellipack.__version__
+
+__all__ = [
+    "contact_function",
+    "contact_function_2d",
+    "overlap",
+    "overlap_2d",
+    "contact_details",
+    "ContactDetails",
+    "f_neg",
+    "spheroid",
+    "from_axes_quaternion",
+    "from_axes_rotation",
+    "from_axes_angle_2d",
+    "overlap_measure",
+    "OverlapMeasure",
+    "pack",
+    "Packing",
+    "packing_from_arrays",
+    "read_packing",
+    "verify",
+]
+
+
+def _f64(name: str, x: Any) -> np.ndarray:
+    """`x` as a C-contiguous float64 array; integers are converted, other dtypes refused."""
+    a = np.asarray(x)
+    if a.dtype != np.float64:
+        if a.dtype.kind not in "fiu":
+            raise TypeError(
+                f"{name}: expected real numbers (converted to float64), got an array of dtype "
+                f"{a.dtype}"
+            )
+        a = a.astype(np.float64)
+    # Not np.ascontiguousarray: it turns a 0-d array into shape (1,).
+    return a if a.flags.c_contiguous else a.copy(order="C")
+
+
+def _rows(name: str, x: Any, width: int) -> Tuple[np.ndarray, Optional[int]]:
+    """`x` as a (rows, width) matrix, and its row count when it is a batch (None: one row)."""
+    a = _f64(name, x)
+    if width == 1:
+        if a.ndim == 0:
+            return a.reshape(1, 1), None
+        if a.ndim == 1:
+            return a.reshape(-1, 1), a.shape[0]
+        raise ValueError(f"{name}: expected a number or shape (n,), got shape {a.shape}")
+    if a.ndim == 1 and a.shape[0] == width:
+        return a.reshape(1, width), None
+    if a.ndim == 2 and a.shape[1] == width:
+        return a, a.shape[0]
+    raise ValueError(f"{name}: expected shape ({width},) or (n, {width}), got shape {a.shape}")
+
+
+def _threads(threads: Optional[int]) -> int:
+    if threads is None:
+        return 1
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
+        raise ValueError(f"threads must be None or an integer >= 0, not {threads!r}")
+    return int(threads)
+
+
+def _evaluate(
+    kind: str,
+    args: list,
+    out_width: int,
+    out: Optional[np.ndarray],
+    threads: Optional[int],
+) -> np.ndarray:
+    """Runs the row kernel `kind` on `args` ((name, value, width) triples) and returns the
+    output, shape (n, out_width) for a batch and (out_width,) for one row."""
+    matrices = []
+    n: Optional[int] = None
+    n_from = ""
+    for name, value, width in args:
+        m, rows = _rows(name, value, width)
+        if rows is not None:
+            if n is None:
+                n, n_from = rows, name
+            elif rows != n:
+                raise ValueError(f"{name} has {rows} rows but {n_from} has {n}")
+        matrices.append(m)
+    shape = (out_width,) if n is None else (n, out_width)
+    if out is None:
+        result = np.empty(shape)
+    else:
+        result = _check_out(out, shape)
+    _ellipack._rows(
+        kind,
+        matrices,
+        result.reshape(1 if n is None else n, out_width),
+        _threads(threads),
+        n is not None,
+    )
+    return result
+
+
+def _check_out(out: Any, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
+    if not isinstance(out, np.ndarray):
+        raise TypeError(f"out must be a NumPy array, not {type(out).__name__}")
+    if out.dtype != dtype:
+        raise TypeError(f"out must have dtype {np.dtype(dtype)}, not {out.dtype}")
+    if out.shape != shape:
+        raise ValueError(f"out must have shape {shape}, not {out.shape}")
+    if not out.flags.c_contiguous or not out.flags.writeable:
+        raise ValueError("out must be C-contiguous and writeable")
+    return out
+
+
+def _pair(
+    kind: str, r12: Any, q1: Any, q2: Any, dim: int, out: Any, threads: Optional[int]
+) -> tuple:
+    forms = 6 if dim == 3 else 3
+    args = [("r12", r12, dim), ("q1", q1, forms), ("q2", q2, forms)]
+    result = _evaluate(kind, args, 2, out, threads)
+    if result.ndim == 1:
+        return float(result[0]), float(result[1])
+    return result[:, 0], result[:, 1]
+
+
+def _output_shape(args: list, width: int) -> tuple:
+    n = None
+    for name, value, w in args:
+        _, rows = _rows(name, value, w)
+        if rows is not None:
+            n = rows
+    return (width,) if n is None else (n, width)
+
+
+def contact_function(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Tuple[Any, Any]:
+    """The PW85 contact function mu^2 of two ellipsoids and its maximiser lambda.
+
+    ``r12 = c2 - c1``; ``q1``, ``q2`` are the quadratic forms ``[Q11, Q12, Q13, Q22, Q23, Q33]``.
+    mu^2 = max over 0 <= lambda <= 1 of f(lambda) = lambda (1 - lambda) r12^T Q(lambda)^-1 r12,
+    Q(lambda) = (1 - lambda) Q1 + lambda Q2. The ellipsoids overlap iff mu^2 < 1 (at 1 they
+    touch); mu is the factor by which both must be scaled about their centres to touch.
+    Coincident centres give mu^2 = 0 and lambda = 1/2.
+
+    Shapes: r12 (3,) or (n, 3), q1, q2 (6,) or (n, 6). ``out``, when given, is float64 of shape
+    (2,) (one pair) or (n, 2) and receives ``[mu2, lam]`` per pair (as pypw85 fills it).
+    Returns ``(mu2, lam)``: floats for one pair, arrays of shape (n,) (views into ``out``)
+    otherwise.
+    """
+    return _pair("contact3", r12, q1, q2, 3, out, threads)
+
+
+def contact_function_2d(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Tuple[Any, Any]:
+    """The contact function of two ellipses: as :func:`contact_function` with r12 (2,) or
+    (n, 2) and q1, q2 ``[Q11, Q12, Q22]`` (3,) or (n, 3)."""
+    return _pair("contact2", r12, q1, q2, 2, out, threads)
+
+
+def _verdict(kind, r12, q1, q2, dim, out, threads):
+    forms = 6 if dim == 3 else 3
+    args = [("r12", r12, dim), ("q1", q1, forms), ("q2", q2, forms)]
+    shape = _output_shape(args, 1)
+    if out is not None:
+        out = _check_out(out, shape[:-1], np.bool_)
+    values = _evaluate(kind, args, 1, None, threads)[..., 0]
+    if out is None:
+        return values != 0.0 if values.ndim else bool(values != 0.0)
+    np.not_equal(values, 0.0, out=out)
+    return out
+
+
+def overlap(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
+    """Whether two ellipsoids overlap (mu^2 < 1), decided without computing mu^2 to full
+    precision (early exit): the same verdict as ``contact_function(...)[0] < 1``.
+
+    Shapes as :func:`contact_function`; returns a bool for one pair, a bool array of shape (n,)
+    otherwise (``out``: a bool array of that shape).
+    """
+    return _verdict("overlap3", r12, q1, q2, 3, out, threads)
+
+
+def overlap_2d(
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
+    """Whether two ellipses overlap: :func:`overlap` in 2D."""
+    return _verdict("overlap2", r12, q1, q2, 2, out, threads)
+
+
+class ContactDetails(NamedTuple):
+    """What :func:`contact_details` returns; every field has a leading (n,) for n pairs."""
+
+    mu2: Any
+    """mu^2."""
+    lam: Any
+    """The maximiser lambda."""
+    point: Any
+    """x0 - c1 = (1 - lambda) Q1 Q(lambda)^-1 r12: where the ellipsoids scaled by mu touch,
+    relative to the first centre, shape (3,)."""
+    normal: Any
+    """The unit normal there, pointing out of the first ellipsoid, shape (3,)."""
+    grad_r12: Any
+    """d mu^2 / d r12 = 2 lambda (1 - lambda) Q(lambda)^-1 r12, shape (3,)."""
+    grad_q1: Any
+    """d mu^2 / d q1 for the six stored entries (off-diagonal entries count twice), (6,)."""
+    grad_q2: Any
+    """d mu^2 / d q2, as grad_q1."""
+
+
+def contact_details(
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, *, threads: Optional[int] = None
+) -> ContactDetails:
+    """mu^2, lambda, the contact point, the common normal and the gradients of mu^2 with
+    respect to r12, q1 and q2 (see :class:`ContactDetails`). Shapes as
+    :func:`contact_function`."""
+    d = _evaluate("details3", [("r12", r12, 3), ("q1", q1, 6), ("q2", q2, 6)], 23, None, threads)
+    if d.ndim == 1:
+        return ContactDetails(float(d[0]), float(d[1]), d[2:5], d[5:8], d[8:11], d[11:17], d[17:23])
+    return ContactDetails(
+        d[..., 0], d[..., 1], d[..., 2:5], d[..., 5:8], d[..., 8:11], d[..., 11:17], d[..., 17:23]
+    )
+
+
+def f_neg(
+    lambda_: npt.ArrayLike,
+    r12: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    q2: npt.ArrayLike,
+    *,
+    threads: Optional[int] = None,
+) -> Any:
+    """-f(lambda) = -lambda (1 - lambda) r12^T Q(lambda)^-1 r12, Q(lambda) = (1 - lambda) Q1 +
+    lambda Q2: the function whose minimum over [0, 1] is -mu^2 (pypw85's ``f_neg``, for use
+    with a scalar minimiser). ``lambda_`` in [0, 1], a number or shape (n,)."""
+    r = _evaluate(
+        "f_neg3", [("lambda_", lambda_, 1), ("r12", r12, 3), ("q1", q1, 6), ("q2", q2, 6)],
+        1, None, threads,
+    )
+    return r[..., 0] if r.ndim > 1 else float(r[0])
+
+
+def spheroid(
+    a: npt.ArrayLike,
+    c: npt.ArrayLike,
+    n: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
+    """The quadratic form of the spheroid with equatorial semi-axis ``a``, polar semi-axis
+    ``c`` and axis of revolution ``n`` (normalised here): Q = a^2 I + (c^2 - a^2) n n^T.
+
+    a, c: numbers or shape (n,); n: (3,) or (n, 3). Returns shape (6,) or (n, 6), into ``out``
+    when given.
+    """
+    args = [("a", a, 1), ("c", c, 1), ("n", n, 3)]
+    return _evaluate("spheroid", args, 6, out, threads)
+
+
+def from_axes_quaternion(
+    axes: npt.ArrayLike,
+    quaternion: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
+    """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and quaternions (w, x, y, z) (4,) or
+    (n, 4), normalised here. Returns shape (6,) or (n, 6)."""
+    args = [("axes", axes, 3), ("quaternion", quaternion, 4)]
+    return _evaluate("axes_quaternion", args, 6, out, threads)
+
+
+def from_axes_rotation(
+    axes: npt.ArrayLike,
+    rotation: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
+    """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and rotation matrices (3, 3) or
+    (n, 3, 3) whose column k is the direction of semi-axis k (orthogonal within 1e-6,
+    determinant +1). Returns shape (6,) or (n, 6)."""
+    r = _f64("rotation", rotation)
+    if r.shape[-2:] != (3, 3) or r.ndim not in (2, 3):
+        raise ValueError(f"rotation: expected shape (3, 3) or (n, 3, 3), got shape {r.shape}")
+    args = [("axes", axes, 3), ("rotation", r.reshape(r.shape[:-2] + (9,)), 9)]
+    return _evaluate("axes_rotation", args, 6, out, threads)
+
+
+def from_axes_angle_2d(
+    axes: npt.ArrayLike,
+    theta: npt.ArrayLike,
+    out: Optional[np.ndarray] = None,
+    *,
+    threads: Optional[int] = None,
+) -> np.ndarray:
+    """The ellipse's Q = R(theta) diag(a^2, b^2) R(theta)^T, R(theta) = [[cos, -sin], [sin,
+    cos]], for semi-axes (2,) or (n, 2) and angles (radians), a number or shape (n,). Returns
+    ``[Q11, Q12, Q22]``, shape (3,) or (n, 3)."""
+    args = [("axes", axes, 2), ("theta", theta, 1)]
+    return _evaluate("axes_angle_2d", args, 3, out, threads)
+
+
+class OverlapMeasure(NamedTuple):
+    """The implicit-variable overlap measure of Birgin, Lobato and Martinez (2016), eqs. 21-35,
+    of body i against body j. Body i is mapped to the unit ball: c = P_i^-1/2 Q_i^T (c_i - c_j)
+    and E_j becomes {x : x^T S x <= 1}."""
+
+    f: Any
+    """f = max(0, 1 - d2)^2 + max(0, eps - U)^2 (eq. 34): 0 iff the bodies do not overlap."""
+    u: Any
+    """The multiplier U of eq. 22: X + U S X = c."""
+    d2: Any
+    """d2 = |c - X|^2."""
+    eps: Any
+    """eps = min(l_i) min(l_j)^2 / (max(l_i)^2 max(l_j)) (Prop. 3.3)."""
+    x: Any
+    """X, the point of the boundary x^T S x = 1 nearest to c (eq. 35), shape (dim,); NaN where
+    it is not unique (the hard case)."""
+
+
+def overlap_measure(
+    ci: npt.ArrayLike,
+    ai: npt.ArrayLike,
+    oi: npt.ArrayLike,
+    cj: npt.ArrayLike,
+    aj: npt.ArrayLike,
+    oj: npt.ArrayLike,
+    *,
+    threads: Optional[int] = None,
+) -> OverlapMeasure:
+    """The overlap measure (f, U, d2, eps, X) of body i against body j (not symmetric in i, j).
+
+    3D: centres ``ci``, ``cj`` (3,) or (n, 3), semi-axes ``ai``, ``aj`` (3,) or (n, 3),
+    orientations ``oi``, ``oj`` quaternions (w, x, y, z) (4,) or (n, 4). 2D: centres and
+    semi-axes (2,) or (n, 2), orientations angles theta (a number or (n,)). The dimension is
+    the centres' last axis. Evaluated as ``ellipack measure`` does (in the units of the larger
+    body), so the result does not depend on the units.
+    """
+    c = _f64("ci", ci)
+    dim = c.shape[-1] if c.ndim else 0
+    if dim not in (2, 3):
+        raise ValueError(f"ci: expected shape (3,), (n, 3), (2,) or (n, 2), got {c.shape}")
+    ow = 1 if dim == 2 else 4
+    parts = [("ci", ci, dim), ("ai", ai, dim), ("oi", oi, ow), ("cj", cj, dim), ("aj", aj, dim),
+             ("oj", oj, ow)]
+    blocks = [_rows(name, value, w) for name, value, w in parts]
+    counts = {rows for _, rows in blocks if rows is not None}
+    if len(counts) > 1:
+        raise ValueError(f"the arguments have different row counts: {sorted(counts)}")
+    n = counts.pop() if counts else None
+    rows = 1 if n is None else n
+    table = np.concatenate([np.broadcast_to(m, (rows, m.shape[1])) for m, _ in blocks], axis=1)
+    width = 2 * (2 * dim + ow)
+    r = _evaluate(f"measure{dim}", [("pairs", table if n is not None else table[0], width)],
+                  3 + dim + 2, None, threads)
+    x = np.where(r[..., -1:] != 0.0, r[..., 4:4 + dim], np.nan)
+    if r.ndim == 1:
+        return OverlapMeasure(float(r[3]), float(r[0]), float(r[1]), float(r[2]), x)
+    return OverlapMeasure(r[:, 3], r[:, 0], r[:, 1], r[:, 2], x)
+
+
+# ---- the packer -------------------------------------------------------------------------------
+
+
+def _scene_source(scene) -> Tuple[Optional[str], Optional[str]]:
+    if scene is None:
+        return None, None
+    if isinstance(scene, dict):
+        return _ellipack._scene_toml(scene), None
+    if isinstance(scene, os.PathLike):
+        return None, os.fspath(scene)
+    if isinstance(scene, str):
+        if "\n" in scene or "=" in scene:
+            return scene, None
+        return None, scene
+    raise TypeError(
+        f"scene: a dict, a path or a TOML string, not {type(scene).__name__}"
+    )
+
+
+def _progress(progress) -> Tuple[Optional[Callable[[dict], Any]], Callable[[], None]]:
+    if progress is False:
+        return None, lambda: None
+    if callable(progress):
+        return progress, lambda: None
+    if progress is None or progress is True:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            return None, lambda: None
+        bar = tqdm(desc="ellipack", unit=" local minimisations")
+
+        def show(p: dict) -> None:
+            bar.update(1)
+            bar.set_postfix(best=f"{p['best_density']:.5f}", last=f"{p['last_density']:.5f}")
+
+        return show, bar.close
+    raise TypeError(f"progress: a callable, True, False or None, not {type(progress).__name__}")
+
+
+def pack(
+    scene: Union[dict, str, "os.PathLike[str]", None] = None,
+    *,
+    time_limit: Optional[float] = None,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    progress: Union[Callable[[dict], Any], bool, None] = None,
+) -> Packing:
+    """Packs the scene's items as densely as it can within the time limit and returns the best
+    certified packing (:class:`Packing`): no two items overlap (PW85 mu^2 >= 1 on every pair)
+    and every item is inside the container, checked by the certificate.
+
+    ``scene``: a dict with the keys of the scene file (``dimension``, ``container``,
+    ``shapes``, ``solver``, ...), a path (``str`` without ``=`` or a newline, or a
+    ``pathlib.Path``) to a scene file, a TOML string, or None for the built-in scene. Errors
+    in it raise ValueError naming the line and the key. ``time_limit`` (seconds), ``seed`` and
+    ``threads`` (0: every core) override the scene's solver settings.
+
+    ``progress``: called with a dict (``local_minimisations``, ``best_density``,
+    ``last_density``, ``elapsed``) after every local minimisation, on the calling thread;
+    None (the default) shows a tqdm bar when tqdm is installed; False shows nothing.
+
+    Ctrl-C (KeyboardInterrupt, also when raised by ``progress``) stops the run within about
+    0.1 s plus the end of the current solver iteration, and ``pack`` *returns* the best
+    certified packing found so far, with ``packing.interrupted`` True; KeyboardInterrupt is
+    not raised. Any other exception from a signal handler or from ``progress`` stops the run
+    and is raised.
+    """
+    text, path = _scene_source(scene)
+    callback, close = _progress(progress)
+    if time_limit is not None:
+        time_limit = float(time_limit)
+    try:
+        return _ellipack._pack(text, path, time_limit, seed, threads, callback)
+    finally:
+        close()
+
+
+def packing_from_arrays(
+    container: dict, centres: npt.ArrayLike, semi_axes: npt.ArrayLike, orientations: npt.ArrayLike
+) -> Packing:
+    """A :class:`Packing` of your own items, e.g. to :func:`verify` it or ``write`` it.
+
+    ``container``: as summary.json has it, e.g. ``{"kind": "ball", "radius": 5.0}`` or
+    ``{"kind": "cuboid", "half_sides": [1, 2, 3], "center": [0, 0, 0]}``; ``centres``,
+    ``semi_axes``: shape (m, dim); ``orientations``: quaternions (w, x, y, z), shape (m, 4), in
+    3D, angles, shape (m,), in 2D. Its certificate is computed.
+    """
+    c = _f64("centres", centres)
+    a = _f64("semi_axes", semi_axes)
+    o = _f64("orientations", orientations)
+    if o.ndim == 1:
+        o = o.reshape(-1, 1)
+    if c.ndim != 2 or a.ndim != 2 or o.ndim != 2:
+        raise ValueError("centres and semi_axes must have shape (m, dim), orientations (m, 4) "
+                         "or (m,)")
+    return _ellipack._packing_from_arrays(
+        json.dumps(container, default=lambda v: v.tolist()), c.tolist(), a.tolist(), o.tolist()
+    )

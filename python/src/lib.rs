@@ -1,0 +1,25 @@
+//! The native part of the Python package `ellipack` (module `ellipack._ellipack`): thin
+//! bindings of the workspace crates. The user-facing functions, their argument checks and
+//! their docstrings are in `ellipack/__init__.py`; this module evaluates rows and runs the
+//! packer with the GIL released.
+#![deny(missing_docs)]
+
+use pyo3::prelude::*;
+
+mod packer;
+mod rows;
+
+/// The extension module.
+#[pymodule]
+fn _ellipack(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(rows::_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(rows::_bench_rust_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::_scene_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::_pack, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::_packing_from_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::read_packing, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::verify, m)?)?;
+    m.add_class::<packer::PyPacking>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

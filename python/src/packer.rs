@@ -1,0 +1,490 @@
+//! The packer from Python: scenes (TOML text, a file, or a dict turned into TOML), the run with
+//! the GIL released while the calling thread relays progress and polls Python's signals, the
+//! packing object, reading a packing folder and verifying a packing.
+
+use ellipack::folder::{HISTORY_FILE, Published, Staging};
+use ellipack::pack::{MultiStartProgress, Observer, RunOptions, run, time_limit_of};
+use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
+use ellipack::scene::Scene;
+use numpy::{PyArray1, PyArray2};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
+};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How often the calling thread wakes to run Python's signal handlers during a run.
+const SIGNAL_POLL: Duration = Duration::from_millis(100);
+
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// `_scene_toml(obj)`: the TOML text of a scene given as a dict (nested dicts, lists, tuples,
+/// str, bool, int, float; NumPy arrays and scalars through their `tolist()`), so that a dict is
+/// read by the same parser, with the same messages, as a scene file.
+#[pyfunction]
+pub fn _scene_toml(obj: &Bound<'_, PyAny>) -> PyResult<String> {
+    match toml_value(obj, "scene")? {
+        toml::Value::Table(t) => Ok(toml::to_string(&t).map_err(value_error)?),
+        _ => Err(PyTypeError::new_err("a scene is a dict (its TOML tables)")),
+    }
+}
+
+fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        // The seed goes up to 2⁶⁴ − 1, beyond TOML's integers: the scene takes it as a string.
+        return Ok(match obj.extract::<i64>() {
+            Ok(i) => toml::Value::Integer(i),
+            Err(_) => toml::Value::String(obj.str()?.to_string()),
+        });
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(obj.extract()?));
+    }
+    if let Ok(d) = obj.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, v) in d.iter() {
+            let name: String = k.extract().map_err(|_| {
+                PyTypeError::new_err(format!("{key}: the keys of a table are str, not {k:?}"))
+            })?;
+            let value = toml_value(&v, &format!("{key}.{name}"))?;
+            table.insert(name, value);
+        }
+        return Ok(toml::Value::Table(table));
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        let mut items = Vec::new();
+        for (i, v) in obj.try_iter()?.enumerate() {
+            items.push(toml_value(&v?, &format!("{key}[{i}]"))?);
+        }
+        return Ok(toml::Value::Array(items));
+    }
+    if obj.hasattr("tolist")? {
+        return toml_value(&obj.call_method0("tolist")?, key);
+    }
+    Err(PyTypeError::new_err(format!(
+        "{key}: {} has no TOML form (use dict, list, str, bool, int or float)",
+        obj.get_type().name()?
+    )))
+}
+
+/// A packing: container and items, with the summary of the run (or of the folder) that made it.
+#[pyclass(name = "Packing", module = "ellipack", frozen)]
+pub struct PyPacking {
+    packing: Packing,
+    summary: Summary,
+    history: Option<String>,
+    interrupted: bool,
+}
+
+impl PyPacking {
+    fn json(py: Python<'_>, text: &str) -> PyResult<Py<PyAny>> {
+        Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
+    }
+}
+
+#[pymethods]
+impl PyPacking {
+    /// 2 (ellipses) or 3 (ellipsoids).
+    #[getter]
+    fn dimension(&self) -> usize {
+        self.packing.items().dimension()
+    }
+
+    fn __len__(&self) -> usize {
+        self.packing.items().len()
+    }
+
+    /// The centres, shape (m, dimension).
+    #[getter]
+    fn centres<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rows: Vec<Vec<f64>> = match self.packing.items() {
+            Items::Ellipses(v) => v.iter().map(|e| e.center.to_vec()).collect(),
+            Items::Ellipsoids(v) => v.iter().map(|e| e.center.to_vec()).collect(),
+        };
+        PyArray2::from_vec2(py, &rows).map_err(value_error)
+    }
+
+    /// The semi-axes, shape (m, dimension): semi-axis k lies along column k of the rotation.
+    #[getter]
+    fn semi_axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rows: Vec<Vec<f64>> = match self.packing.items() {
+            Items::Ellipses(v) => v.iter().map(|e| e.semi_axes.to_vec()).collect(),
+            Items::Ellipsoids(v) => v.iter().map(|e| e.semi_axes.to_vec()).collect(),
+        };
+        PyArray2::from_vec2(py, &rows).map_err(value_error)
+    }
+
+    /// 3D: the unit quaternions (w, x, y, z), shape (m, 4), Hamilton active rotations; 2D: None.
+    #[getter]
+    fn quaternions<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        match self.packing.items() {
+            Items::Ellipses(_) => Ok(None),
+            Items::Ellipsoids(v) => {
+                let rows: Vec<Vec<f64>> = v.iter().map(|e| e.quaternion.to_vec()).collect();
+                PyArray2::from_vec2(py, &rows)
+                    .map(Some)
+                    .map_err(value_error)
+            }
+        }
+    }
+
+    /// 2D: the angles θ (radians), shape (m,); 3D: None.
+    #[getter]
+    fn angles<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        match self.packing.items() {
+            Items::Ellipses(v) => Some(PyArray1::from_iter(py, v.iter().map(|e| e.theta))),
+            Items::Ellipsoids(_) => None,
+        }
+    }
+
+    /// The container as in summary.json: `kind`, `center` and its size (`radius`,
+    /// `semi_axes` or `half_sides`).
+    #[getter]
+    fn container(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let text = serde_json::to_string(self.packing.container()).map_err(value_error)?;
+        Self::json(py, &text)
+    }
+
+    /// Total item area or volume over the container's.
+    #[getter]
+    fn density(&self) -> f64 {
+        self.packing.density()
+    }
+
+    /// The certificate: `overlapping_pairs`, `containment_violations` (both 0 for a certified
+    /// packing) and `min_mu2`, the smallest PW85 μ² over the pairs whose enclosing balls meet.
+    #[getter]
+    fn certificate(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let text = serde_json::to_string(&self.summary.certificate).map_err(value_error)?;
+        Self::json(py, &text)
+    }
+
+    /// The whole of summary.json as a dict.
+    #[getter]
+    fn summary(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let text = ellipack::packing::summary_json(&self.summary).map_err(value_error)?;
+        Self::json(py, &text)
+    }
+
+    /// True when the run was stopped by Ctrl-C (or by the progress callback raising
+    /// KeyboardInterrupt) before its time limit: the packing is the best certified one found.
+    #[getter]
+    fn interrupted(&self) -> bool {
+        self.interrupted
+    }
+
+    /// history.csv of the run (one row per local minimisation), None for a packing read from
+    /// a folder.
+    #[getter]
+    fn history(&self) -> Option<String> {
+        self.history.clone()
+    }
+
+    /// Writes packing.csv, summary.json, packing.xyz (when `xyz`) and the run's history.csv
+    /// into `folder` (created with its parents if needed), as one set: the previous files of the folder are
+    /// replaced together or not at all.
+    #[pyo3(signature = (folder, xyz = true))]
+    fn write(&self, py: Python<'_>, folder: PathBuf, xyz: bool) -> PyResult<()> {
+        py.detach(|| -> Result<(), String> {
+            ellipack::pack::probe_output_folder(&folder).map_err(|e| e.to_string())?;
+            let staging = Staging::begin(&folder).map_err(|e| e.to_string())?;
+            let staged = staging.path();
+            ellipack::packing::write_files(staged, &self.packing, &self.summary, xyz)
+                .map_err(|e| e.to_string())?;
+            if let Some(history) = &self.history {
+                ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())
+                    .map_err(|e| e.to_string())?;
+            }
+            match staging.commit().map_err(|e| e.to_string())? {
+                Published::Swapped | Published::InPlace(_) => Ok(()),
+            }
+        })
+        .map_err(PyOSError::new_err)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.summary.certificate;
+        format!(
+            "<ellipack.Packing: {} {} in a {}, density {:.5}, {} overlapping pairs, {} items \
+             outside{}>",
+            self.packing.items().len(),
+            self.packing.items().noun(),
+            self.packing.container().kind(),
+            self.packing.density(),
+            c.overlapping_pairs,
+            c.containment_violations,
+            if self.interrupted {
+                ", interrupted"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// The observer of a run in the worker thread: finished local minimisations go to the calling
+/// thread through a channel, the stop request comes from it through a flag.
+struct Relay<'a> {
+    progress: mpsc::Sender<MultiStartProgress>,
+    stop: &'a AtomicBool,
+    history: String,
+}
+
+impl Observer for Relay<'_> {
+    fn finished(&mut self, p: &MultiStartProgress) {
+        self.history.push_str(&format!(
+            "{},{:.3},{:.9},{:.9}\n",
+            p.local_minimisations,
+            p.elapsed.as_secs_f64(),
+            p.last_density,
+            p.best_density
+        ));
+        // The calling thread has stopped listening only when it is about to return.
+        let _ = self.progress.send(*p);
+    }
+
+    fn should_stop(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+}
+
+/// `_pack(text, path, time_limit, seed, threads, progress)`: packs the scene of `text` (TOML)
+/// or of the file `path` (the built-in scene when both are None) and returns the packing.
+///
+/// The run happens on a worker thread with the GIL released. The calling thread wakes every
+/// 100 ms to run Python's signal handlers and calls `progress(dict)` after every local
+/// minimisation. KeyboardInterrupt (Ctrl-C, or raised by `progress`) stops the run, which
+/// returns its best certified packing with `interrupted` set; any other exception from a
+/// signal handler or from `progress` stops the run and is raised once it has stopped.
+#[pyfunction]
+#[pyo3(signature = (text, path, time_limit, seed, threads, progress))]
+pub fn _pack(
+    py: Python<'_>,
+    text: Option<String>,
+    path: Option<PathBuf>,
+    time_limit: Option<f64>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyPacking> {
+    let scene = match (text, path) {
+        (Some(text), _) => Scene::from_toml_str(&text, "<scene>").map_err(value_error)?,
+        (None, Some(path)) => Scene::from_file(&path).map_err(value_error)?,
+        (None, None) => Scene::default_scene(),
+    };
+    let options = RunOptions {
+        time_limit: time_limit
+            .map(time_limit_of)
+            .transpose()
+            .map_err(value_error)?,
+        seed,
+        threads,
+        resume_from: None,
+        shard: None,
+    };
+    let stop = AtomicBool::new(false);
+    let (sender, receiver) = mpsc::channel();
+    let relay = Relay {
+        progress: sender,
+        stop: &stop,
+        history: String::from("local_minimisation,seconds,density,best_density\n"),
+    };
+    let mut interrupted = false;
+    let mut pending: Option<PyErr> = None;
+    let (result, history) = std::thread::scope(|s| {
+        let (scene, options) = (&scene, &options);
+        let worker = s.spawn(move || {
+            let mut relay = relay;
+            let result = run(scene, options, &mut relay);
+            (result, relay.history)
+        });
+        let mut receiver = receiver;
+        let mut stop_with = |e: PyErr, py: Python<'_>| {
+            if e.is_instance_of::<PyKeyboardInterrupt>(py) {
+                interrupted = true;
+            } else if pending.is_none() {
+                pending = Some(e);
+            }
+            stop.store(true, Ordering::SeqCst);
+        };
+        loop {
+            let (message, r) = py.detach(move || (receiver.recv_timeout(SIGNAL_POLL), receiver));
+            receiver = r;
+            match message {
+                Ok(p) => {
+                    if let Some(callback) = &progress {
+                        let report = progress_dict(py, &p);
+                        if let Err(e) = report.and_then(|d| callback.call1(py, (d,))) {
+                            stop_with(e, py);
+                        }
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            }
+            if let Err(e) = py.check_signals() {
+                stop_with(e, py);
+            }
+        }
+        worker.join()
+    })
+    .map_err(|_| PyRuntimeError::new_err("the packing run panicked"))?;
+    if let Some(e) = pending {
+        return Err(e);
+    }
+    let outcome = result.map_err(value_error)?;
+    Ok(PyPacking {
+        packing: outcome.packing,
+        summary: outcome.summary,
+        history: Some(history),
+        interrupted: interrupted || outcome.interrupted,
+    })
+}
+
+fn progress_dict<'py>(py: Python<'py>, p: &MultiStartProgress) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("local_minimisations", p.local_minimisations)?;
+    d.set_item("best_density", p.best_density)?;
+    d.set_item("last_density", p.last_density)?;
+    d.set_item("elapsed", p.elapsed.as_secs_f64())?;
+    Ok(d)
+}
+
+/// `read_packing(folder)`: the packing of a folder written by `ellipack pack` or
+/// `Packing.write` (packing.csv and summary.json).
+#[pyfunction]
+pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
+    let (packing, summary) = py
+        .detach(|| ellipack::packing::read_packing_dir(&folder))
+        .map_err(|e| match &e {
+            // A file that cannot be read is an OSError, as Python's own `open` raises.
+            ellipack::packing::PackingError::Read { source, .. }
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                PyFileNotFoundError::new_err(e.to_string())
+            }
+            ellipack::packing::PackingError::Read { .. } => PyOSError::new_err(e.to_string()),
+            _ => value_error(e),
+        })?;
+    Ok(PyPacking {
+        packing,
+        summary,
+        history: None,
+        interrupted: false,
+    })
+}
+
+/// `_packing_from_arrays(container_json, centres, semi_axes, orientations)`: a packing of
+/// items given as rows (orientations: quaternions (w, x, y, z) in 3D, angles in 2D), checked,
+/// with its certificate computed.
+#[pyfunction]
+pub fn _packing_from_arrays(
+    py: Python<'_>,
+    container_json: &str,
+    centres: Vec<Vec<f64>>,
+    semi_axes: Vec<Vec<f64>>,
+    orientations: Vec<Vec<f64>>,
+) -> PyResult<PyPacking> {
+    let container: Container = serde_json::from_str(container_json)
+        .map_err(|e| PyValueError::new_err(format!("container: {e}")))?;
+    let m = centres.len();
+    if semi_axes.len() != m || orientations.len() != m {
+        return Err(PyValueError::new_err(format!(
+            "{m} centres, {} semi-axes and {} orientations: one of each per item",
+            semi_axes.len(),
+            orientations.len()
+        )));
+    }
+    let row = |name: &str, i: usize, v: &[f64], k: usize| -> PyResult<()> {
+        if v.len() == k {
+            Ok(())
+        } else {
+            Err(PyValueError::new_err(format!(
+                "item {i}: {name} has {} values, not {k}",
+                v.len()
+            )))
+        }
+    };
+    let items = match container.dimension() {
+        2 => {
+            let mut v = Vec::with_capacity(m);
+            for i in 0..m {
+                row("centre", i, &centres[i], 2)?;
+                row("semi_axes", i, &semi_axes[i], 2)?;
+                row("angle", i, &orientations[i], 1)?;
+                v.push(EllipseItem {
+                    center: [centres[i][0], centres[i][1]],
+                    semi_axes: [semi_axes[i][0], semi_axes[i][1]],
+                    theta: orientations[i][0],
+                });
+            }
+            Items::Ellipses(v)
+        }
+        _ => {
+            let mut v = Vec::with_capacity(m);
+            for i in 0..m {
+                row("centre", i, &centres[i], 3)?;
+                row("semi_axes", i, &semi_axes[i], 3)?;
+                row("quaternion", i, &orientations[i], 4)?;
+                let (c, a, q) = (&centres[i], &semi_axes[i], &orientations[i]);
+                v.push(EllipsoidItem {
+                    center: [c[0], c[1], c[2]],
+                    semi_axes: [a[0], a[1], a[2]],
+                    quaternion: [q[0], q[1], q[2], q[3]],
+                });
+            }
+            Items::Ellipsoids(v)
+        }
+    };
+    let packing = Packing::new(container, items).map_err(value_error)?;
+    let certificate = py
+        .detach(|| ellipack::pack::verify(&packing))
+        .map_err(value_error)?;
+    let summary = Summary::new(&packing, packing.container().measure(), 0.0, 0, certificate);
+    Ok(PyPacking {
+        packing,
+        summary,
+        history: None,
+        interrupted: false,
+    })
+}
+
+/// `verify(packing)`: the packing checked again from its items, independently of how it was
+/// made (PW85 verdicts on every pair whose enclosing balls meet, exact containment). Returns
+/// a dict: `certified`, `overlapping_pairs` (a list of (i, j, μ²), deepest first), `outside`
+/// (a list of (i, t): the container scaled by t about its centre would hold item i), and
+/// `min_mu2`.
+#[pyfunction]
+pub fn verify<'py>(
+    py: Python<'py>,
+    packing: &Bound<'py, PyPacking>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = packing.get();
+    let v = py
+        .detach(|| ellipack::pack::verify_detailed(&p.packing))
+        .map_err(value_error)?;
+    let d = PyDict::new(py);
+    d.set_item("certified", v.certificate.is_certified())?;
+    let pairs: Vec<(usize, usize, f64)> = v
+        .overlapping_pairs
+        .iter()
+        .map(|o| (o.items.0, o.items.1, o.mu2))
+        .collect();
+    d.set_item("overlapping_pairs", pairs)?;
+    let outside: Vec<(usize, f64)> = v.outside.iter().map(|o| (o.item, o.scale)).collect();
+    d.set_item("outside", outside)?;
+    d.set_item("min_mu2", v.certificate.min_mu2)?;
+    Ok(d)
+}

@@ -1,0 +1,419 @@
+//! Row-wise evaluation: every vectorised function of the package is one [`Kind`] mapping rows of
+//! its inputs to a row of its output. The Python layer (`ellipack/__init__.py`) turns what the
+//! user passed into C-contiguous float64 matrices (one row, broadcast, or n rows); here the
+//! rows are cut into chunks, evaluated by the Rust crates on the calling thread or a rayon pool,
+//! with the GIL released.
+
+use numpy::{PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
+use pw85::batch::{Pair, Pair2d, Parallelism, contact_functions, overlaps};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Rows per chunk: small enough that a chunk's pairs stay in L1/L2 and the threads balance,
+/// large enough that the per-chunk work (one batch call) is negligible.
+const CHUNK: usize = 256;
+
+/// What a row-wise call computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Contact3,
+    Contact2,
+    Overlap3,
+    Overlap2,
+    Details3,
+    FNeg3,
+    Spheroid,
+    AxesQuaternion,
+    AxesRotation,
+    AxesAngle2d,
+    Measure3,
+    Measure2,
+}
+
+impl Kind {
+    fn from_name(name: &str) -> PyResult<Kind> {
+        Ok(match name {
+            "contact3" => Kind::Contact3,
+            "contact2" => Kind::Contact2,
+            "overlap3" => Kind::Overlap3,
+            "overlap2" => Kind::Overlap2,
+            "details3" => Kind::Details3,
+            "f_neg3" => Kind::FNeg3,
+            "spheroid" => Kind::Spheroid,
+            "axes_quaternion" => Kind::AxesQuaternion,
+            "axes_rotation" => Kind::AxesRotation,
+            "axes_angle_2d" => Kind::AxesAngle2d,
+            "measure3" => Kind::Measure3,
+            "measure2" => Kind::Measure2,
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "unknown row kernel `{name}`"
+                )));
+            }
+        })
+    }
+
+    /// The width of each input row, in the order of the arguments.
+    fn input_widths(self) -> &'static [usize] {
+        match self {
+            Kind::Contact3 | Kind::Overlap3 | Kind::Details3 => &[3, 6, 6],
+            Kind::Contact2 | Kind::Overlap2 => &[2, 3, 3],
+            Kind::FNeg3 => &[1, 3, 6, 6],
+            Kind::Spheroid => &[1, 1, 3],
+            Kind::AxesQuaternion => &[3, 4],
+            Kind::AxesRotation => &[3, 9],
+            Kind::AxesAngle2d => &[2, 1],
+            Kind::Measure3 => &[20],
+            Kind::Measure2 => &[10],
+        }
+    }
+
+    /// The width of an output row.
+    fn output_width(self) -> usize {
+        match self {
+            Kind::Contact3 | Kind::Contact2 => 2,
+            Kind::Overlap3 | Kind::Overlap2 | Kind::FNeg3 => 1,
+            // μ², λ, point, normal, ∂μ²/∂r12, ∂μ²/∂q1, ∂μ²/∂q2.
+            Kind::Details3 => 23,
+            Kind::Spheroid | Kind::AxesQuaternion | Kind::AxesRotation => 6,
+            Kind::AxesAngle2d => 3,
+            // U, d², ε, f, X, X unique (1 or 0).
+            Kind::Measure3 => 8,
+            Kind::Measure2 => 7,
+        }
+    }
+}
+
+/// One argument: rows of `width` values, or a single row that every output row reuses.
+#[derive(Clone, Copy)]
+struct Input<'a> {
+    data: &'a [f64],
+    width: usize,
+    broadcast: bool,
+}
+
+impl Input<'_> {
+    #[inline(always)]
+    fn row<const K: usize>(&self, i: usize) -> [f64; K] {
+        let start = if self.broadcast { 0 } else { i * self.width };
+        core::array::from_fn(|k| self.data[start + k])
+    }
+
+    #[inline(always)]
+    fn scalar(&self, i: usize) -> f64 {
+        self.data[if self.broadcast { 0 } else { i }]
+    }
+}
+
+/// The first row that could not be evaluated.
+struct RowError {
+    row: usize,
+    message: String,
+}
+
+/// Copies `values` into `out` (one output row).
+#[inline(always)]
+fn put(out: &mut [f64], values: &[f64]) {
+    out.copy_from_slice(values);
+}
+
+/// Evaluates the rows `start..start + out.len() / width` into `out`.
+fn chunk(kind: Kind, inputs: &[Input<'_>], start: usize, out: &mut [f64]) -> Result<(), RowError> {
+    let width = kind.output_width();
+    let rows = out.len() / width;
+    let fail = |i: usize, e: &dyn std::fmt::Display| RowError {
+        row: start + i,
+        message: e.to_string(),
+    };
+    match kind {
+        Kind::Contact3 | Kind::Overlap3 => {
+            let pairs: Vec<Pair> = (0..rows)
+                .map(|i| Pair {
+                    r12: inputs[0].row(start + i),
+                    q1: inputs[1].row(start + i),
+                    q2: inputs[2].row(start + i),
+                })
+                .collect();
+            evaluate_pairs(kind, &pairs, out, &fail)
+        }
+        Kind::Contact2 | Kind::Overlap2 => {
+            let pairs: Vec<Pair2d> = (0..rows)
+                .map(|i| Pair2d {
+                    r12: inputs[0].row(start + i),
+                    q1: inputs[1].row(start + i),
+                    q2: inputs[2].row(start + i),
+                })
+                .collect();
+            evaluate_pairs(kind, &pairs, out, &fail)
+        }
+        _ => {
+            for (i, o) in out.chunks_exact_mut(width).enumerate() {
+                one_row(kind, inputs, start + i, o).map_err(|message| RowError {
+                    row: start + i,
+                    message,
+                })?;
+            }
+            Ok(())
+        }
+    }
+}
+
+/// The contact functions or verdicts of one chunk of pairs, through pw85's batch functions.
+fn evaluate_pairs<P: pw85::batch::BatchPair>(
+    kind: Kind,
+    pairs: &[P],
+    out: &mut [f64],
+    fail: &dyn Fn(usize, &dyn std::fmt::Display) -> RowError,
+) -> Result<(), RowError> {
+    if matches!(kind, Kind::Contact3 | Kind::Contact2) {
+        let mut results = vec![Ok(pw85::batch::EMPTY_CONTACT); pairs.len()];
+        contact_functions(pairs, &mut results, Parallelism::Serial);
+        for (i, (r, o)) in results.iter().zip(out.chunks_exact_mut(2)).enumerate() {
+            let c = r.as_ref().map_err(|e| fail(i, e))?;
+            put(o, &[c.mu2, c.lambda]);
+        }
+    } else {
+        let mut results = vec![Ok(false); pairs.len()];
+        overlaps(pairs, &mut results, Parallelism::Serial);
+        for (i, (r, o)) in results.iter().zip(out.iter_mut()).enumerate() {
+            let overlapping = r.as_ref().map_err(|e| fail(i, e))?;
+            *o = f64::from(u8::from(*overlapping));
+        }
+    }
+    Ok(())
+}
+
+/// One row of a kind evaluated pair by pair (everything but the batched contact functions).
+fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<(), String> {
+    let text = |e: pw85::Error| e.to_string();
+    match kind {
+        Kind::Details3 => {
+            let d = pw85::contact_details(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
+                .map_err(text)?;
+            o[0] = d.contact.mu2;
+            o[1] = d.contact.lambda;
+            o[2..5].copy_from_slice(&d.point);
+            o[5..8].copy_from_slice(&d.normal);
+            o[8..11].copy_from_slice(&d.grad_r12);
+            o[11..17].copy_from_slice(&d.grad_q1);
+            o[17..23].copy_from_slice(&d.grad_q2);
+        }
+        Kind::FNeg3 => {
+            let lambda = inputs[0].scalar(i);
+            let (r12, q1, q2) = (inputs[1].row(i), inputs[2].row(i), inputs[3].row(i));
+            if !(0.0..=1.0).contains(&lambda) {
+                return Err(format!("lambda must lie in [0, 1], not {lambda}"));
+            }
+            // The verdict validates the inputs (finite, positive definite) with the typed
+            // errors of the contact function.
+            pw85::overlap(&r12, &q1, &q2).map_err(text)?;
+            o[0] = -pw85::poly::RationalForm::new(&r12, &q1, &q2).f(lambda);
+        }
+        Kind::Spheroid => {
+            let q = pw85::spheroid(inputs[0].scalar(i), inputs[1].scalar(i), &inputs[2].row(i))
+                .map_err(text)?;
+            o.copy_from_slice(&q);
+        }
+        Kind::AxesQuaternion => {
+            let q = pw85::shape::from_axes_quaternion(&inputs[0].row(i), &inputs[1].row(i))
+                .map_err(text)?;
+            o.copy_from_slice(&q);
+        }
+        Kind::AxesRotation => {
+            let m: [f64; 9] = inputs[1].row(i);
+            let rotation = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];
+            let q = pw85::shape::from_axes_rotation(&inputs[0].row(i), &rotation).map_err(text)?;
+            o.copy_from_slice(&q);
+        }
+        Kind::AxesAngle2d => {
+            let q = pw85::shape::from_axes_angle_2d(&inputs[0].row(i), inputs[1].scalar(i))
+                .map_err(text)?;
+            o.copy_from_slice(&q);
+        }
+        Kind::Measure3 => {
+            let t =
+                ellipack::measure::pair_term_3d(&inputs[0].row(i)).map_err(|e| e.to_string())?;
+            o[..4].copy_from_slice(&[t.u, t.d2, t.eps, t.f]);
+            o[4..7].copy_from_slice(&t.x);
+            o[7] = f64::from(u8::from(t.x_unique));
+        }
+        Kind::Measure2 => {
+            let t =
+                ellipack::measure::pair_term_2d(&inputs[0].row(i)).map_err(|e| e.to_string())?;
+            o[..4].copy_from_slice(&[t.u, t.d2, t.eps, t.f]);
+            o[4..6].copy_from_slice(&t.x);
+            o[6] = f64::from(u8::from(t.x_unique));
+        }
+        Kind::Contact3 | Kind::Contact2 | Kind::Overlap3 | Kind::Overlap2 => {
+            unreachable!("batched kinds are evaluated by `evaluate_pairs`")
+        }
+    }
+    Ok(())
+}
+
+/// The rayon pool of `threads` threads, built once per count.
+fn pool(threads: usize) -> PyResult<Arc<rayon::ThreadPool>> {
+    static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
+    let pools = POOLS.get_or_init(Default::default);
+    // A poisoned lock only means another call panicked while inserting: the map is still valid.
+    let mut pools = pools.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some(p) = pools.get(&threads) {
+        return Ok(Arc::clone(p));
+    }
+    let p = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(Arc::new)
+        .map_err(|e| PyValueError::new_err(format!("cannot start {threads} threads: {e}")))?;
+    pools.insert(threads, Arc::clone(&p));
+    Ok(p)
+}
+
+/// Every chunk of `out`, on the calling thread (`threads == 1`) or a pool; the error of the
+/// lowest failing row.
+fn evaluate(
+    kind: Kind,
+    inputs: &[Input<'_>],
+    out: &mut [f64],
+    threads: usize,
+    pool: Option<&rayon::ThreadPool>,
+) -> Result<(), RowError> {
+    let step = CHUNK * kind.output_width();
+    let job = |(c, o): (usize, &mut [f64])| chunk(kind, inputs, c * CHUNK, o);
+    match pool {
+        Some(pool) if threads != 1 && out.len() > step => pool.install(|| {
+            out.par_chunks_mut(step)
+                .enumerate()
+                .map(job)
+                .filter_map(Result::err)
+                .min_by_key(|e| e.row)
+                .map_or(Ok(()), Err)
+        }),
+        _ => out.chunks_mut(step).enumerate().try_for_each(job),
+    }
+}
+
+/// `_rows(kind, inputs, out, threads, batch)`: evaluates `kind` on every row.
+///
+/// Each input is a C-contiguous float64 matrix with the kind's row width and either one row
+/// (broadcast) or as many rows as `out`; `out` is C-contiguous float64 with the kind's output
+/// width. `threads`: 1 on the calling thread, 0 on every core, n on n threads. `batch` says
+/// whether the caller passed rows (the error then names the row).
+#[pyfunction]
+#[pyo3(signature = (kind, inputs, out, threads, batch))]
+pub fn _rows(
+    py: Python<'_>,
+    kind: &str,
+    inputs: Vec<PyReadonlyArray2<'_, f64>>,
+    mut out: PyReadwriteArray2<'_, f64>,
+    threads: usize,
+    batch: bool,
+) -> PyResult<()> {
+    let kind = Kind::from_name(kind)?;
+    let widths = kind.input_widths();
+    if inputs.len() != widths.len() {
+        return Err(PyValueError::new_err(format!(
+            "{} inputs where the kernel takes {}",
+            inputs.len(),
+            widths.len()
+        )));
+    }
+    let [n, out_width] = [out.shape()[0], out.shape()[1]];
+    if out_width != kind.output_width() {
+        return Err(PyValueError::new_err(format!(
+            "out has rows of {out_width}, not {}",
+            kind.output_width()
+        )));
+    }
+    let mut views = Vec::with_capacity(inputs.len());
+    for (k, (a, &width)) in inputs.iter().zip(widths).enumerate() {
+        let [rows, w] = [a.shape()[0], a.shape()[1]];
+        if w != width || !(rows == n || rows == 1) {
+            return Err(PyValueError::new_err(format!(
+                "input {k} has shape ({rows}, {w}), not (1, {width}) or ({n}, {width})"
+            )));
+        }
+        let data = a
+            .as_slice()
+            .map_err(|_| PyValueError::new_err(format!("input {k} is not C-contiguous")))?;
+        views.push(Input {
+            data,
+            width,
+            broadcast: rows == 1 && n != 1,
+        });
+    }
+    let out = out
+        .as_slice_mut()
+        .map_err(|_| PyValueError::new_err("out is not C-contiguous"))?;
+    let pool = match threads {
+        1 => None,
+        0 => pool(rayon::current_num_threads().max(1)).map(Some)?,
+        t => pool(t).map(Some)?,
+    };
+    py.detach(|| evaluate(kind, &views, out, threads, pool.as_deref()))
+        .map_err(|e| {
+            PyValueError::new_err(if batch {
+                format!("row {}: {}", e.row, e.message)
+            } else {
+                e.message
+            })
+        })
+}
+
+/// `_bench_rust_batch(r12, q1, q2, all_threads)`: the seconds pw85's batch
+/// `contact_functions` takes on the pairs of the three (n, 3), (n, 6), (n, 6) matrices, the
+/// pairs already laid out as the batch wants them (the building is not timed). The reference
+/// for the per-pair cost of the Python call.
+#[pyfunction]
+pub fn _bench_rust_batch(
+    py: Python<'_>,
+    r12: PyReadonlyArray2<'_, f64>,
+    q1: PyReadonlyArray2<'_, f64>,
+    q2: PyReadonlyArray2<'_, f64>,
+    all_threads: bool,
+) -> PyResult<f64> {
+    let slice = |a: &PyReadonlyArray2<'_, f64>, width: usize, name: &str| {
+        if a.shape()[1] != width {
+            return Err(PyValueError::new_err(format!(
+                "{name} must have {width} columns"
+            )));
+        }
+        a.as_slice()
+            .map(|s| s.to_vec())
+            .map_err(|_| PyValueError::new_err(format!("{name} is not C-contiguous")))
+    };
+    let (r, a, b) = (
+        slice(&r12, 3, "r12")?,
+        slice(&q1, 6, "q1")?,
+        slice(&q2, 6, "q2")?,
+    );
+    let n = r.len() / 3;
+    if a.len() != 6 * n || b.len() != 6 * n {
+        return Err(PyValueError::new_err(
+            "r12, q1 and q2 must have the same rows",
+        ));
+    }
+    let pairs: Vec<Pair> = (0..n)
+        .map(|i| Pair {
+            r12: core::array::from_fn(|k| r[3 * i + k]),
+            q1: core::array::from_fn(|k| a[6 * i + k]),
+            q2: core::array::from_fn(|k| b[6 * i + k]),
+        })
+        .collect();
+    let parallelism = if all_threads {
+        Parallelism::Threads
+    } else {
+        Parallelism::Serial
+    };
+    Ok(py.detach(|| {
+        let mut out = vec![Ok(pw85::batch::EMPTY_CONTACT); n];
+        let start = std::time::Instant::now();
+        contact_functions(&pairs, &mut out, parallelism);
+        let seconds = start.elapsed().as_secs_f64();
+        std::hint::black_box(&out);
+        seconds
+    }))
+}

@@ -1,0 +1,289 @@
+"""The packer on small scenes, checked independently with NumPy; scenes as dict, TOML text and
+file; writing and reading a folder; progress and Ctrl-C."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+import ellipack
+
+SCENE_2D = {
+    "dimension": 2,
+    "seed": 5,
+    "container": {"kind": "circle"},
+    "shapes": [{"count": 5, "semi_axes": [2.0, 1.0]}, {"count": 2, "semi_axes": [1.0, 1.0]}],
+    "solver": {"time_limit": 30.0, "threads": 1, "local_minimisations": 6},
+}
+
+SCENE_3D = {
+    "dimension": 3,
+    "seed": 2,
+    "container": {"kind": "ball"},
+    "shapes": [{"count": 5, "semi_axes": [1.0, 0.75, 0.5]}],
+    "solver": {"time_limit": 30.0, "threads": 1, "local_minimisations": 4},
+}
+
+
+# ---- an independent check of non-overlap, from the arrays alone --------------------------------
+
+
+def rotation_2d(theta):
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def rotation_3d(q):
+    """The active rotation of the quaternion (w, x, y, z), normalised."""
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def forms(packing):
+    rotations = (
+        [rotation_2d(t) for t in packing.angles]
+        if packing.dimension == 2
+        else [rotation_3d(q) for q in packing.quaternions]
+    )
+    return [R @ np.diag(a * a) @ R.T for R, a in zip(rotations, packing.semi_axes)]
+
+
+def best_f(r, Q1, Q2):
+    """A lower bound of μ² = max f(λ): f on a grid of λ, then golden-section refinement around
+    the best grid point. Any λ with f(λ) > 1 proves that the interiors are disjoint."""
+    def f(lam):
+        Q = (1 - lam) * Q1 + lam * Q2
+        return lam * (1 - lam) * r @ np.linalg.solve(Q, r)
+
+    grid = np.linspace(0.0, 1.0, 401)
+    values = [f(t) for t in grid]
+    k = int(np.argmax(values))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, 400)]
+    g = (np.sqrt(5) - 1) / 2
+    for _ in range(60):
+        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+        if f(a) < f(b):
+            lo = a
+        else:
+            hi = b
+    return max(max(values), f((lo + hi) / 2))
+
+
+def check_independently(packing):
+    centres = packing.centres
+    Q = forms(packing)
+    m = len(packing)
+    assert centres.shape == (m, packing.dimension)
+    worst = np.inf
+    for i in range(m):
+        for j in range(i + 1, m):
+            worst = min(worst, best_f(centres[j] - centres[i], Q[i], Q[j]))
+    assert worst > 1.0, f"two items overlap: max f(λ) = {worst}"
+    # Every item inside the container (a ball or disc about the origin): the farthest point of
+    # item i from the centre, sampled densely on its boundary.
+    container = packing.container
+    assert container["kind"] in ("circle", "ball")
+    radius = container["radius"]
+    rng = np.random.default_rng(0)
+    for i in range(m):
+        u = rng.normal(size=(20000, packing.dimension))
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        # Points of the boundary: c + L u with L Lᵀ = Q.
+        L = np.linalg.cholesky(Q[i])
+        points = centres[i] + u @ L.T
+        assert np.linalg.norm(points, axis=1).max() <= radius * (1 + 1e-12)
+    # The density from the arrays.
+    a = packing.semi_axes
+    if packing.dimension == 2:
+        density = np.pi * a.prod(axis=1).sum() / (np.pi * radius**2)
+    else:
+        density = a.prod(axis=1).sum() / radius**3
+    assert density == pytest.approx(packing.density, rel=1e-12)
+
+
+# ---- the tests ----------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def packed_2d():
+    seen = []
+    packing = ellipack.pack(SCENE_2D, progress=seen.append)
+    return packing, seen
+
+
+def test_pack_2d_gives_a_certified_packing(packed_2d):
+    packing, seen = packed_2d
+    assert packing.dimension == 2 and len(packing) == 7
+    assert packing.quaternions is None and packing.angles.shape == (7,)
+    assert packing.certificate["overlapping_pairs"] == 0
+    assert packing.certificate["containment_violations"] == 0
+    assert packing.certificate["min_mu2"] >= 1.0
+    assert not packing.interrupted
+    check_independently(packing)
+    assert ellipack.verify(packing) == {
+        "certified": True,
+        "overlapping_pairs": [],
+        "outside": [],
+        "min_mu2": packing.certificate["min_mu2"],
+    }
+    # The progress callback heard every local minimisation, in order.
+    assert [p["local_minimisations"] for p in seen] == list(range(1, len(seen) + 1))
+    assert len(seen) >= 6
+    assert max(p["best_density"] for p in seen) == pytest.approx(packing.density, rel=1e-9)
+    assert packing.history.count("\n") == len(seen) + 1
+
+
+def test_pack_3d_gives_a_certified_packing():
+    packing = ellipack.pack(SCENE_3D, progress=False)
+    assert packing.dimension == 3 and packing.quaternions.shape == (5, 4)
+    assert packing.angles is None
+    check_independently(packing)
+    assert ellipack.verify(packing)["certified"]
+
+
+def test_dict_toml_text_and_file_are_the_same_scene(tmp_path, packed_2d):
+    packing, _ = packed_2d
+    text = ellipack._ellipack._scene_toml(SCENE_2D)
+    from_text = ellipack.pack(text, progress=False)
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    from_file = ellipack.pack(path, progress=False)
+    from_str_path = ellipack.pack(str(path), progress=False)
+    for other in (from_text, from_file, from_str_path):
+        assert np.array_equal(other.centres, packing.centres)
+        assert np.array_equal(other.angles, packing.angles)
+
+
+def test_write_and_read_back(tmp_path, packed_2d):
+    packing, _ = packed_2d
+    out = tmp_path / "run" / "out"
+    packing.write(out)
+    assert sorted(os.listdir(out)) == ["history.csv", "packing.csv", "packing.xyz", "summary.json"]
+    back = ellipack.read_packing(out)
+    assert np.array_equal(back.centres, packing.centres)
+    assert np.array_equal(back.semi_axes, packing.semi_axes)
+    assert np.array_equal(back.angles, packing.angles)
+    assert back.container == packing.container
+    assert back.summary == packing.summary
+    assert back.history is None
+    # Overwriting keeps one set: the new packing without xyz replaces the old files.
+    back.write(out, xyz=False)
+    assert sorted(os.listdir(out)) == ["packing.csv", "summary.json"]
+    with pytest.raises(FileNotFoundError, match="packing.csv"):
+        ellipack.read_packing(tmp_path / "nothing")
+    (out / "summary.json").write_text("{}")
+    with pytest.raises(ValueError, match="summary.json"):
+        ellipack.read_packing(out)
+
+
+def test_scene_errors_name_the_line_and_key():
+    bad = dict(SCENE_2D, container={"kind": "ball"})
+    with pytest.raises(ValueError, match=r"line \d+, column \d+: `container.kind`: a ball is a 3D"):
+        ellipack.pack(bad, progress=False)
+    bad = dict(SCENE_2D, shapes=[{"count": 0, "semi_axes": [1.0, 1.0]}])
+    with pytest.raises(ValueError, match=r"`shapes\[0\].count`"):
+        ellipack.pack(bad, progress=False)
+    with pytest.raises(ValueError, match="time limit"):
+        ellipack.pack(SCENE_2D, time_limit=0.0, progress=False)
+    with pytest.raises(TypeError, match="no TOML form"):
+        ellipack.pack(dict(SCENE_2D, seed=None), progress=False)
+    with pytest.raises(TypeError, match="scene"):
+        ellipack.pack(42, progress=False)
+
+
+def test_an_exception_in_progress_stops_the_run_and_is_raised():
+    def fail(p):
+        raise RuntimeError("stop here")
+
+    start = time.monotonic()
+    with pytest.raises(RuntimeError, match="stop here"):
+        ellipack.pack(dict(SCENE_2D, solver={"time_limit": 30.0, "threads": 1}), progress=fail)
+    assert time.monotonic() - start < 10.0
+
+
+def test_keyboard_interrupt_in_progress_returns_the_best_packing():
+    def interrupt(p):
+        if p["local_minimisations"] == 2:
+            raise KeyboardInterrupt
+
+    start = time.monotonic()
+    packing = ellipack.pack(dict(SCENE_2D, solver={"time_limit": 30.0, "threads": 1}),
+                            progress=interrupt)
+    assert time.monotonic() - start < 10.0
+    assert packing.interrupted
+    check_independently(packing)
+
+
+def test_packing_from_arrays_and_verify_name_the_offenders():
+    p = ellipack.packing_from_arrays(
+        {"kind": "circle", "radius": 3.0},
+        [[0.0, 0.0], [1.5, 0.0], [0.0, 2.5]],
+        [[1.0, 1.0], [1.0, 1.0], [1.0, 1.0]],
+        [0.0, 0.0, 0.0],
+    )
+    v = ellipack.verify(p)
+    assert not v["certified"]
+    assert [(i, j) for i, j, _ in v["overlapping_pairs"]] == [(0, 1)]
+    assert v["overlapping_pairs"][0][2] == pytest.approx(0.5625, rel=1e-14)
+    assert [i for i, _ in v["outside"]] == [2]
+    assert v["outside"][0][1] == pytest.approx(3.5 / 3.0, rel=1e-14)
+    with pytest.raises(ValueError, match="item 1"):
+        ellipack.packing_from_arrays({"kind": "circle", "radius": 3.0}, [[0, 0], [1, 1]],
+                                     [[1, 1], [1, -1]], [0, 0])
+
+
+CTRL_C_CHILD = textwrap.dedent(
+    """
+    import signal, sys
+    import ellipack
+    # What an interactive interpreter has; a process started in the background by a
+    # non-interactive shell inherits SIGINT ignored instead.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    scene = {"dimension": 2, "seed": 1, "container": {"kind": "circle"},
+             "shapes": [{"count": 12, "semi_axes": [2.0, 1.0]}],
+             "solver": {"time_limit": 120.0, "threads": 1}}
+    def progress(p):
+        if p["local_minimisations"] == 1:
+            print("started", flush=True)
+    packing = ellipack.pack(scene, progress=progress)
+    v = ellipack.verify(packing)
+    print("returned", packing.interrupted, v["certified"], len(packing),
+          packing.summary["wall_seconds"], flush=True)
+    packing.write(sys.argv[1])
+    print("alive", flush=True)
+    """
+)
+
+
+def test_ctrl_c_stops_the_run_and_returns_the_packing(tmp_path):
+    child = subprocess.Popen(
+        [sys.executable, "-c", CTRL_C_CHILD, str(tmp_path / "out")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert child.stdout.readline().strip() == "started"
+        time.sleep(0.5)
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    assert child.returncode == 0, err
+    assert time.monotonic() - sent < 30.0
+    lines = out.split("\n")
+    returned = lines[0].split()
+    assert returned[:4] == ["returned", "True", "True", "12"], out
+    assert float(returned[4]) < 60.0
+    assert lines[1] == "alive"
+    check_independently(ellipack.read_packing(tmp_path / "out"))
