@@ -40,6 +40,7 @@ fn main() -> Result<(), auglag::Error> {
     for (name, inner) in [
         ("spectral projected gradient", InnerSolver::Spg),
         ("projected L-BFGS", InnerSolver::ProjectedLbfgs),
+        ("truncated Newton", InnerSolver::TruncatedNewton),
     ] {
         let options = Options {
             inner_solver: inner,

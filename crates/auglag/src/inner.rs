@@ -13,6 +13,12 @@ pub(crate) trait Smooth {
     fn value_grad(&mut self, x: &[f64], grad: &mut [f64]) -> f64;
     /// Number of evaluations so far (monotone), for the evaluation budget.
     fn evaluations(&self) -> usize;
+    /// Overwrites `out` with ∇²F(x) v and returns true, or returns false when F offers no
+    /// Hessian products (the caller then differences gradients).
+    fn hessian_times(&mut self, x: &[f64], v: &[f64], out: &mut [f64]) -> bool {
+        let _ = (x, v, out);
+        false
+    }
 }
 
 /// Settings of one inner solve.

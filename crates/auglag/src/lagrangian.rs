@@ -40,7 +40,11 @@ pub struct Phr<'a> {
 }
 
 impl<'a> Phr<'a> {
-    pub(crate) fn new(
+    /// The subproblem with penalty ρ = `penalty`, the first `n_eq` constraints equalities,
+    /// objective factor s_f, constraint factors sᵢ and safeguarded multipliers (one per
+    /// constraint). The solver builds these; a problem's own tests can too, to check its
+    /// fused hooks against the unfused formulas.
+    pub fn new(
         penalty: f64,
         n_eq: usize,
         objective_scale: f64,
@@ -91,6 +95,17 @@ impl<'a> Phr<'a> {
     /// multiplier estimate λᵢ⁺.
     pub fn derivative(&self, i: usize, c: f64) -> f64 {
         self.constraint_scales[i] * self.estimate(i, c)
+    }
+
+    /// d² term(i, c) / dc²: the weight of ∇cᵢ ∇cᵢᵀ in the Hessian, ρ sᵢ² where the term is
+    /// quadratic in c (equalities, and inequalities with λ̄ᵢ + ρ sᵢ c > 0), 0 elsewhere.
+    pub fn curvature(&self, i: usize, c: f64) -> f64 {
+        let s = self.constraint_scales[i];
+        if i < self.n_eq || self.multipliers[i] + self.penalty * s * c > 0.0 {
+            self.penalty * s * s
+        } else {
+            0.0
+        }
     }
 
     /// First-order multiplier estimate λ̄ᵢ + ρ sᵢ c (clipped at 0 for inequalities).
@@ -253,6 +268,12 @@ impl<P: Problem + ?Sized> Smooth for AugmentedLagrangian<'_, P> {
         self.evaluate(x, Some(grad))
     }
 
+    fn hessian_times(&mut self, x: &[f64], v: &[f64], out: &mut [f64]) -> bool {
+        let phr = self.phr();
+        self.problem
+            .augmented_lagrangian_hessian_times(x, &phr, v, out)
+    }
+
     fn evaluations(&self) -> usize {
         self.function_evaluations
     }
@@ -278,6 +299,8 @@ mod tests {
                 let h = 1e-6;
                 let fd = (phr.term(i, c + h) - phr.term(i, c - h)) / (2.0 * h);
                 assert!((phr.derivative(i, c) - fd).abs() <= 1e-6 * (1.0 + fd.abs()));
+                let fd2 = (phr.derivative(i, c + h) - phr.derivative(i, c - h)) / (2.0 * h);
+                assert!((phr.curvature(i, c) - fd2).abs() <= 1e-6 * (1.0 + fd2.abs()));
             }
         }
     }

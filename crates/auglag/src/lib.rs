@@ -59,6 +59,7 @@ mod projected_qn;
 mod projection;
 mod report;
 mod spg;
+mod truncated_newton;
 
 pub use error::{Error, Evaluation};
 pub use lagrangian::Phr;

@@ -13,6 +13,9 @@ pub enum InnerSolver {
     /// Active-set projected L-BFGS: faster on smooth, ill-conditioned problems.
     #[default]
     ProjectedLbfgs,
+    /// Active-set truncated Newton: conjugate gradients on the free variables with
+    /// Hessian–vector products (the problem's own, or difference quotients of gradients).
+    TruncatedNewton,
 }
 
 /// Settings of [`minimize`](crate::minimize): start from `Options::default()` and change
@@ -46,6 +49,8 @@ pub struct Options {
     pub lbfgs_memory: usize,
     /// Nonmonotone memory M of the SPG line search (M = 1: monotone). Default 10.
     pub spg_memory: usize,
+    /// Conjugate-gradient iterations per truncated-Newton step at most (≥ 1). Default 50.
+    pub cg_iterations: usize,
     /// Safeguards [λ_min, λ_max] of the SPG spectral step. Default [1e-10, 1e10].
     pub spectral_step_bounds: (f64, f64),
     /// Initial penalty ρ₁; `None` (default) chooses it as Algencan does:
@@ -96,6 +101,8 @@ with_setters!(Options:
     with_lbfgs_memory => lbfgs_memory: usize,
     /// Sets [`Options::spg_memory`].
     with_spg_memory => spg_memory: usize,
+    /// Sets [`Options::cg_iterations`].
+    with_cg_iterations => cg_iterations: usize,
     /// Sets [`Options::spectral_step_bounds`].
     with_spectral_step_bounds => spectral_step_bounds: (f64, f64),
     /// Sets [`Options::initial_penalty`].
@@ -126,6 +133,7 @@ impl Default for Options {
             inner_solver: InnerSolver::default(),
             lbfgs_memory: 7,
             spg_memory: 10,
+            cg_iterations: 50,
             spectral_step_bounds: (1e-10, 1e10),
             initial_penalty: None,
             penalty_increase: 10.0,
@@ -194,6 +202,12 @@ impl Options {
             self.spg_memory as f64,
             (1..=MAX_SPG_MEMORY).contains(&self.spg_memory),
             "must lie in 1..=1000000",
+        )?;
+        require(
+            "cg_iterations",
+            self.cg_iterations as f64,
+            self.cg_iterations >= 1,
+            "must be at least 1",
         )?;
         let (lo, hi) = self.spectral_step_bounds;
         require(

@@ -41,6 +41,7 @@ use crate::projected_qn::LbfgsWorkspace;
 use crate::projection::{norm_inf, project};
 use crate::report::{Control, Event, Progress, Report, Solution, StopReason};
 use crate::spg::SpgWorkspace;
+use crate::truncated_newton::NewtonWorkspace;
 
 /// Floor of the scale factors, so that a huge initial gradient cannot switch a function off.
 const MIN_SCALE: f64 = 1e-8;
@@ -105,6 +106,7 @@ struct OuterMeasures {
 enum InnerWorkspace {
     Spg(SpgWorkspace),
     Lbfgs(LbfgsWorkspace),
+    Newton(NewtonWorkspace),
 }
 
 /// The state of one run; every buffer is allocated in `new`.
@@ -155,6 +157,9 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
             )),
             InnerSolver::ProjectedLbfgs => {
                 InnerWorkspace::Lbfgs(LbfgsWorkspace::new(n, options.lbfgs_memory))
+            }
+            InnerSolver::TruncatedNewton => {
+                InnerWorkspace::Newton(NewtonWorkspace::new(n, options.cg_iterations))
             }
         };
         let mut run = Self {
@@ -417,6 +422,7 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
         let method: &mut dyn Method = match &mut self.inner {
             InnerWorkspace::Spg(ws) => ws,
             InnerWorkspace::Lbfgs(ws) => ws,
+            InnerWorkspace::Newton(ws) => ws,
         };
         inner::minimize(
             f,
@@ -541,6 +547,10 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
                 function_evaluations: self.al.function_evaluations,
                 gradient_evaluations: self.al.gradient_evaluations,
                 constraint_evaluations: self.al.constraint_evaluations,
+                hessian_products: match &self.inner {
+                    InnerWorkspace::Newton(ws) => ws.cg_iterations,
+                    _ => 0,
+                },
                 infeasibility,
                 complementarity: last.complementarity,
                 projected_gradient_norm: self.projected_gradient,

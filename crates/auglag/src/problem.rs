@@ -80,6 +80,31 @@ pub trait Problem {
         let _ = (x, phr, grad);
         None
     }
+
+    /// Optional product of the augmented Lagrangian's Hessian with a direction, for the
+    /// truncated-Newton inner solver ([`InnerSolver::TruncatedNewton`]).
+    ///
+    /// Return `false` (the default) to let the solver use a difference quotient of gradients,
+    /// (∇L(x + h v) − ∇L(x)) / h. Otherwise overwrite `out` with
+    ///
+    /// ```text
+    /// ∇²L(x) v = phr.objective_scale() · ∇²f(x) v
+    ///          + Σᵢ [ phr.derivative(i, cᵢ(x)) · ∇²cᵢ(x) v + phr.curvature(i, cᵢ(x)) · ∇cᵢ(x) (∇cᵢ(x)ᵀ v) ]
+    /// ```
+    ///
+    /// and return `true`.
+    ///
+    /// [`InnerSolver::TruncatedNewton`]: crate::InnerSolver::TruncatedNewton
+    fn augmented_lagrangian_hessian_times(
+        &self,
+        x: &[f64],
+        phr: &Phr<'_>,
+        v: &[f64],
+        out: &mut [f64],
+    ) -> bool {
+        let _ = (x, phr, v, out);
+        false
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for &P {
@@ -111,5 +136,14 @@ impl<P: Problem + ?Sized> Problem for &P {
         grad: Option<&mut [f64]>,
     ) -> Option<f64> {
         (**self).augmented_lagrangian(x, phr, grad)
+    }
+    fn augmented_lagrangian_hessian_times(
+        &self,
+        x: &[f64],
+        phr: &Phr<'_>,
+        v: &[f64],
+        out: &mut [f64],
+    ) -> bool {
+        (**self).augmented_lagrangian_hessian_times(x, phr, v, out)
     }
 }

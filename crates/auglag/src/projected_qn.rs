@@ -126,20 +126,7 @@ impl LbfgsWorkspace {
 
     /// Marks the ε-active variables (see the module docs).
     fn mark_free(&mut self, x: &[f64], g: &[f64], lower: &[f64], upper: &[f64], pg: f64) {
-        let eps = ACTIVE_EPSILON.min(pg);
-        let mut all_free = true;
-        for (((fr, &xi), &gi), (&l, &u)) in self
-            .free
-            .iter_mut()
-            .zip(x)
-            .zip(g)
-            .zip(lower.iter().zip(upper))
-        {
-            let active = (xi - l <= eps && gi > 0.0) || (u - xi <= eps && gi < 0.0);
-            *fr = if active { 0.0 } else { 1.0 };
-            all_free &= !active;
-        }
-        self.all_free = all_free;
+        self.all_free = mark_free(&mut self.free, (x, g), (lower, upper), pg);
     }
 
     /// d = −H_F g_F by the two-loop recursion over the free variables. Returns false when no
@@ -200,35 +187,48 @@ impl LbfgsWorkspace {
         self.direction.iter_mut().for_each(|v| *v = -*v);
         used
     }
+}
 
-    /// Sends each ε-active variable to its bound (dᵢ = lᵢ − xᵢ or uᵢ − xᵢ): Bertsekas moves
-    /// them by a gradient step instead, but leaving them in place (dᵢ = 0) would strand a
-    /// variable at distance ≤ ε from its bound forever, with ‖P(x − ∇F) − x‖∞ stuck at that
-    /// distance. Each such component has gᵢdᵢ ≤ 0, so descent is kept.
-    fn aim_active_at_bounds(&mut self, x: &[f64], g: &[f64], lower: &[f64], upper: &[f64]) {
-        for (i, d) in self.direction.iter_mut().enumerate() {
-            if self.free[i] == 0.0 {
-                *d = if g[i] > 0.0 {
-                    lower[i] - x[i]
-                } else {
-                    upper[i] - x[i]
-                };
-            }
-        }
+/// Marks the ε-active variables of step 1 (module docs) in `free` (1.0 free, 0.0 active);
+/// returns whether every variable is free.
+pub(crate) fn mark_free(
+    free: &mut [f64],
+    (x, g): (&[f64], &[f64]),
+    (lower, upper): (&[f64], &[f64]),
+    pg: f64,
+) -> bool {
+    let eps = ACTIVE_EPSILON.min(pg);
+    let mut all_free = true;
+    for (((fr, &xi), &gi), (&l, &u)) in free.iter_mut().zip(x).zip(g).zip(lower.iter().zip(upper)) {
+        let active = (xi - l <= eps && gi > 0.0) || (u - xi <= eps && gi < 0.0);
+        *fr = if active { 0.0 } else { 1.0 };
+        all_free &= !active;
     }
+    all_free
+}
 
-    /// Zeroes direction components that point out of the box from a bound: the projection
-    /// would discard them anyway, and keeping them would spoil the descent test.
-    fn clip_blocked(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) {
-        for ((d, &xi), (&l, &u)) in self
-            .direction
-            .iter_mut()
-            .zip(x)
-            .zip(lower.iter().zip(upper))
-        {
-            if (xi <= l && *d < 0.0) || (xi >= u && *d > 0.0) {
-                *d = 0.0;
-            }
+/// Completes a direction on the free variables: each ε-active variable is sent to its bound
+/// (dᵢ = lᵢ − xᵢ or uᵢ − xᵢ; Bertsekas moves them by a gradient step instead, but leaving them
+/// in place would strand a variable at distance ≤ ε from its bound forever, with
+/// ‖P(x − ∇F) − x‖∞ stuck at that distance; each such component has gᵢdᵢ ≤ 0, so descent is
+/// kept), and components pointing out of the box from a bound are zeroed (the projection would
+/// discard them anyway, and keeping them would spoil the descent test).
+pub(crate) fn complete_direction(
+    direction: &mut [f64],
+    free: &[f64],
+    (x, g): (&[f64], &[f64]),
+    (lower, upper): (&[f64], &[f64]),
+) {
+    for (i, d) in direction.iter_mut().enumerate() {
+        if free[i] == 0.0 {
+            *d = if g[i] > 0.0 {
+                lower[i] - x[i]
+            } else {
+                upper[i] - x[i]
+            };
+        }
+        if (x[i] <= lower[i] && *d < 0.0) || (x[i] >= upper[i] && *d > 0.0) {
+            *d = 0.0;
         }
     }
 }
@@ -285,8 +285,7 @@ fn direction(
     ws: &mut LbfgsWorkspace,
 ) -> bool {
     let quasi_newton = ws.two_loop(grad);
-    ws.aim_active_at_bounds(x, grad, lower, upper);
-    ws.clip_blocked(x, lower, upper);
+    complete_direction(&mut ws.direction, &ws.free, (x, grad), (lower, upper));
     quasi_newton
 }
 

@@ -139,6 +139,9 @@ pub struct Report {
     pub gradient_evaluations: usize,
     /// Calls of the constraints (or of the fused hook when there are constraints).
     pub constraint_evaluations: usize,
+    /// Hessian–vector products of the truncated-Newton inner solver (exact, or difference
+    /// quotients counted also as evaluations); 0 with the other inner solvers.
+    pub hessian_products: usize,
     /// Unscaled sup-norm infeasibility max(‖h‖∞, ‖g₊‖∞) at the returned point.
     pub infeasibility: f64,
     /// Complementarity ‖min(−g̃, μ)‖∞ at the last outer iterate.

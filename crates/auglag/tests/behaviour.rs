@@ -8,7 +8,11 @@ use auglag::{
     minimize_with_callback,
 };
 
-const SOLVERS: [InnerSolver; 2] = [InnerSolver::Spg, InnerSolver::ProjectedLbfgs];
+const SOLVERS: [InnerSolver; 3] = [
+    InnerSolver::Spg,
+    InnerSolver::ProjectedLbfgs,
+    InnerSolver::TruncatedNewton,
+];
 
 /// min (x₀ − a)² + (x₁ − a)² s.t. x₀ + x₁ = 2 and, optionally, x₀ − b ≤ 0.
 /// With a = 3 and no inequality: x* = (1, 1), λ* = 4 (∇f + λ∇h = 0 ⇒ 2(1 − 3) + λ = 0).

@@ -3,7 +3,11 @@
 
 use auglag::{InnerSolver, Options, Problem, Solution, StopReason, minimize};
 
-const SOLVERS: [InnerSolver; 2] = [InnerSolver::Spg, InnerSolver::ProjectedLbfgs];
+const SOLVERS: [InnerSolver; 3] = [
+    InnerSolver::Spg,
+    InnerSolver::ProjectedLbfgs,
+    InnerSolver::TruncatedNewton,
+];
 
 /// Tolerances tighter than the assertions below (1e-6), so that a pass means the solver
 /// reached the optimum and not merely stopped near it.

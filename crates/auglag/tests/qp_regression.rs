@@ -100,7 +100,11 @@ impl Problem for Qp {
 
 #[test]
 fn both_inner_solvers_converge_on_the_saved_case() {
-    for solver in [InnerSolver::Spg, InnerSolver::ProjectedLbfgs] {
+    for solver in [
+        InnerSolver::Spg,
+        InnerSolver::ProjectedLbfgs,
+        InnerSolver::TruncatedNewton,
+    ] {
         let options = Options {
             optimality_tolerance: 1e-9,
             inner_solver: solver,

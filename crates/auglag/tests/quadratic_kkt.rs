@@ -95,7 +95,11 @@ proptest! {
     #[test]
     fn solution_satisfies_projected_gradient_kkt((qp, x0) in qp_strategy(),
                                                  probes in prop::collection::vec(-6.0f64..6.0, 24)) {
-        for solver in [InnerSolver::Spg, InnerSolver::ProjectedLbfgs] {
+        for solver in [
+        InnerSolver::Spg,
+        InnerSolver::ProjectedLbfgs,
+        InnerSolver::TruncatedNewton,
+    ] {
             let options = Options {
                 optimality_tolerance: TOL,
                 inner_solver: solver,

@@ -290,6 +290,7 @@ fn run_n<const N: usize>(
     local.inner_solver = match scene.solver.inner_solver {
         crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
         crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
+        crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
     };
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));

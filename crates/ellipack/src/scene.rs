@@ -25,7 +25,7 @@
 //! time_limit = 60.0                   # seconds of wall clock (--time-limit overrides it)
 //! threads = 0                         # 0: every core (--threads overrides it)
 //! # local_minimisations = 50          # cap on multi-start local minimisations (default: none)
-//! inner_solver = "projected-lbfgs"    # or "spg"
+//! inner_solver = "projected-lbfgs"    # or "spg", "truncated-newton"
 //! perturbation = 0.025                # multi-start perturbation, relative (paper: 2.5 % in 2D,
 //!                                     # 10 % in 3D: the default follows the dimension)
 //! lattice_starts = 16                 # dense lattice starts before the perturbations
@@ -154,6 +154,9 @@ pub enum InnerSolverName {
     /// Active-set projected L-BFGS (`"projected-lbfgs"`).
     #[default]
     ProjectedLbfgs,
+    /// Active-set truncated Newton with the model's exact Hessian–vector products
+    /// (`"truncated-newton"`).
+    TruncatedNewton,
 }
 
 impl InnerSolverName {
@@ -162,6 +165,7 @@ impl InnerSolverName {
         match self {
             InnerSolverName::Spg => "spg",
             InnerSolverName::ProjectedLbfgs => "projected-lbfgs",
+            InnerSolverName::TruncatedNewton => "truncated-newton",
         }
     }
 }

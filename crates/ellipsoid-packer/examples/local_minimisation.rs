@@ -1,6 +1,7 @@
 //! One local minimisation from the paper's lattice start (or, with a fourth argument `dense`,
 //! the face-centred cubic / hexagonal start of `ellipsoid_packer::starts`), certified and
 //! repaired: `cargo run --release -p ellipsoid-packer --example local_minimisation -- 3 ball 100`.
+//! A fifth argument chooses the inner solver: `lbfgs` (default), `spg` or `newton`.
 
 use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
@@ -21,7 +22,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "dense" => true,
         other => return Err(format!("unknown start `{other}` (paper or dense)").into()),
     };
-    let settings = LocalSettings::default();
+    let solver = match args.get(5).map_or("lbfgs", String::as_str) {
+        "lbfgs" => auglag::InnerSolver::ProjectedLbfgs,
+        "spg" => auglag::InnerSolver::Spg,
+        "newton" => auglag::InnerSolver::TruncatedNewton,
+        other => return Err(format!("unknown inner solver `{other}` (lbfgs, spg, newton)").into()),
+    };
+    let settings = LocalSettings::default().with_inner_solver(solver);
     let start = Instant::now();
     // Outer iterations on stderr: a large m takes minutes.
     let mut observe = |p: &auglag::Progress<'_>| {
@@ -57,12 +64,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{check}");
     println!(
         "{dim}D m = {m} {kind:?}: density {density:.5} (before repair {before:.5}, factor {factor:.6}), \
-         {:.2} s, {:?}, {} outer / {} inner iterations, {} evaluations, {builds} builds of the pair list",
+         {:.2} s, {:?}, {} outer / {} inner iterations, {} evaluations, {} Hessian products, \
+         {builds} builds of the pair list",
         elapsed.as_secs_f64(),
         report.stop_reason,
         report.outer_iterations,
         report.inner_iterations,
-        report.function_evaluations
+        report.function_evaluations,
+        report.hessian_products
     );
     Ok(())
 }

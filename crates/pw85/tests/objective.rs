@@ -11,7 +11,11 @@ fn the_objective_peaks_at_the_contact_function() {
     let r12 = [1.6, 0.3, -0.4];
     let c = contact_function(&r12, &q1, &q2).unwrap();
     let at_max = objective(c.lambda, &r12, &q1, &q2).unwrap();
-    assert!((at_max - c.mu2).abs() <= 1e-14 * c.mu2, "{at_max} against {}", c.mu2);
+    assert!(
+        (at_max - c.mu2).abs() <= 1e-14 * c.mu2,
+        "{at_max} against {}",
+        c.mu2
+    );
     for k in 0..=20 {
         let lambda = f64::from(k) / 20.0;
         assert!(objective(lambda, &r12, &q1, &q2).unwrap() <= c.mu2 * (1.0 + 1e-14));
@@ -21,8 +25,17 @@ fn the_objective_peaks_at_the_contact_function() {
     // Invariant under a uniform change of units, far outside the ordinary range.
     for e in [-400, 400] {
         let t = 2f64.powi(e);
-        let f = objective(0.3, &r12.map(|x| x * t), &q1.map(|x| x * t * t), &q2.map(|x| x * t * t));
-        assert_eq!(f.unwrap(), objective(0.3, &r12, &q1, &q2).unwrap(), "units 2^{e}");
+        let f = objective(
+            0.3,
+            &r12.map(|x| x * t),
+            &q1.map(|x| x * t * t),
+            &q2.map(|x| x * t * t),
+        );
+        assert_eq!(
+            f.unwrap(),
+            objective(0.3, &r12, &q1, &q2).unwrap(),
+            "units 2^{e}"
+        );
     }
 }
 
