@@ -270,8 +270,7 @@ impl<P: Problem + ?Sized> Smooth for AugmentedLagrangian<'_, P> {
 
     fn hessian_times(&mut self, x: &[f64], v: &[f64], out: &mut [f64]) -> bool {
         let phr = self.phr();
-        self.problem
-            .augmented_lagrangian_hessian_times(x, &phr, v, out)
+        self.problem.hessian_times(x, &phr, v, out)
     }
 
     fn evaluations(&self) -> usize {

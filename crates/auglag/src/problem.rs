@@ -95,13 +95,7 @@ pub trait Problem {
     /// and return `true`.
     ///
     /// [`InnerSolver::TruncatedNewton`]: crate::InnerSolver::TruncatedNewton
-    fn augmented_lagrangian_hessian_times(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        v: &[f64],
-        out: &mut [f64],
-    ) -> bool {
+    fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
         let _ = (x, phr, v, out);
         false
     }
@@ -137,13 +131,7 @@ impl<P: Problem + ?Sized> Problem for &P {
     ) -> Option<f64> {
         (**self).augmented_lagrangian(x, phr, grad)
     }
-    fn augmented_lagrangian_hessian_times(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        v: &[f64],
-        out: &mut [f64],
-    ) -> bool {
-        (**self).augmented_lagrangian_hessian_times(x, phr, v, out)
+    fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
+        (**self).hessian_times(x, phr, v, out)
     }
 }

@@ -12,7 +12,7 @@
 //!    direction of non-positive curvature (then the last iterate is kept, or −∇_F F when it
 //!    happens at the first iteration: Steihaug's rule without a trust region). The Hessian
 //!    products come from F itself when it offers them ([`Smooth::hessian_times`]: for the
-//!    augmented Lagrangian, [`crate::Problem::augmented_lagrangian_hessian_times`]) and are
+//!    augmented Lagrangian, [`crate::Problem::hessian_times`]) and are
 //!    otherwise difference quotients of gradients, (∇F(x + h p) − ∇F(x)) / h with
 //!    h = √ε_mach · max(1, ‖x‖∞) / ‖p‖∞, as Gencan's incremental quotients.
 //! 3. Active variables are sent to their bounds and blocked components cleared, as in

@@ -60,13 +60,7 @@ impl Problem for Quadratic {
             out.iter_mut().for_each(|o| *o += w[0]);
         }
     }
-    fn augmented_lagrangian_hessian_times(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        v: &[f64],
-        out: &mut [f64],
-    ) -> bool {
+    fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
         if !self.exact_hessian {
             return false;
         }

@@ -456,13 +456,7 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     /// The model's exact products ([`Model::hessian_vector_product`]) assembled as the
     /// trait documents: sf ∇²V v + Σᵢ [λᵢ⁺ ∇²cᵢ v + ρ sᵢ² ∇cᵢ (∇cᵢᵀ v)] over the overlap and
     /// containment constraints.
-    fn augmented_lagrangian_hessian_times(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        v: &[f64],
-        out: &mut [f64],
-    ) -> bool {
+    fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
         let mut model = self.model.borrow_mut();
         let mut at = self.hessian_point.borrow_mut();
         if at.x != x {
@@ -566,7 +560,7 @@ mod tests {
             let phr = Phr::new(10.0, 2, 0.7, &scales, &multipliers);
             let v: Vec<f64> = (0..n).map(|k| ((k * 31 % 17) as f64 - 8.0) / 8.0).collect();
             let mut hv = vec![0.0; n];
-            assert!(adapter.augmented_lagrangian_hessian_times(&x, &phr, &v, &mut hv));
+            assert!(adapter.hessian_times(&x, &phr, &v, &mut hv));
             let h = 1e-6;
             let gradient_at = |t: f64| {
                 let y: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + t * b).collect();

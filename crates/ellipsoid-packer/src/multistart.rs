@@ -581,22 +581,12 @@ mod tests {
     #[test]
     fn shards_are_reproducible_and_disjoint() {
         let axes = vec![[2.0, 1.0]; 6];
-        let x0 = paper_start(&axes, ContainerShape::Ellipsoid).unwrap();
         let run_shard = |shard: Shard| {
             let settings = MultiStartSettings::paper(2, 11)
                 .with_max_local_minimisations(2)
                 .with_shard(shard);
-            let mut densities = Vec::new();
-            let result = multistart(
-                &axes,
-                ContainerShape::Ellipsoid,
-                &x0,
-                &settings,
-                &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-                    densities.push(p.last_density);
-                }),
-            )
-            .unwrap();
+            let (result, densities) =
+                run_from_paper_start(&axes, ContainerShape::Ellipsoid, &settings);
             (result.best.x, densities)
         };
         let shards: Vec<_> = (0..3)
@@ -617,24 +607,13 @@ mod tests {
 
     #[test]
     fn the_best_is_at_least_the_first() {
-        let axes = vec![[1.0, 0.75, 0.5]; 6];
-        let x0 = paper_start(&axes, ContainerShape::Ball).unwrap();
-        let mut first = None;
         let settings = MultiStartSettings {
             max_local_minimisations: 3,
             ..MultiStartSettings::paper(3, 1)
         };
-        let r = multistart(
-            &axes,
-            ContainerShape::Ball,
-            &x0,
-            &settings,
-            &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-                first.get_or_insert(p.last_density);
-            }),
-        )
-        .unwrap();
-        assert!(r.best.density >= first.unwrap());
+        let (r, densities) =
+            run_from_paper_start(&[[1.0, 0.75, 0.5]; 6], ContainerShape::Ball, &settings);
+        assert!(r.best.density >= densities[0]);
         assert!(r.best.certificate.is_feasible());
     }
 
@@ -663,12 +642,21 @@ mod tests {
     /// A run on 7 ellipses (2, 1) in a box from the paper's start, with the density of every
     /// local minimisation in start order.
     fn run_7_in_a_box(settings: &MultiStartSettings) -> (MultiStartResult, Vec<f64>) {
-        let axes = vec![[2.0, 1.0]; 7];
-        let x0 = paper_start(&axes, ContainerShape::Box).unwrap();
+        run_from_paper_start(&[[2.0, 1.0]; 7], ContainerShape::Box, settings)
+    }
+
+    /// A run from the paper's start, with the density of every local minimisation in start
+    /// order.
+    fn run_from_paper_start<const N: usize>(
+        axes: &[[f64; N]],
+        kind: ContainerShape,
+        settings: &MultiStartSettings,
+    ) -> (MultiStartResult, Vec<f64>) {
+        let x0 = paper_start(axes, kind).unwrap();
         let mut densities = Vec::new();
         let r = multistart(
-            &axes,
-            ContainerShape::Box,
+            axes,
+            kind,
             &x0,
             settings,
             &mut Callbacks::on_finished(|p: &MultiStartProgress| densities.push(p.last_density)),

@@ -172,67 +172,49 @@ pub struct Form3(Sym3);
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Form2(Sym2);
 
-impl Form3 {
-    /// `entries` as a form, once checked.
-    ///
-    /// # Errors
-    /// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`]
-    /// otherwise if the matrix is not positive definite (decided whatever the units); the
-    /// error names the argument [`Argument::Q1`].
-    pub fn new(entries: Sym3) -> Result<Self, Error> {
-        check_finite(Argument::Q1, &entries)?;
-        crate::extreme::check_positive_definite_balanced(Argument::Q1, &entries)?;
-        Ok(Self(entries))
-    }
+/// `new`, `entries` and the conversions of a checked form type over its storage.
+macro_rules! checked_form {
+    ($form:ident, $entries:ty, $order:literal) => {
+        impl $form {
+            /// `entries` (
+            #[doc = $order]
+            /// ) as a form, once checked.
+            ///
+            /// # Errors
+            /// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`]
+            /// otherwise if the matrix is not positive definite (decided whatever the units);
+            /// the error names the argument [`Argument::Q1`].
+            pub fn new(entries: $entries) -> Result<Self, Error> {
+                check_finite(Argument::Q1, &entries)?;
+                crate::extreme::check_positive_definite_balanced(Argument::Q1, &entries)?;
+                Ok(Self(entries))
+            }
 
-    /// The stored entries: Q11, Q12, Q13, Q22, Q23, Q33.
-    pub fn entries(&self) -> &Sym3 {
-        &self.0
-    }
+            /// The stored entries (
+            #[doc = $order]
+            /// ).
+            pub fn entries(&self) -> &$entries {
+                &self.0
+            }
+        }
+
+        impl TryFrom<$entries> for $form {
+            type Error = Error;
+            fn try_from(entries: $entries) -> Result<Self, Error> {
+                Self::new(entries)
+            }
+        }
+
+        impl From<$form> for $entries {
+            fn from(q: $form) -> $entries {
+                q.0
+            }
+        }
+    };
 }
 
-impl Form2 {
-    /// `entries` as a form, once checked.
-    ///
-    /// # Errors
-    /// As [`Form3::new`].
-    pub fn new(entries: Sym2) -> Result<Self, Error> {
-        check_finite(Argument::Q1, &entries)?;
-        crate::extreme::check_positive_definite_balanced(Argument::Q1, &entries)?;
-        Ok(Self(entries))
-    }
-
-    /// The stored entries: Q11, Q12, Q22.
-    pub fn entries(&self) -> &Sym2 {
-        &self.0
-    }
-}
-
-impl TryFrom<Sym3> for Form3 {
-    type Error = Error;
-    fn try_from(entries: Sym3) -> Result<Self, Error> {
-        Self::new(entries)
-    }
-}
-
-impl TryFrom<Sym2> for Form2 {
-    type Error = Error;
-    fn try_from(entries: Sym2) -> Result<Self, Error> {
-        Self::new(entries)
-    }
-}
-
-impl From<Form3> for Sym3 {
-    fn from(q: Form3) -> Sym3 {
-        q.0
-    }
-}
-
-impl From<Form2> for Sym2 {
-    fn from(q: Form2) -> Sym2 {
-        q.0
-    }
-}
+checked_form!(Form3, Sym3, "Q11, Q12, Q13, Q22, Q23, Q33");
+checked_form!(Form2, Sym2, "Q11, Q12, Q22");
 
 #[cfg(test)]
 mod tests {

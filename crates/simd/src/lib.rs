@@ -15,6 +15,25 @@
 //! a kernel written with plain operators gives the same bits in both; a kernel that wants
 //! hardware FMA asks for it explicitly (the `fused` form of [`multiversion!`]).
 //!
+//! ```
+//! /// Σ aᵢ bᵢ, fused where the hardware fuses.
+//! #[inline(always)]
+//! fn dot4<const FMA: bool>(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+//!     let mut s = 0.0;
+//!     for k in 0..4 {
+//!         s = if FMA { a[k].mul_add(b[k], s) } else { s + a[k] * b[k] };
+//!     }
+//!     s
+//! }
+//!
+//! simd::multiversion! {
+//!     /// [`dot4`] in the build the processor allows.
+//!     pub fn dot(a: &[f64; 4], b: &[f64; 4]) -> f64 => fused dot4;
+//! }
+//!
+//! assert_eq!(dot(&[1.0, 2.0, 3.0, 4.0], &[1.0; 4]), 10.0);
+//! ```
+//!
 //! # Soundness
 //! An [`F64x4`] or [`Mask4`] is created only by `unsafe` constructors whose contract is that
 //! the processor has AVX2 and FMA (in practice: inside the AVX2 + FMA build of a function
