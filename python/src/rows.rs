@@ -87,24 +87,26 @@ impl Kind {
     }
 }
 
-/// One argument: rows of `width` values, or a single row that every output row reuses.
+/// One argument: rows of `width` values, or a single row that every output row reuses
+/// (`stride` 0), so that reading a row has no branch.
 #[derive(Clone, Copy)]
 struct Input<'a> {
     data: &'a [f64],
-    width: usize,
-    broadcast: bool,
+    stride: usize,
 }
 
 impl Input<'_> {
     #[inline(always)]
     fn row<const K: usize>(&self, i: usize) -> [f64; K] {
-        let start = if self.broadcast { 0 } else { i * self.width };
-        core::array::from_fn(|k| self.data[start + k])
+        let start = i * self.stride;
+        let mut row = [0.0; K];
+        row.copy_from_slice(&self.data[start..start + K]);
+        row
     }
 
     #[inline(always)]
     fn scalar(&self, i: usize) -> f64 {
-        self.data[if self.broadcast { 0 } else { i }]
+        self.data[i * self.stride]
     }
 }
 
@@ -341,8 +343,7 @@ pub fn _rows(
             .map_err(|_| PyValueError::new_err(format!("input {k} is not C-contiguous")))?;
         views.push(Input {
             data,
-            width,
-            broadcast: rows == 1 && n != 1,
+            stride: if rows == 1 { 0 } else { width },
         });
     }
     let out = out
