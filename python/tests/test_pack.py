@@ -287,3 +287,36 @@ def test_ctrl_c_stops_the_run_and_returns_the_packing(tmp_path):
     assert float(returned[4]) < 60.0
     assert lines[1] == "alive"
     check_independently(ellipack.read_packing(tmp_path / "out"))
+
+
+def test_tqdm_shows_progress_when_installed(monkeypatch):
+    """With progress=None, a tqdm bar (here a stand-in module) hears every local
+    minimisation and is closed at the end."""
+    import types
+
+    bars = []
+
+    class Bar:
+        def __init__(self, **kwargs):
+            self.updates, self.closed, self.postfix = 0, False, None
+            bars.append(self)
+
+        def update(self, k):
+            self.updates += k
+
+        def set_postfix(self, **kwargs):
+            self.postfix = kwargs
+
+        def close(self):
+            self.closed = True
+
+    auto = types.ModuleType("tqdm.auto")
+    auto.tqdm = Bar
+    package = types.ModuleType("tqdm")
+    package.auto = auto
+    monkeypatch.setitem(sys.modules, "tqdm", package)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", auto)
+    packing = ellipack.pack(SCENE_2D)
+    assert len(bars) == 1 and bars[0].closed
+    assert bars[0].updates == packing.summary["local_minimisations"]
+    assert bars[0].postfix["best"] == f"{packing.density:.5f}"
