@@ -82,12 +82,20 @@ def _rows(name: str, x: Any, width: int) -> Tuple[np.ndarray, Optional[int]]:
     raise ValueError(f"{name}: expected shape ({width},) or (n, {width}), got shape {a.shape}")
 
 
+# More threads than this is a mistake, not a wish: each count keeps its own pool alive.
+_MAX_THREADS = 1024
+
+
+def _count(name: str, value: Any, largest: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, not {type(value).__name__}")
+    if not 0 <= value <= largest:
+        raise ValueError(f"{name} must lie in [0, {largest}], not {value}")
+    return int(value)
+
+
 def _threads(threads: Optional[int]) -> int:
-    if threads is None:
-        return 1
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
-        raise ValueError(f"threads must be None or an integer >= 0, not {threads!r}")
-    return int(threads)
+    return 1 if threads is None else _count("threads", threads, _MAX_THREADS)
 
 
 def _evaluate(
@@ -477,9 +485,13 @@ def pack(
     and is raised.
     """
     text, path = _scene_source(scene)
-    callback, close = _progress(progress)
     if time_limit is not None:
         time_limit = float(time_limit)
+    if seed is not None:
+        seed = _count("seed", seed, 2**64 - 1)
+    if threads is not None:
+        threads = _count("threads", threads, _MAX_THREADS)
+    callback, close = _progress(progress)
     try:
         return _ellipack._pack(text, path, time_limit, seed, threads, callback)
     finally:

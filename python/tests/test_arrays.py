@@ -82,6 +82,10 @@ def test_threads_give_the_same_bits(pairs):
     assert np.array_equal(ellipack.overlap(r12, q1, q2), ellipack.overlap(r12, q1, q2, threads=0))
     with pytest.raises(ValueError, match="threads"):
         ellipack.contact_function(r12, q1, q2, threads=-1)
+    with pytest.raises(ValueError, match="threads"):
+        ellipack.contact_function(r12, q1, q2, threads=100_000)
+    with pytest.raises(TypeError, match="threads"):
+        ellipack.contact_function(r12, q1, q2, threads=1.5)
 
 
 def test_verdict_agrees_with_mu2(pairs):
