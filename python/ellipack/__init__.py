@@ -9,7 +9,7 @@ ellipse's as ``[Q11, Q12, Q22]`` (shape ``(3,)``). Semi-axis k lies along column
 rotation, Q = R diag(a^2, b^2, c^2) R^T. Quaternions are (w, x, y, z), Hamilton active rotations.
 
 Vectorised functions take one row (``(3,)``, ``(6,)``) or n rows (``(n, 3)``, ``(n, 6)``) per
-argument; a single row is broadcast against the n rows of the others. Inputs are converted to
+argument; a single row (``(3,)`` or ``(1, 3)``) is broadcast against the n rows of the others. Inputs are converted to
 float64 (integers too) and copied when not C-contiguous. ``threads=1`` (the default) computes on
 the calling thread, ``threads=0`` on every core, ``threads=k`` on k threads; the GIL is released
 during the computation. Bad input raises ValueError naming the row; wrong shapes raise
@@ -108,16 +108,13 @@ def _evaluate(
     """Runs the row kernel `kind` on `args` ((name, value, width) triples) and returns the
     output, shape (n, out_width) for a batch and (out_width,) for one row."""
     matrices = []
-    n: Optional[int] = None
-    n_from = ""
+    counted = []
     for name, value, width in args:
         m, rows = _rows(name, value, width)
-        if rows is not None:
-            if n is None:
-                n, n_from = rows, name
-            elif rows != n:
-                raise ValueError(f"{name} has {rows} rows but {n_from} has {n}")
         matrices.append(m)
+        if rows is not None:
+            counted.append((name, rows))
+    n = _common_rows(counted)
     shape = (out_width,) if n is None else (n, out_width)
     if out is None:
         result = np.empty(shape)
@@ -131,6 +128,18 @@ def _evaluate(
         n is not None,
     )
     return result
+
+
+def _common_rows(counted: list) -> Optional[int]:
+    """The row count of a call from the (name, rows) of its batch arguments: as in NumPy, an
+    argument of one row is broadcast against the others; None when no argument is a batch."""
+    if not counted:
+        return None
+    many = [(name, rows) for name, rows in counted if rows != 1]
+    for name, rows in many[1:]:
+        if rows != many[0][1]:
+            raise ValueError(f"{name} has {rows} rows but {many[0][0]} has {many[0][1]}")
+    return many[0][1] if many else 1
 
 
 def _check_out(out: Any, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
@@ -157,11 +166,12 @@ def _pair(
 
 
 def _output_shape(args: list, width: int) -> tuple:
-    n = None
+    counted = []
     for name, value, w in args:
         _, rows = _rows(name, value, w)
         if rows is not None:
-            n = rows
+            counted.append((name, rows))
+    n = _common_rows(counted)
     return (width,) if n is None else (n, width)
 
 
@@ -402,10 +412,7 @@ def overlap_measure(
     parts = [("ci", ci, dim), ("ai", ai, dim), ("oi", oi, ow), ("cj", cj, dim), ("aj", aj, dim),
              ("oj", oj, ow)]
     blocks = [_rows(name, value, w) for name, value, w in parts]
-    counts = {rows for _, rows in blocks if rows is not None}
-    if len(counts) > 1:
-        raise ValueError(f"the arguments have different row counts: {sorted(counts)}")
-    n = counts.pop() if counts else None
+    n = _common_rows([(p[0], b[1]) for p, b in zip(parts, blocks) if b[1] is not None])
     rows = 1 if n is None else n
     table = np.concatenate([np.broadcast_to(m, (rows, m.shape[1])) for m, _ in blocks], axis=1)
     width = 2 * (2 * dim + ow)
