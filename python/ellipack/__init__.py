@@ -18,6 +18,7 @@ ValueError, non-numeric dtypes TypeError.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 from typing import Any, Callable, NamedTuple, Optional, Tuple, Union
@@ -432,12 +433,13 @@ def _scene_source(scene) -> Tuple[Optional[str], Optional[str]]:
         return None, None
     if isinstance(scene, dict):
         return _ellipack._scene_toml(scene), None
-    if isinstance(scene, os.PathLike):
-        return None, os.fspath(scene)
-    if isinstance(scene, str):
-        if "\n" in scene or "=" in scene:
-            return scene, None
-        return None, scene
+    if isinstance(scene, str) and ("\n" in scene or "=" in scene):
+        return scene, None
+    if isinstance(scene, (str, os.PathLike)):
+        path = os.fspath(scene)
+        if not os.path.isfile(path):
+            raise FileNotFoundError(errno.ENOENT, "no scene file", path)
+        return None, path
     raise TypeError(
         f"scene: a dict, a path or a TOML string, not {type(scene).__name__}"
     )

@@ -198,6 +198,8 @@ def test_scene_errors_name_the_line_and_key():
         ellipack.pack(dict(SCENE_2D, seed=None), progress=False)
     with pytest.raises(TypeError, match="scene"):
         ellipack.pack(42, progress=False)
+    with pytest.raises(FileNotFoundError, match="no scene file"):
+        ellipack.pack("no/such/scene.toml", progress=False)
     with pytest.raises(ValueError, match="seed"):
         ellipack.pack(SCENE_2D, seed=-1, progress=False)
     with pytest.raises(ValueError, match="threads"):
