@@ -315,8 +315,8 @@ fn pool(threads: usize) -> PyResult<Arc<rayon::ThreadPool>> {
     Ok(p)
 }
 
-/// Every chunk of `out`, on the calling thread (`threads == 1`) or a pool; the error of the
-/// lowest failing row.
+/// Every chunk of `out`, on the calling thread (`threads == 1`), rayon's global pool
+/// (`threads == 0`) or `pool`; the error of the lowest failing row.
 fn evaluate(
     kind: Kind,
     inputs: &[Input<'_>],
@@ -328,21 +328,25 @@ fn evaluate(
     let job = |buffers: &mut Buffers, (c, o): (usize, &mut [f64])| {
         chunk(kind, inputs, c * CHUNK, o, buffers)
     };
+    let parallel = |out: &mut [f64]| {
+        out.par_chunks_mut(step)
+            .enumerate()
+            .map_init(Buffers::default, job)
+            .filter_map(Result::err)
+            .min_by_key(|e| e.row)
+            .map_or(Ok(()), Err)
+    };
+    if threads == 1 || out.len() <= step {
+        let mut buffers = Buffers::default();
+        return out
+            .chunks_mut(step)
+            .enumerate()
+            .try_for_each(|c| job(&mut buffers, c));
+    }
     match pool {
-        Some(pool) if threads != 1 && out.len() > step => pool.install(|| {
-            out.par_chunks_mut(step)
-                .enumerate()
-                .map_init(Buffers::default, job)
-                .filter_map(Result::err)
-                .min_by_key(|e| e.row)
-                .map_or(Ok(()), Err)
-        }),
-        _ => {
-            let mut buffers = Buffers::default();
-            out.chunks_mut(step)
-                .enumerate()
-                .try_for_each(|c| job(&mut buffers, c))
-        }
+        Some(pool) => pool.install(|| parallel(out)),
+        // Every core: rayon's global pool, the one pw85's own batch functions use.
+        None => parallel(out),
     }
 }
 
@@ -398,8 +402,7 @@ pub fn _rows(
         .as_slice_mut()
         .map_err(|_| PyValueError::new_err("out is not C-contiguous"))?;
     let pool = match threads {
-        1 => None,
-        0 => pool(rayon::current_num_threads().max(1)).map(Some)?,
+        0 | 1 => None,
         t => pool(t).map(Some)?,
     };
     py.detach(|| evaluate(kind, &views, out, threads, pool.as_deref()))
