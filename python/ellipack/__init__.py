@@ -9,7 +9,7 @@ ellipse's as ``[Q11, Q12, Q22]`` (shape ``(3,)``). Semi-axis k lies along column
 rotation, Q = R diag(a^2, b^2, c^2) R^T. Quaternions are (w, x, y, z), Hamilton active rotations.
 
 Vectorised functions take one row (``(3,)``, ``(6,)``) or n rows (``(n, 3)``, ``(n, 6)``) per
-argument; a single row is broadcast against the n rows of the others. Inputs are converted to
+argument; a single row (``(3,)`` or ``(1, 3)``) is broadcast against the n rows of the others. Inputs are converted to
 float64 (integers too) and copied when not C-contiguous. ``threads=1`` (the default) computes on
 the calling thread, ``threads=0`` on every core, ``threads=k`` on k threads; the GIL is released
 during the computation. Bad input raises ValueError naming the row; wrong shapes raise
@@ -18,6 +18,7 @@ ValueError, non-numeric dtypes TypeError.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 from typing import Any, Callable, NamedTuple, Optional, Tuple, Union
@@ -82,12 +83,20 @@ def _rows(name: str, x: Any, width: int) -> Tuple[np.ndarray, Optional[int]]:
     raise ValueError(f"{name}: expected shape ({width},) or (n, {width}), got shape {a.shape}")
 
 
+# More threads than this is a mistake, not a wish: each count keeps its own pool alive.
+_MAX_THREADS = 1024
+
+
+def _count(name: str, value: Any, largest: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, not {type(value).__name__}")
+    if not 0 <= value <= largest:
+        raise ValueError(f"{name} must lie in [0, {largest}], not {value}")
+    return int(value)
+
+
 def _threads(threads: Optional[int]) -> int:
-    if threads is None:
-        return 1
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 0:
-        raise ValueError(f"threads must be None or an integer >= 0, not {threads!r}")
-    return int(threads)
+    return 1 if threads is None else _count("threads", threads, _MAX_THREADS)
 
 
 def _evaluate(
@@ -100,16 +109,13 @@ def _evaluate(
     """Runs the row kernel `kind` on `args` ((name, value, width) triples) and returns the
     output, shape (n, out_width) for a batch and (out_width,) for one row."""
     matrices = []
-    n: Optional[int] = None
-    n_from = ""
+    counted = []
     for name, value, width in args:
         m, rows = _rows(name, value, width)
-        if rows is not None:
-            if n is None:
-                n, n_from = rows, name
-            elif rows != n:
-                raise ValueError(f"{name} has {rows} rows but {n_from} has {n}")
         matrices.append(m)
+        if rows is not None:
+            counted.append((name, rows))
+    n = _common_rows(counted)
     shape = (out_width,) if n is None else (n, out_width)
     if out is None:
         result = np.empty(shape)
@@ -123,6 +129,18 @@ def _evaluate(
         n is not None,
     )
     return result
+
+
+def _common_rows(counted: list) -> Optional[int]:
+    """The row count of a call from the (name, rows) of its batch arguments: as in NumPy, an
+    argument of one row is broadcast against the others; None when no argument is a batch."""
+    if not counted:
+        return None
+    many = [(name, rows) for name, rows in counted if rows != 1]
+    for name, rows in many[1:]:
+        if rows != many[0][1]:
+            raise ValueError(f"{name} has {rows} rows but {many[0][0]} has {many[0][1]}")
+    return many[0][1] if many else 1
 
 
 def _check_out(out: Any, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
@@ -149,11 +167,12 @@ def _pair(
 
 
 def _output_shape(args: list, width: int) -> tuple:
-    n = None
+    counted = []
     for name, value, w in args:
         _, rows = _rows(name, value, w)
         if rows is not None:
-            n = rows
+            counted.append((name, rows))
+    n = _common_rows(counted)
     return (width,) if n is None else (n, width)
 
 
@@ -394,10 +413,7 @@ def overlap_measure(
     parts = [("ci", ci, dim), ("ai", ai, dim), ("oi", oi, ow), ("cj", cj, dim), ("aj", aj, dim),
              ("oj", oj, ow)]
     blocks = [_rows(name, value, w) for name, value, w in parts]
-    counts = {rows for _, rows in blocks if rows is not None}
-    if len(counts) > 1:
-        raise ValueError(f"the arguments have different row counts: {sorted(counts)}")
-    n = counts.pop() if counts else None
+    n = _common_rows([(p[0], b[1]) for p, b in zip(parts, blocks) if b[1] is not None])
     rows = 1 if n is None else n
     table = np.concatenate([np.broadcast_to(m, (rows, m.shape[1])) for m, _ in blocks], axis=1)
     width = 2 * (2 * dim + ow)
@@ -417,12 +433,13 @@ def _scene_source(scene) -> Tuple[Optional[str], Optional[str]]:
         return None, None
     if isinstance(scene, dict):
         return _ellipack._scene_toml(scene), None
-    if isinstance(scene, os.PathLike):
-        return None, os.fspath(scene)
-    if isinstance(scene, str):
-        if "\n" in scene or "=" in scene:
-            return scene, None
-        return None, scene
+    if isinstance(scene, str) and ("\n" in scene or "=" in scene):
+        return scene, None
+    if isinstance(scene, (str, os.PathLike)):
+        path = os.fspath(scene)
+        if not os.path.isfile(path):
+            raise FileNotFoundError(errno.ENOENT, "no scene file", path)
+        return None, path
     raise TypeError(
         f"scene: a dict, a path or a TOML string, not {type(scene).__name__}"
     )
@@ -477,9 +494,13 @@ def pack(
     and is raised.
     """
     text, path = _scene_source(scene)
-    callback, close = _progress(progress)
     if time_limit is not None:
         time_limit = float(time_limit)
+    if seed is not None:
+        seed = _count("seed", seed, 2**64 - 1)
+    if threads is not None:
+        threads = _count("threads", threads, _MAX_THREADS)
+    callback, close = _progress(progress)
     try:
         return _ellipack._pack(text, path, time_limit, seed, threads, callback)
     finally:

@@ -338,7 +338,13 @@ pub fn _pack(
                 stop_with(e, py);
             }
         }
-        worker.join()
+        let joined = worker.join();
+        // A Ctrl-C that came after the last poll would otherwise be raised by the next Python
+        // statement and lose the packing.
+        if let Err(e) = py.check_signals() {
+            stop_with(e, py);
+        }
+        joined
     })
     .map_err(|_| PyRuntimeError::new_err("the packing run panicked"))?;
     if let Some(e) = pending {

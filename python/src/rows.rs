@@ -87,24 +87,26 @@ impl Kind {
     }
 }
 
-/// One argument: rows of `width` values, or a single row that every output row reuses.
+/// One argument: rows of `width` values, or a single row that every output row reuses
+/// (`stride` 0), so that reading a row has no branch.
 #[derive(Clone, Copy)]
 struct Input<'a> {
     data: &'a [f64],
-    width: usize,
-    broadcast: bool,
+    stride: usize,
 }
 
 impl Input<'_> {
     #[inline(always)]
     fn row<const K: usize>(&self, i: usize) -> [f64; K] {
-        let start = if self.broadcast { 0 } else { i * self.width };
-        core::array::from_fn(|k| self.data[start + k])
+        let start = i * self.stride;
+        let mut row = [0.0; K];
+        row.copy_from_slice(&self.data[start..start + K]);
+        row
     }
 
     #[inline(always)]
     fn scalar(&self, i: usize) -> f64 {
-        self.data[if self.broadcast { 0 } else { i }]
+        self.data[i * self.stride]
     }
 }
 
@@ -114,40 +116,60 @@ struct RowError {
     message: String,
 }
 
-/// Copies `values` into `out` (one output row).
-#[inline(always)]
-fn put(out: &mut [f64], values: &[f64]) {
-    out.copy_from_slice(values);
+/// The pairs of a chunk and their results, kept from chunk to chunk so that a call allocates
+/// once per thread rather than once per chunk.
+#[derive(Default)]
+struct Buffers {
+    pairs: Vec<Pair>,
+    pairs_2d: Vec<Pair2d>,
+    contacts: Vec<Result<pw85::Contact, pw85::Error>>,
+    verdicts: Vec<Result<bool, pw85::Error>>,
 }
 
 /// Evaluates the rows `start..start + out.len() / width` into `out`.
-fn chunk(kind: Kind, inputs: &[Input<'_>], start: usize, out: &mut [f64]) -> Result<(), RowError> {
+fn chunk(
+    kind: Kind,
+    inputs: &[Input<'_>],
+    start: usize,
+    out: &mut [f64],
+    buffers: &mut Buffers,
+) -> Result<(), RowError> {
     let width = kind.output_width();
     let rows = out.len() / width;
-    let fail = |i: usize, e: &dyn std::fmt::Display| RowError {
+    let fail = |i: usize, e: &pw85::Error| RowError {
         row: start + i,
         message: e.to_string(),
     };
     match kind {
         Kind::Contact3 | Kind::Overlap3 => {
-            let pairs: Vec<Pair> = (0..rows)
-                .map(|i| Pair {
-                    r12: inputs[0].row(start + i),
-                    q1: inputs[1].row(start + i),
-                    q2: inputs[2].row(start + i),
-                })
-                .collect();
-            evaluate_pairs(kind, &pairs, out, &fail)
+            buffers.pairs.clear();
+            buffers.pairs.extend((0..rows).map(|i| Pair {
+                r12: inputs[0].row(start + i),
+                q1: inputs[1].row(start + i),
+                q2: inputs[2].row(start + i),
+            }));
+            let Buffers {
+                pairs,
+                contacts,
+                verdicts,
+                ..
+            } = buffers;
+            evaluate_pairs(kind, pairs, out, contacts, verdicts, &fail)
         }
         Kind::Contact2 | Kind::Overlap2 => {
-            let pairs: Vec<Pair2d> = (0..rows)
-                .map(|i| Pair2d {
-                    r12: inputs[0].row(start + i),
-                    q1: inputs[1].row(start + i),
-                    q2: inputs[2].row(start + i),
-                })
-                .collect();
-            evaluate_pairs(kind, &pairs, out, &fail)
+            buffers.pairs_2d.clear();
+            buffers.pairs_2d.extend((0..rows).map(|i| Pair2d {
+                r12: inputs[0].row(start + i),
+                q1: inputs[1].row(start + i),
+                q2: inputs[2].row(start + i),
+            }));
+            let Buffers {
+                pairs_2d,
+                contacts,
+                verdicts,
+                ..
+            } = buffers;
+            evaluate_pairs(kind, pairs_2d, out, contacts, verdicts, &fail)
         }
         _ => {
             for (i, o) in out.chunks_exact_mut(width).enumerate() {
@@ -166,19 +188,21 @@ fn evaluate_pairs<P: pw85::batch::BatchPair>(
     kind: Kind,
     pairs: &[P],
     out: &mut [f64],
-    fail: &dyn Fn(usize, &dyn std::fmt::Display) -> RowError,
+    contacts: &mut Vec<Result<pw85::Contact, pw85::Error>>,
+    verdicts: &mut Vec<Result<bool, pw85::Error>>,
+    fail: &dyn Fn(usize, &pw85::Error) -> RowError,
 ) -> Result<(), RowError> {
     if matches!(kind, Kind::Contact3 | Kind::Contact2) {
-        let mut results = vec![Ok(pw85::batch::EMPTY_CONTACT); pairs.len()];
-        contact_functions(pairs, &mut results, Parallelism::Serial);
-        for (i, (r, o)) in results.iter().zip(out.chunks_exact_mut(2)).enumerate() {
+        contacts.resize(pairs.len(), Ok(pw85::batch::EMPTY_CONTACT));
+        contact_functions(pairs, contacts, Parallelism::Serial);
+        for (i, (r, o)) in contacts.iter().zip(out.chunks_exact_mut(2)).enumerate() {
             let c = r.as_ref().map_err(|e| fail(i, e))?;
-            put(o, &[c.mu2, c.lambda]);
+            o.copy_from_slice(&[c.mu2, c.lambda]);
         }
     } else {
-        let mut results = vec![Ok(false); pairs.len()];
-        overlaps(pairs, &mut results, Parallelism::Serial);
-        for (i, (r, o)) in results.iter().zip(out.iter_mut()).enumerate() {
+        verdicts.resize(pairs.len(), Ok(false));
+        overlaps(pairs, verdicts, Parallelism::Serial);
+        for (i, (r, o)) in verdicts.iter().zip(out.iter_mut()).enumerate() {
             let overlapping = r.as_ref().map_err(|e| fail(i, e))?;
             *o = f64::from(u8::from(*overlapping));
         }
@@ -186,7 +210,7 @@ fn evaluate_pairs<P: pw85::batch::BatchPair>(
     Ok(())
 }
 
-/// One row of a kind evaluated pair by pair (everything but the batched contact functions).
+/// One row of a kind.
 fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<(), String> {
     let text = |e: pw85::Error| e.to_string();
     match kind {
@@ -247,8 +271,27 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
             o[4..6].copy_from_slice(&t.x);
             o[6] = f64::from(u8::from(t.x_unique));
         }
-        Kind::Contact3 | Kind::Contact2 | Kind::Overlap3 | Kind::Overlap2 => {
-            unreachable!("batched kinds are evaluated by `evaluate_pairs`")
+        // `chunk` hands these to pw85's batch functions; one row gives the same bits.
+        Kind::Contact3 => {
+            let c = pw85::contact_function(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
+                .map_err(text)?;
+            o.copy_from_slice(&[c.mu2, c.lambda]);
+        }
+        Kind::Contact2 => {
+            let c =
+                pw85::contact_function_2d(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
+                    .map_err(text)?;
+            o.copy_from_slice(&[c.mu2, c.lambda]);
+        }
+        Kind::Overlap3 => {
+            let v = pw85::overlap(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
+                .map_err(text)?;
+            o[0] = f64::from(u8::from(v));
+        }
+        Kind::Overlap2 => {
+            let v = pw85::overlap_2d(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
+                .map_err(text)?;
+            o[0] = f64::from(u8::from(v));
         }
     }
     Ok(())
@@ -272,8 +315,8 @@ fn pool(threads: usize) -> PyResult<Arc<rayon::ThreadPool>> {
     Ok(p)
 }
 
-/// Every chunk of `out`, on the calling thread (`threads == 1`) or a pool; the error of the
-/// lowest failing row.
+/// Every chunk of `out`, on the calling thread (`threads == 1`), rayon's global pool
+/// (`threads == 0`) or `pool`; the error of the lowest failing row.
 fn evaluate(
     kind: Kind,
     inputs: &[Input<'_>],
@@ -282,17 +325,28 @@ fn evaluate(
     pool: Option<&rayon::ThreadPool>,
 ) -> Result<(), RowError> {
     let step = CHUNK * kind.output_width();
-    let job = |(c, o): (usize, &mut [f64])| chunk(kind, inputs, c * CHUNK, o);
+    let job = |buffers: &mut Buffers, (c, o): (usize, &mut [f64])| {
+        chunk(kind, inputs, c * CHUNK, o, buffers)
+    };
+    let parallel = |out: &mut [f64]| {
+        out.par_chunks_mut(step)
+            .enumerate()
+            .map_init(Buffers::default, job)
+            .filter_map(Result::err)
+            .min_by_key(|e| e.row)
+            .map_or(Ok(()), Err)
+    };
+    if threads == 1 || out.len() <= step {
+        let mut buffers = Buffers::default();
+        return out
+            .chunks_mut(step)
+            .enumerate()
+            .try_for_each(|c| job(&mut buffers, c));
+    }
     match pool {
-        Some(pool) if threads != 1 && out.len() > step => pool.install(|| {
-            out.par_chunks_mut(step)
-                .enumerate()
-                .map(job)
-                .filter_map(Result::err)
-                .min_by_key(|e| e.row)
-                .map_or(Ok(()), Err)
-        }),
-        _ => out.chunks_mut(step).enumerate().try_for_each(job),
+        Some(pool) => pool.install(|| parallel(out)),
+        // Every core: rayon's global pool, the one pw85's own batch functions use.
+        None => parallel(out),
     }
 }
 
@@ -341,16 +395,14 @@ pub fn _rows(
             .map_err(|_| PyValueError::new_err(format!("input {k} is not C-contiguous")))?;
         views.push(Input {
             data,
-            width,
-            broadcast: rows == 1 && n != 1,
+            stride: if rows == 1 { 0 } else { width },
         });
     }
     let out = out
         .as_slice_mut()
         .map_err(|_| PyValueError::new_err("out is not C-contiguous"))?;
     let pool = match threads {
-        1 => None,
-        0 => pool(rayon::current_num_threads().max(1)).map(Some)?,
+        0 | 1 => None,
         t => pool(t).map(Some)?,
     };
     py.detach(|| evaluate(kind, &views, out, threads, pool.as_deref()))

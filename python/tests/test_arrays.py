@@ -36,6 +36,17 @@ def test_one_ellipsoid_broadcast_against_many(pairs):
     assert np.array_equal(mu2_r, ellipack.contact_function(np.tile(r12[3], (1000, 1)), q1, q2)[0])
 
 
+def test_one_row_batches_broadcast_and_empty_batches(pairs):
+    r12, q1, q2 = pairs
+    mu2, _ = ellipack.contact_function(r12, q1[:1], q2)
+    assert np.array_equal(mu2, ellipack.contact_function(r12, q1[0], q2)[0])
+    mu2, lam = ellipack.contact_function(r12[:1], q1[:1], q2[:1])
+    assert mu2.shape == (1,) and mu2[0] == ellipack.contact_function(r12[0], q1[0], q2[0])[0]
+    mu2, lam = ellipack.contact_function(np.empty((0, 3)), q1[0], q2[0])
+    assert mu2.shape == lam.shape == (0,)
+    assert ellipack.overlap(np.empty((0, 3)), q1[0], q2[0]).shape == (0,)
+
+
 def test_non_contiguous_and_integer_inputs(pairs):
     r12, q1, q2 = pairs
     expected = ellipack.contact_function(r12, q1, q2)
@@ -82,6 +93,10 @@ def test_threads_give_the_same_bits(pairs):
     assert np.array_equal(ellipack.overlap(r12, q1, q2), ellipack.overlap(r12, q1, q2, threads=0))
     with pytest.raises(ValueError, match="threads"):
         ellipack.contact_function(r12, q1, q2, threads=-1)
+    with pytest.raises(ValueError, match="threads"):
+        ellipack.contact_function(r12, q1, q2, threads=100_000)
+    with pytest.raises(TypeError, match="threads"):
+        ellipack.contact_function(r12, q1, q2, threads=1.5)
 
 
 def test_verdict_agrees_with_mu2(pairs):
@@ -103,6 +118,8 @@ def test_wrong_shapes_and_dtypes():
         ellipack.contact_function([1.0, 0, 0], np.eye(3), q)
     with pytest.raises(ValueError, match="q2 has 4 rows but r12 has 5"):
         ellipack.contact_function(np.ones((5, 3)), q, np.tile(q, (4, 1)))
+    with pytest.raises(ValueError, match="cj has 3 rows but ci has 2"):
+        ellipack.overlap_measure(np.zeros((2, 2)), [1.0, 1], 0.0, np.ones((3, 2)), [1.0, 1], 0.0)
     with pytest.raises(TypeError, match="complex"):
         ellipack.contact_function(np.ones(3, dtype=complex), q, q)
     with pytest.raises(TypeError, match="dtype"):
@@ -236,5 +253,5 @@ def test_measure_broadcasting_and_errors():
     assert two.f[0] == 0.0 and two.f[1] > 0.0
     with pytest.raises(ValueError, match="row 1: ellipsoid j:"):
         ellipack.overlap_measure(ci, ai, qi, cj, [[1.0, 1, 1], [1, -1, 1], [1, 1, 1]], qi)
-    with pytest.raises(ValueError, match="different row counts"):
+    with pytest.raises(ValueError, match="aj has 2 rows but cj has 3"):
         ellipack.overlap_measure(ci, ai, qi, cj, np.ones((2, 3)), qi)

@@ -198,6 +198,12 @@ def test_scene_errors_name_the_line_and_key():
         ellipack.pack(dict(SCENE_2D, seed=None), progress=False)
     with pytest.raises(TypeError, match="scene"):
         ellipack.pack(42, progress=False)
+    with pytest.raises(FileNotFoundError, match="no scene file"):
+        ellipack.pack("no/such/scene.toml", progress=False)
+    with pytest.raises(ValueError, match="seed"):
+        ellipack.pack(SCENE_2D, seed=-1, progress=False)
+    with pytest.raises(ValueError, match="threads"):
+        ellipack.pack(SCENE_2D, threads=-2, progress=False)
 
 
 def test_an_exception_in_progress_stops_the_run_and_is_raised():
@@ -287,3 +293,51 @@ def test_ctrl_c_stops_the_run_and_returns_the_packing(tmp_path):
     assert float(returned[4]) < 60.0
     assert lines[1] == "alive"
     check_independently(ellipack.read_packing(tmp_path / "out"))
+
+
+def test_tqdm_shows_progress_when_installed(monkeypatch):
+    """With progress=None, a tqdm bar (here a stand-in module) hears every local
+    minimisation and is closed at the end."""
+    import types
+
+    bars = []
+
+    class Bar:
+        def __init__(self, **kwargs):
+            self.updates, self.closed, self.postfix = 0, False, None
+            bars.append(self)
+
+        def update(self, k):
+            self.updates += k
+
+        def set_postfix(self, **kwargs):
+            self.postfix = kwargs
+
+        def close(self):
+            self.closed = True
+
+    auto = types.ModuleType("tqdm.auto")
+    auto.tqdm = Bar
+    package = types.ModuleType("tqdm")
+    package.auto = auto
+    monkeypatch.setitem(sys.modules, "tqdm", package)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", auto)
+    packing = ellipack.pack(SCENE_2D)
+    assert len(bars) == 1 and bars[0].closed
+    assert bars[0].updates == packing.summary["local_minimisations"]
+    assert bars[0].postfix["best"] == f"{packing.density:.5f}"
+
+
+def test_the_independent_check_catches_an_overlap_and_an_item_outside():
+    container = {"kind": "circle", "radius": 3.0}
+    axes = [[1.0, 0.5], [1.0, 0.5]]
+    # Two ellipses whose interiors overlap by 1e-3 along x: every f(λ) < 1.
+    touching = ellipack.packing_from_arrays(container, [[-1.0, 0], [0.999, 0]], axes, [0, 0])
+    with pytest.raises(AssertionError, match="overlap"):
+        check_independently(touching)
+    # Apart, but one sticks out of the disc by 1e-3.
+    outside = ellipack.packing_from_arrays(container, [[-1.0, 0], [2.001, 0]], axes, [0, 0])
+    with pytest.raises(AssertionError):
+        check_independently(outside)
+    apart = ellipack.packing_from_arrays(container, [[-1.0, 0], [1.001, 0]], axes, [0, 0])
+    check_independently(apart)
