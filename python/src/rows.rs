@@ -231,10 +231,7 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
             if !(0.0..=1.0).contains(&lambda) {
                 return Err(format!("lambda must lie in [0, 1], not {lambda}"));
             }
-            // The verdict validates the inputs (finite, positive definite) with the typed
-            // errors of the contact function.
-            pw85::overlap(&r12, &q1, &q2).map_err(text)?;
-            o[0] = -pw85::poly::RationalForm::new(&r12, &q1, &q2).f(lambda);
+            o[0] = -pw85::objective(lambda, &r12, &q1, &q2).map_err(text)?;
         }
         Kind::Spheroid => {
             let q = pw85::spheroid(inputs[0].scalar(i), inputs[1].scalar(i), &inputs[2].row(i))
@@ -273,24 +270,23 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
         }
         // `chunk` hands these to pw85's batch functions; one row gives the same bits.
         Kind::Contact3 => {
-            let c = pw85::contact_function(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
-                .map_err(text)?;
+            let (r12, q1, q2) = (inputs[0].row(i), inputs[1].row(i), inputs[2].row(i));
+            let c = pw85::contact_function::<[f64; 6]>(&r12, &q1, &q2).map_err(text)?;
             o.copy_from_slice(&[c.mu2, c.lambda]);
         }
         Kind::Contact2 => {
-            let c =
-                pw85::contact_function_2d(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
-                    .map_err(text)?;
+            let (r12, q1, q2) = (inputs[0].row(i), inputs[1].row(i), inputs[2].row(i));
+            let c = pw85::contact_function::<[f64; 3]>(&r12, &q1, &q2).map_err(text)?;
             o.copy_from_slice(&[c.mu2, c.lambda]);
         }
         Kind::Overlap3 => {
-            let v = pw85::overlap(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
-                .map_err(text)?;
+            let (r12, q1, q2) = (inputs[0].row(i), inputs[1].row(i), inputs[2].row(i));
+            let v = pw85::overlap::<[f64; 6]>(&r12, &q1, &q2).map_err(text)?;
             o[0] = f64::from(u8::from(v));
         }
         Kind::Overlap2 => {
-            let v = pw85::overlap_2d(&inputs[0].row(i), &inputs[1].row(i), &inputs[2].row(i))
-                .map_err(text)?;
+            let (r12, q1, q2) = (inputs[0].row(i), inputs[1].row(i), inputs[2].row(i));
+            let v = pw85::overlap::<[f64; 3]>(&r12, &q1, &q2).map_err(text)?;
             o[0] = f64::from(u8::from(v));
         }
     }
