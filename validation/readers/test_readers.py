@@ -228,6 +228,9 @@ def test_ovito_reads_every_file(folders, name):
         ("packing.data", {"atom_style": "ellipsoid"}),
     ]:
         data = import_file(str(folder / path), **options).compute()
+        if path == "packing.gsd":
+            # GSD's dimensions make OVITO treat the cell of a 2D packing as 2D.
+            assert data.cell.is2D == (e.dimension == 2)
         particles = data.particles
         assert particles.count == e.n, path
         position = np.asarray(particles["Position"])
