@@ -1,6 +1,6 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
-use ellipack::export::{Format, write_formats};
+use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
     MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
@@ -104,7 +104,8 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let staging = Staging::begin(&out)?;
     let staged = staging.path();
     write_files(staged, &outcome.packing, &outcome.summary, scene.output.xyz)?;
-    write_formats(staged, &outcome.packing, &PACK_FORMATS)?;
+    let cell = Cell::enclosing(&outcome.packing);
+    write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     if scene.output.pictures {
         let options = RenderOptions {

@@ -855,21 +855,25 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
 // ---------------------------------------------------------------------------------------------
 // Writing
 
-/// Writes the files of `formats` for `packing` into `dir` (which must exist), each
-/// atomically, with the cell [`Cell::enclosing`] the packing.
+/// Writes the files of `formats` for `packing` in `cell` (for a container,
+/// [`Cell::enclosing`] it) into `dir` (which must exist), each atomically.
 ///
 /// # Errors
-/// [`ExportError::Write`] or [`ExportError::Packing`] naming the file that could not be
-/// written; the files before it are written.
-pub fn write_formats(dir: &Path, packing: &Packing, formats: &[Format]) -> Result<(), ExportError> {
-    let cell = Cell::enclosing(packing);
+/// [`ExportError::Write`] naming the file that could not be written; the files before it are
+/// written.
+pub fn write_formats(
+    dir: &Path,
+    packing: &Packing,
+    cell: &Cell,
+    formats: &[Format],
+) -> Result<(), ExportError> {
     for format in formats {
         let path = dir.join(format.file_name());
         let bytes = match format {
-            Format::Lammps => lammps_data(packing, &cell).into_bytes(),
-            Format::Gsd => gsd_bytes(packing, &cell),
-            Format::Xyz => crate::packing::xyz_string(packing).into_bytes(),
-            Format::Obj => mesh_obj(packing.container(), &cell).into_bytes(),
+            Format::Lammps => lammps_data(packing, cell).into_bytes(),
+            Format::Gsd => gsd_bytes(packing, cell),
+            Format::Xyz => crate::packing::xyz_string_in(packing, cell).into_bytes(),
+            Format::Obj => mesh_obj(packing.container(), cell).into_bytes(),
         };
         crate::output::write_atomically(&path, &bytes)?;
     }
@@ -877,7 +881,7 @@ pub fn write_formats(dir: &Path, packing: &Packing, formats: &[Format]) -> Resul
 }
 
 /// `ellipack convert`: reads the packing of `dir` (packing.csv and summary.json) and writes
-/// the files of `formats` beside them.
+/// the files of `formats` beside them, in the cell [`Cell::enclosing`] the packing.
 ///
 /// # Errors
 /// [`ExportError::NotAFolder`] when `dir` is not a folder, the errors of
@@ -901,6 +905,6 @@ pub fn convert(dir: &Path, formats: &[Format]) -> Result<Packing, ExportError> {
         }
     }
     let (packing, _) = crate::packing::read_packing_dir(dir)?;
-    write_formats(dir, &packing, formats)?;
+    write_formats(dir, &packing, &Cell::enclosing(&packing), formats)?;
     Ok(packing)
 }

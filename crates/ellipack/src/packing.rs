@@ -1174,9 +1174,14 @@ pub fn write_files(
 /// z, with `dimension=2`; the container is in the `container*` keys, which OVITO keeps as
 /// global attributes and ASE in `Atoms.info`.
 pub fn xyz_string(packing: &Packing) -> String {
+    xyz_string_in(packing, &crate::export::Cell::enclosing(packing))
+}
+
+/// [`xyz_string`] with the cell given: `Lattice` holds its edge vectors, `Origin` its lower
+/// corner and `pbc` its periodicity.
+pub fn xyz_string_in(packing: &Packing, cell: &crate::export::Cell) -> String {
     let items = &packing.items;
     let container = &packing.container;
-    let cell = crate::export::Cell::enclosing(packing);
     let bodies = crate::export::bodies(items);
     let groups = crate::export::shape_groups(&bodies);
     let join = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");

@@ -265,6 +265,29 @@ fn a_sheared_cell_writes_its_tilt_factors() {
     );
     let data = export::read_lammps_data(&text, LAMMPS_FILE).unwrap();
     assert_eq!(data.tilt, [0.5, -0.25, 0.125]);
+
+    // The same cell, periodic, in the XYZ and GSD files.
+    cell.periodic = [true; 3];
+    let xyz = packing::xyz_string_in(p, &cell);
+    let comment = xyz.lines().nth(1).unwrap();
+    assert!(comment.contains(r#"pbc="T T T""#), "{comment}");
+    let lattice: Vec<f64> = comment
+        .split("Lattice=\"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .unwrap()
+        .split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    let [lx, ly, lz] = cell.lengths;
+    assert_eq!(
+        lattice,
+        [lx, 0.0, 0.0, 0.5, ly, 0.0, -0.25, 0.125, lz],
+        "rows a, b, c"
+    );
+    let (_, _, chunks) = read_gsd(&export::gsd_bytes(p, &cell));
+    let hoomd_box = [lx, ly, lz, 0.5 / ly, -0.25 / lz, 0.125 / lz].map(|v| v as f32);
+    assert_eq!(f32s(&chunks["configuration/box"]), hoomd_box);
 }
 
 #[track_caller]
