@@ -1,5 +1,6 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
+use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
     MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
@@ -105,6 +106,8 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let staging = Staging::begin(&out)?;
     let staged = staging.path();
     write_files(staged, &outcome.packing, &outcome.summary, scene.output.xyz)?;
+    let cell = Cell::enclosing(&outcome.packing);
+    write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     if scene.output.pictures {
         let options = RenderOptions {
@@ -229,6 +232,25 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
             out.display()
         );
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The files for other programs that `ellipack pack` writes beside packing.csv (packing.xyz
+/// is written with them, unless the scene turns it off).
+const PACK_FORMATS: [Format; 3] = [Format::Lammps, Format::Gsd, Format::Obj];
+
+/// `ellipack convert`: the files of `formats` for the packing in `folder`.
+pub fn convert(folder: &Path, formats: &[Format]) -> Result<ExitCode, Box<dyn Error>> {
+    let packing = ellipack::export::convert(folder, formats)?;
+    let names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();
+    println!(
+        "{} {} in a {} container: wrote {} in {}",
+        packing.items().len(),
+        packing.items().noun(),
+        packing.container().kind(),
+        names.join(", "),
+        folder.display()
+    );
     Ok(ExitCode::SUCCESS)
 }
 

@@ -23,6 +23,7 @@
 //! The swap replaces the folder's directory entry: a shell whose working directory is the
 //! output folder still sees the old, removed folder until it changes into it again.
 
+use crate::export::{GSD_FILE, LAMMPS_FILE, MESH_FILE};
 use crate::packing::{CSV_FILE, SUMMARY_FILE, XYZ_FILE};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -36,10 +37,13 @@ pub const PNG_FILE: &str = "packing.png";
 
 /// Every file `ellipack pack` writes into an output folder. Anything else there belongs to the
 /// user and is kept.
-pub const RUN_FILES: [&str; 6] = [
+pub const RUN_FILES: [&str; 9] = [
     CSV_FILE,
     SUMMARY_FILE,
     XYZ_FILE,
+    LAMMPS_FILE,
+    GSD_FILE,
+    MESH_FILE,
     HISTORY_FILE,
     SVG_FILE,
     PNG_FILE,

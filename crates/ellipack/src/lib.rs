@@ -11,6 +11,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 pub mod error;
+pub mod export;
 pub mod folder;
 pub mod instances;
 pub mod measure;

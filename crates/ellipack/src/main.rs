@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use ellipack::Error;
+use ellipack::export::Format;
 use ellipack::output::{OutputFile, refuse_overwriting_input};
 use ellipack::packing::ContainerKind;
 use ellipack::pairs::{Criterion, Summary, contact_stream};
@@ -28,8 +29,8 @@ enum Command {
     /// containment. Without a scene file or --instance, packs a built-in scene (30 ellipses
     /// (2, 1) in a minimum-area ellipse, 45 s).
     ///
-    /// Writes packing.csv, summary.json, packing.xyz, packing.svg and packing.png in the
-    /// output folder, which is checked for writing before the run begins. Every run ends with
+    /// Writes packing.csv, summary.json, packing.xyz, packing.data, packing.gsd,
+    /// container.obj, packing.svg and packing.png in the output folder, which is checked for writing before the run begins. Every run ends with
     /// a certified packing: the start is one, and the best so far is kept. Ctrl-C, SIGTERM and
     /// SIGHUP stop the run and write the best certified packing found so far; with --resume, a
     /// run starts from the (certified) packing already in the folder and never writes a worse
@@ -116,6 +117,25 @@ enum Command {
         )]
         center: Option<Vec<f64>>,
     },
+    /// Write the files for other programs for a packing folder that `ellipack pack` wrote
+    /// (read from its packing.csv and summary.json): packing.data (LAMMPS, atom_style
+    /// ellipsoid), packing.gsd (HOOMD schema), packing.xyz (extended XYZ for ASE and OVITO) and
+    /// container.obj (the container as a surface mesh). Each file is replaced atomically.
+    ///
+    /// Exit status: 0 the files were written; 1 the folder or its packing could not be read,
+    /// or a file could not be written.
+    Convert {
+        /// The folder with packing.csv and summary.json.
+        folder: PathBuf,
+        /// The files to write, separated by commas: lammps, gsd, xyz, obj (default: all).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            value_parser = parse_format,
+            default_value = "lammps,gsd,xyz,obj"
+        )]
+        formats: Vec<Format>,
+    },
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
     /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids or
@@ -189,6 +209,10 @@ fn parse_shard(text: &str) -> Result<ellipack::pack::Shard, String> {
     ellipack::pack::Shard::new(k, n).map_err(|e| e.to_string())
 }
 
+fn parse_format(name: &str) -> Result<Format, String> {
+    Format::from_name(name).map_err(|e| e.to_string())
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum CriterionArg {
     Contact,
@@ -240,6 +264,7 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             size,
             center,
         })?,
+        Command::Convert { folder, formats } => commands::convert(&folder, &formats)?,
         Command::Instances => {
             print!("{}", ellipack::instances::listing());
             ExitCode::SUCCESS
@@ -262,6 +287,7 @@ fn run_table(command: Command) -> Result<ExitCode, Error> {
         Command::Pack { .. }
         | Command::Verify { .. }
         | Command::Merge { .. }
+        | Command::Convert { .. }
         | Command::Instances => Ok(ExitCode::SUCCESS),
     }
 }

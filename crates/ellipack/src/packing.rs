@@ -14,7 +14,7 @@
 //! * [`CSV_FILE`]: one row per item, `id,x,y,a,b,theta` (2D) or `id,x,y,z,a,b,c,qw,qx,qy,qz`
 //!   (3D); `id` counts from 0;
 //! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
-//! * [`XYZ_FILE`]: extended XYZ for OVITO, see [`xyz_string`].
+//! * [`XYZ_FILE`]: extended XYZ for ASE and OVITO, see [`xyz_string`].
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -34,8 +34,10 @@ pub const CSV_COLUMNS_2D: [&str; 6] = ["id", "x", "y", "a", "b", "theta"];
 pub const CSV_COLUMNS_3D: [&str; 11] = ["id", "x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"];
 
 /// The `Properties` of [`XYZ_FILE`]: OVITO maps `aspherical_shape` to *Aspherical Shape* and
-/// `orientation` to *Orientation*, a quaternion in OVITO's order (x, y, z, w).
-pub const XYZ_PROPERTIES: &str = "species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4";
+/// `orientation` to *Orientation*, a quaternion in OVITO's order (x, y, z, w); `group` is the
+/// item's shape group (from 1).
+pub const XYZ_PROPERTIES: &str =
+    "species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4";
 
 /// Why a packing file could not be read or written. Messages name the file and, for what is
 /// wrong inside it, the line and column (both 1-based).
@@ -1171,88 +1173,69 @@ pub fn write_files(
     Ok(())
 }
 
-/// The third semi-axis given to an ellipse in the XYZ file, so that OVITO shows a flat
-/// ellipsoid whose outline seen along z is the ellipse (a zero would make OVITO fall back to
-/// the particle radius).
-fn ellipse_thickness(e: &EllipseItem) -> f64 {
-    e.semi_axes[0].min(e.semi_axes[1])
-}
-
-/// The text of [`XYZ_FILE`], extended XYZ as OVITO reads it.
+/// The text of [`XYZ_FILE`], extended XYZ as ASE and OVITO read it.
 ///
 /// ```text
 /// 2
-/// Lattice="8 0 0 0 8 0 0 0 8" Origin="-4 -4 -4" pbc="F F F" Properties=species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4 dimension=3 container=ball container_center="0 0 0" container_radius=4
-/// E x y z a b c qx qy qz qw
+/// Lattice="8 0 0 0 8 0 0 0 8" Origin="-4 -4 -4" pbc="F F F" Properties=species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4 dimension=3 container=ball container_center="0 0 0" container_radius=4
+/// C x y z 1 a b c qx qy qz qw
 /// ```
 ///
-/// `aspherical_shape` holds the semi-axes, `orientation` the quaternion in OVITO's order
-/// (x, y, z, w) — OVITO's *Orientation* property is (X, Y, Z, W) with W the scalar part. The
-/// cell (`Lattice`, `Origin`) is the container's bounding box, not periodic. Ellipses are
-/// written at z = 0 as ellipsoids (a, b, min(a, b)) rotated by θ about z, with `dimension=2`;
-/// the container is in the `container*` keys, which OVITO keeps as global attributes.
+/// `species` is a chemical symbol standing for the item's shape group
+/// ([`crate::export::GROUP_ELEMENTS`]: ASE needs an element), `group` the group's number from 1
+/// (the LAMMPS atom type), `aspherical_shape` the semi-axes, `orientation` the unit quaternion
+/// in OVITO's order (x, y, z, w) — OVITO's *Orientation* property is (X, Y, Z, W) with W the
+/// scalar part. The cell (`Lattice`, `Origin`) is [`crate::export::Cell::enclosing`], not
+/// periodic. Ellipses are written at z = 0 as ellipsoids (a, b, min(a, b)) rotated by θ about
+/// z, with `dimension=2`; the container is in the `container*` keys, which OVITO keeps as
+/// global attributes and ASE in `Atoms.info`.
 pub fn xyz_string(packing: &Packing) -> String {
+    xyz_string_in(packing, &crate::export::Cell::enclosing(packing))
+}
+
+/// [`xyz_string`] with the cell given: `Lattice` holds its edge vectors, `Origin` its lower
+/// corner and `pbc` its periodicity.
+pub fn xyz_string_in(packing: &Packing, cell: &crate::export::Cell) -> String {
     let items = &packing.items;
     let container = &packing.container;
-    let mut half = container.half_extents();
-    let mut center = container.center().to_vec();
-    if let Items::Ellipses(v) = items {
-        // A flat slab around z = 0 thick enough for the flattened ellipsoids.
-        let t = v.iter().map(ellipse_thickness).fold(1.0_f64, f64::max);
-        half.push(t);
-        center.push(0.0);
-    }
-    let lattice = format!(
-        "{} 0 0 0 {} 0 0 0 {}",
-        num(2.0 * half[0]),
-        num(2.0 * half[1]),
-        num(2.0 * half[2])
-    );
-    let origin: Vec<String> = (0..3).map(|k| num(center[k] - half[k])).collect();
+    let bodies = crate::export::bodies(items);
+    let groups = crate::export::shape_groups(&bodies);
     let join = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");
+    let lattice = join(cell.vectors().as_flattened());
     let size = container.size();
     let size_value = if size.len() == 1 {
         num(size[0])
     } else {
         format!("\"{}\"", join(&size))
     };
+    let pbc: Vec<&str> = cell
+        .periodic
+        .iter()
+        .map(|p| if *p { "T" } else { "F" })
+        .collect();
     let mut out = format!(
-        "{}\nLattice=\"{lattice}\" Origin=\"{}\" pbc=\"F F F\" Properties={XYZ_PROPERTIES} \
+        "{}\nLattice=\"{lattice}\" Origin=\"{}\" pbc=\"{}\" Properties={XYZ_PROPERTIES} \
          dimension={} container={} container_center=\"{}\" container_{}={size_value}\n",
         items.len(),
-        origin.join(" "),
+        join(&cell.lo),
+        pbc.join(" "),
         items.dimension(),
         container.kind(),
         join(container.center()),
         container.size_name(),
     );
-    match items {
-        Items::Ellipses(v) => {
-            for e in v {
-                let (s, c) = (0.5 * e.theta).sin_cos();
-                let fields = [
-                    e.center[0],
-                    e.center[1],
-                    0.0,
-                    e.semi_axes[0],
-                    e.semi_axes[1],
-                    ellipse_thickness(e),
-                    0.0,
-                    0.0,
-                    s,
-                    c,
-                ];
-                out.push_str(&format!("E {}\n", join(&fields)));
-            }
-        }
-        Items::Ellipsoids(v) => {
-            for e in v {
-                let [w, x, y, z] = e.quaternion;
-                let [cx, cy, cz] = e.center;
-                let [a, b, c] = e.semi_axes;
-                out.push_str(&format!("E {}\n", join(&[cx, cy, cz, a, b, c, x, y, z, w])));
-            }
-        }
+    let elements = crate::export::GROUP_ELEMENTS;
+    for (b, g) in bodies.iter().zip(&groups.of_item) {
+        let [w, x, y, z] = b.quaternion;
+        let [cx, cy, cz] = b.center;
+        let [a, bb, c] = b.semi_axes;
+        out.push_str(&format!(
+            "{} {} {} {}\n",
+            elements[g % elements.len()],
+            join(&[cx, cy, cz]),
+            g + 1,
+            join(&[a, bb, c, x, y, z, w])
+        ));
     }
     out
 }
@@ -1364,8 +1347,8 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
         };
         malformed(2, format!("container_center, {size_key}: {message}"))
     })?;
-    const NAMES: [&str; 11] = [
-        "species", "x", "y", "z", "a", "b", "c", "qx", "qy", "qz", "qw",
+    const NAMES: [&str; 12] = [
+        "species", "x", "y", "z", "group", "a", "b", "c", "qx", "qy", "qz", "qw",
     ];
     let mut ellipses = Vec::new();
     let mut ellipsoids = Vec::new();
@@ -1389,17 +1372,28 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
                 format!("{} fields, expected {}", fields.len(), NAMES.len()),
             ));
         }
+        if fields[4].parse::<u64>().map_or(true, |g| g == 0) {
+            return Err(PackingError::BadValue {
+                source_name: source_name.to_string(),
+                line,
+                column: 5,
+                name: "group".to_string(),
+                message: format!("`{}` is not a group number (1, 2, …)", fields[4]),
+            });
+        }
         let mut v = [0.0; 10];
         for (k, slot) in v.iter_mut().enumerate() {
-            *slot = match fields[k + 1].parse::<f64>() {
+            // Past the group column, value k is field k + 2.
+            let f = if k < 3 { k + 1 } else { k + 2 };
+            *slot = match fields[f].parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
                 _ => {
                     return Err(PackingError::BadValue {
                         source_name: source_name.to_string(),
                         line,
-                        column: k as u64 + 2,
-                        name: NAMES[k + 1].to_string(),
-                        message: format!("`{}` is not a finite number", fields[k + 1]),
+                        column: f as u64 + 1,
+                        name: NAMES[f].to_string(),
+                        message: format!("`{}` is not a finite number", fields[f]),
                     });
                 }
             };
@@ -1409,8 +1403,8 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
             return Err(PackingError::BadValue {
                 source_name: source_name.to_string(),
                 line,
-                column: k as u64 + 5,
-                name: NAMES[k + 4].to_string(),
+                column: k as u64 + 6,
+                name: NAMES[k + 5].to_string(),
                 message: format!("semi-axis {} is not positive", v[k + 3]),
             });
         }

@@ -148,6 +148,9 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         "packing.csv",
         "summary.json",
         "packing.xyz",
+        "packing.data",
+        "packing.gsd",
+        "container.obj",
         "packing.svg",
         "packing.png",
     ] {
@@ -172,6 +175,17 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         verify.status.success() && text.contains("certified"),
         "{text}"
     );
+    // The LAMMPS data file states the packing of packing.csv.
+    let (packing, _) = ellipack::packing::read_packing_dir(&out).unwrap();
+    let data = std::fs::read_to_string(out.join("packing.data")).unwrap();
+    let data = ellipack::export::read_lammps_data(&data, "packing.data").unwrap();
+    let bodies = ellipack::export::bodies(packing.items());
+    assert_eq!(data.atoms.len(), 6);
+    for ((atom, ellipsoid), body) in data.atoms.iter().zip(&data.ellipsoids).zip(&bodies) {
+        assert_eq!(atom.4, body.center);
+        assert_eq!(ellipsoid.1, body.semi_axes.map(|l| 2.0 * l));
+        assert_eq!(ellipsoid.2, body.quaternion);
+    }
 }
 
 #[test]

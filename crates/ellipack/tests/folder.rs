@@ -69,7 +69,15 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
     std::fs::create_dir(out.join("older")).unwrap();
     std::fs::write(out.join("older").join("packing.csv"), "kept").unwrap();
     pack(&scene_path, &out);
-    for file in ["packing.xyz", "packing.svg", "packing.png", "history.csv"] {
+    for file in [
+        "packing.xyz",
+        "packing.data",
+        "packing.gsd",
+        "container.obj",
+        "packing.svg",
+        "packing.png",
+        "history.csv",
+    ] {
         assert!(out.join(file).exists(), "{file}");
     }
     std::fs::write(&scene_path, scene(false, false)).unwrap();
@@ -77,10 +85,13 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
     assert_eq!(
         names(&out),
         [
+            "container.obj",
             "history.csv",
             "notes.txt",
             "older",
             "packing.csv",
+            "packing.data",
+            "packing.gsd",
             "scene.toml",
             "summary.json"
         ]
@@ -157,7 +168,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
 #[test]
 fn temporary_files_of_killed_runs_are_removed() {
     let (_dir, out, scene_path) = out_and_scene("temp", false, false);
-    for file in ["packing.csv", "summary.json", "packing.png"] {
+    for file in ["packing.csv", "summary.json", "packing.png", "packing.gsd"] {
         std::fs::write(out.join(format!(".{file}.tmp-999999999")), "half written").unwrap();
     }
     std::fs::write(out.join(".mine.tmp-999999999"), "not ours").unwrap();
@@ -166,8 +177,11 @@ fn temporary_files_of_killed_runs_are_removed() {
         names(&out),
         [
             ".mine.tmp-999999999",
+            "container.obj",
             "history.csv",
             "packing.csv",
+            "packing.data",
+            "packing.gsd",
             "summary.json"
         ]
     );

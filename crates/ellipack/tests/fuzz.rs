@@ -1,4 +1,4 @@
-//! Every parser of the command line fed random bytes and mutated valid files: byte flips,
+//! Every parser of the command line (and the LAMMPS data file reader) fed random bytes and mutated valid files: byte flips,
 //! truncation, duplicated lines and columns, extreme and non-finite numbers, odd unicode. No
 //! input may panic, and every error must say something.
 //!
@@ -9,7 +9,7 @@ mod common;
 
 use ellipack::pairs::{Criterion, PAIR_COLUMNS_2D, contact_stream, evaluate, read_pairs};
 use ellipack::scene::Scene;
-use ellipack::{measure, packing};
+use ellipack::{export, measure, packing};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
@@ -252,6 +252,14 @@ fn check_xyz(bytes: &[u8]) {
     read_says_something(bytes, "packing.xyz", packing::read_xyz);
 }
 
+fn check_lammps(bytes: &[u8]) {
+    read_says_something(bytes, "packing.data", export::read_lammps_data);
+}
+
+fn lammps_text(p: &packing::Packing) -> String {
+    export::lammps_data(p, &export::Cell::enclosing(p))
+}
+
 const PAIRS_2D: &str = "case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n\
                         apart,3,0,1,0,1,1,0,1\n\
                         close,1,0.5,4,1,1,1,0,1\n\
@@ -344,5 +352,15 @@ proptest! {
     #[test]
     fn packing_xyz_3d(bytes in input(leak(packing::xyz_string(&common::ellipsoids(2, false, 4))))) {
         check_xyz(&bytes);
+    }
+
+    #[test]
+    fn packing_data_2d(bytes in input(leak(lammps_text(&common::ellipses(2, true, 5))))) {
+        check_lammps(&bytes);
+    }
+
+    #[test]
+    fn packing_data_3d(bytes in input(leak(lammps_text(&common::ellipsoids(2, false, 6))))) {
+        check_lammps(&bytes);
     }
 }

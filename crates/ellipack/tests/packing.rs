@@ -180,14 +180,26 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
         let mut lines = text.lines();
         assert_eq!(lines.next().unwrap(), p.items().len().to_string());
         let comment = lines.next().unwrap();
-        assert!(
-            comment.contains("Properties=species:S:1:pos:R:3:aspherical_shape:R:3:orientation:R:4")
-        );
+        assert!(comment.contains(
+            "Properties=species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4"
+        ));
         assert!(comment.contains("Lattice=\""), "{comment}");
         let back = packing::read_xyz(&text, "packing.xyz").unwrap();
         assert_eq!(back.container(), p.container());
         match (&back.items(), &p.items()) {
-            (Items::Ellipsoids(a), Items::Ellipsoids(b)) => assert_eq!(a, b),
+            (Items::Ellipsoids(a), Items::Ellipsoids(b)) => {
+                // The file holds the unit quaternion: exactly the one the export computes, the
+                // same rotation as the item's.
+                let unit = ellipack::export::bodies(p.items());
+                assert_eq!(a.len(), b.len());
+                for ((x, y), u) in a.iter().zip(b).zip(&unit) {
+                    assert_eq!((x.center, x.semi_axes), (y.center, y.semi_axes));
+                    assert_eq!(x.quaternion, u.quaternion);
+                    for k in 0..4 {
+                        assert!((x.quaternion[k] - y.quaternion[k]).abs() < 1e-15);
+                    }
+                }
+            }
             (Items::Ellipses(a), Items::Ellipses(b)) => {
                 assert_eq!(a.len(), b.len());
                 for (x, y) in a.iter().zip(b) {
@@ -207,7 +219,8 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
     }
 }
 
-/// The numbers of the first item's line of the XYZ file, after its species.
+/// The numbers of the first item's line of the XYZ file, after its species: x, y, z, group,
+/// the semi-axes and the quaternion (x, y, z, w).
 fn first_xyz_row(p: &Packing) -> Vec<f64> {
     packing::xyz_string(p)
         .lines()
@@ -237,7 +250,10 @@ fn xyz_orientation_is_in_ovito_order() {
     )
     .unwrap();
     let row = first_xyz_row(&p);
-    assert_eq!(row, vec![1.0, 2.0, 3.0, 1.0, 0.75, 0.5, 0.0, 0.0, s, c]);
+    assert_eq!(
+        row,
+        vec![1.0, 2.0, 3.0, 1.0, 1.0, 0.75, 0.5, 0.0, 0.0, s, c]
+    );
     // The same rotation as an ellipse angle: θ = π/2.
     let p2 = Packing::new(
         Container::Circle {
@@ -253,10 +269,10 @@ fn xyz_orientation_is_in_ovito_order() {
     .unwrap();
     let row = first_xyz_row(&p2);
     assert!(
-        (row[8] - s).abs() < 1e-16 && (row[9] - c).abs() < 1e-16,
+        (row[9] - s).abs() < 1e-16 && (row[10] - c).abs() < 1e-16,
         "{row:?}"
     );
-    assert_eq!(&row[..6], &[1.0, 2.0, 0.0, 2.0, 1.0, 1.0]);
+    assert_eq!(&row[..7], &[1.0, 2.0, 0.0, 1.0, 2.0, 1.0, 1.0]);
 }
 
 #[track_caller]
