@@ -126,12 +126,7 @@ fn contact(p: &sample::Pw85Pair) -> Result<pw85::Contact, Error> {
 /// The PW85 checks on `n` random pairs.
 pub fn pw85_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let mut rng = Rng::new(seed);
-    let mut ab = Worst::default();
-    let mut eq15 = Worst::default();
-    let mut c_alg = Worst::default();
-    let mut c_fd = Worst::default();
-    let mut eq13 = Worst::default();
-    let mut tangent = Worst::default();
+    let [mut ab, mut eq15, mut c_alg, mut c_fd, mut eq13, mut tangent] = <[Worst; 6]>::default();
     for k in 0..n {
         let (pair, p) = pw85_moderate(&mut rng)?;
         let (r, q1, q2) = (&p.r12, &p.q1, &p.q2);
@@ -246,11 +241,13 @@ fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
 
 fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let mut rng = Rng::new(seed);
-    let mut spheres = Worst::default();
-    let mut rotation = Worst::default();
-    let mut translation = Worst::default();
-    let mut scaling = Worst::default();
-    let mut swap = Worst::default();
+    let [
+        mut spheres,
+        mut rotation,
+        mut shifted,
+        mut scaling,
+        mut swap,
+    ] = <[Worst; 5]>::default();
     for k in 0..n {
         // Spheres: μ = |r| / (a1 + a2).
         let (a1, a2) = (rng.spread(0.1, 10.0), rng.spread(0.1, 10.0));
@@ -286,7 +283,7 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
             cj: [0, 1, 2].map(|m| pair.cj[m] + shift[m]),
             ..pair
         };
-        translation.add(relative_error(contact(&moved.pw85()?)?.mu2, base), || {
+        shifted.add(relative_error(contact(&moved.pw85()?)?.mu2, base), || {
             format!("pair {k}")
         });
 
@@ -314,7 +311,7 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     Ok(vec![
         spheres.check("pw85", "spheres: μ = |r|/(a1 + a2)", ORDINARY),
         rotation.check("pw85", "invariance: common rotation", REROUNDED),
-        translation.check("pw85", "invariance: common translation", REROUNDED),
+        shifted.check("pw85", "invariance: common translation", REROUNDED),
         scaling.check("pw85", "invariance: common scaling by 3", REROUNDED),
         swap.check("pw85", "invariance: swap (−r12, Q2, Q1)", ORDINARY),
     ])
