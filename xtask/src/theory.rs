@@ -126,12 +126,7 @@ fn contact(p: &sample::Pw85Pair) -> Result<pw85::Contact, Error> {
 /// The PW85 checks on `n` random pairs.
 pub fn pw85_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let mut rng = Rng::new(seed);
-    let mut ab = Worst::default();
-    let mut eq15 = Worst::default();
-    let mut c_alg = Worst::default();
-    let mut c_fd = Worst::default();
-    let mut eq13 = Worst::default();
-    let mut tangent = Worst::default();
+    let [mut ab, mut eq15, mut c_alg, mut c_fd, mut eq13, mut tangent] = <[Worst; 6]>::default();
     for k in 0..n {
         let (pair, p) = pw85_moderate(&mut rng)?;
         let (r, q1, q2) = (&p.r12, &p.q1, &p.q2);
@@ -246,11 +241,13 @@ fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
 
 fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let mut rng = Rng::new(seed);
-    let mut spheres = Worst::default();
-    let mut rotation = Worst::default();
-    let mut translation = Worst::default();
-    let mut scaling = Worst::default();
-    let mut swap = Worst::default();
+    let [
+        mut spheres,
+        mut rotation,
+        mut shifted,
+        mut scaling,
+        mut swap,
+    ] = <[Worst; 5]>::default();
     for k in 0..n {
         // Spheres: μ = |r| / (a1 + a2).
         let (a1, a2) = (rng.spread(0.1, 10.0), rng.spread(0.1, 10.0));
@@ -286,7 +283,7 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
             cj: [0, 1, 2].map(|m| pair.cj[m] + shift[m]),
             ..pair
         };
-        translation.add(relative_error(contact(&moved.pw85()?)?.mu2, base), || {
+        shifted.add(relative_error(contact(&moved.pw85()?)?.mu2, base), || {
             format!("pair {k}")
         });
 
@@ -314,7 +311,7 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     Ok(vec![
         spheres.check("pw85", "spheres: μ = |r|/(a1 + a2)", ORDINARY),
         rotation.check("pw85", "invariance: common rotation", REROUNDED),
-        translation.check("pw85", "invariance: common translation", REROUNDED),
+        shifted.check("pw85", "invariance: common translation", REROUNDED),
         scaling.check("pw85", "invariance: common scaling by 3", REROUNDED),
         swap.check("pw85", "invariance: swap (−r12, Q2, Q1)", ORDINARY),
     ])
@@ -546,67 +543,49 @@ fn derivative_check(n: usize, seed: u64) -> Result<Check, Error> {
 pub fn grid_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
     let mut rng = Rng::new(seed);
     let m = n.clamp(100, 3000);
-    let cutoff = 1.0;
     // Side chosen for about ten neighbours within the cutoff per point.
     let side3 = (m as f64 * 4.0 * std::f64::consts::FRAC_PI_3 / 10.0).cbrt();
     let side2 = (m as f64 * std::f64::consts::PI / 10.0).sqrt();
-    let p3: Vec<[f64; 3]> = (0..m)
-        .map(|_| [0; 3].map(|_| rng.range(0.0, side3)))
-        .collect();
-    let p2: Vec<[f64; 2]> = (0..m)
-        .map(|_| [0; 2].map(|_| rng.range(0.0, side2)))
+    Ok(vec![
+        grid_check::<3>(&mut rng, m, side3)?,
+        grid_check::<2>(&mut rng, m, side2)?,
+    ])
+}
+
+/// The pairs of `m` uniform points in a square or cube of side `side` that lie within 1 of each
+/// other: the grid's against brute force.
+fn grid_check<const D: usize>(rng: &mut Rng, m: usize, side: f64) -> Result<Check, Error> {
+    let cutoff = 1.0;
+    let points: Vec<[f64; D]> = (0..m)
+        .map(|_| [0; D].map(|_| rng.range(0.0, side)))
         .collect();
     let grid_err = |e: cell_grid::Error| Error::Grid {
         message: e.to_string(),
     };
-    let mut found3 = BTreeSet::new();
-    cell_grid::Grid::<3>::build(&p3, cutoff)
+    let mut found = BTreeSet::new();
+    cell_grid::Grid::<D>::build(&points, cutoff)
         .map_err(grid_err)?
-        .for_each_pair_within(&p3, |i, j, _| {
-            found3.insert((i.min(j), i.max(j)));
+        .for_each_pair_within(&points, |i, j, _| {
+            found.insert((i.min(j), i.max(j)));
         })
         .map_err(grid_err)?;
-    let mut found2 = BTreeSet::new();
-    cell_grid::Grid::<2>::build(&p2, cutoff)
-        .map_err(grid_err)?
-        .for_each_pair_within(&p2, |i, j, _| {
-            found2.insert((i.min(j), i.max(j)));
-        })
-        .map_err(grid_err)?;
-    let brute = |pts: &dyn Fn(usize, usize) -> f64| {
-        let mut s = BTreeSet::new();
-        for i in 0..m {
-            for j in i + 1..m {
-                if pts(i, j) < cutoff * cutoff {
-                    s.insert((i, j));
-                }
+    let mut brute = BTreeSet::new();
+    for i in 0..m {
+        for j in i + 1..m {
+            let d2: f64 = (0..D).map(|k| (points[i][k] - points[j][k]).powi(2)).sum();
+            if d2 < cutoff * cutoff {
+                brute.insert((i, j));
             }
         }
-        s
-    };
-    let b3 = brute(&|i, j| (0..3).map(|k| (p3[i][k] - p3[j][k]).powi(2)).sum());
-    let b2 = brute(&|i, j| (0..2).map(|k| (p2[i][k] - p2[j][k]).powi(2)).sum());
-    let diff = |a: &BTreeSet<(usize, usize)>, b: &BTreeSet<(usize, usize)>| {
-        a.symmetric_difference(b).count() as f64
-    };
-    Ok(vec![
-        Check {
-            group: "grid",
-            name: "3D grid pairs within cutoff = brute force (differences)".into(),
-            residual: diff(&found3, &b3),
-            tolerance: 0.0,
-            cases: m,
-            detail: format!("{} pairs", b3.len()),
-        },
-        Check {
-            group: "grid",
-            name: "2D grid pairs within cutoff = brute force (differences)".into(),
-            residual: diff(&found2, &b2),
-            tolerance: 0.0,
-            cases: m,
-            detail: format!("{} pairs", b2.len()),
-        },
-    ])
+    }
+    Ok(Check {
+        group: "grid",
+        name: format!("{D}D grid pairs within cutoff = brute force (differences)"),
+        residual: found.symmetric_difference(&brute).count() as f64,
+        tolerance: 0.0,
+        cases: m,
+        detail: format!("{} pairs", brute.len()),
+    })
 }
 
 /// The reference files against the accuracy bounds of the crates' issues: μ² to 1e-13
@@ -660,37 +639,35 @@ fn pw85_reference_checks() -> Result<Vec<Check>, Error> {
     ])
 }
 
+/// The checks of one implicit-model reference file: `$term` is the measured pair term of its
+/// case `$c`. A macro because the rows of `blm_3d.csv` and `blm_2d.csv` are two types with the
+/// same fields.
+macro_rules! blm_file {
+    ($file:literal, $cases:expr, |$c:ident| $term:expr) => {{
+        let (mut ud, mut x, mut eps, mut verdict) = blm_worst();
+        for $c in &$cases {
+            let t = $term;
+            blm_add(
+                (&mut ud, &mut x, &mut eps, &mut verdict),
+                &$c.id,
+                &$c.category,
+                (t.u, t.d2, t.eps, t.f),
+                ($c.u, $c.d2, $c.eps, $c.f, $c.mu2),
+                $c.x.map(|r| (t.x.to_vec(), r.to_vec())),
+            );
+        }
+        blm_checks($file, ud, x, eps, verdict)
+    }};
+}
+
 fn blm_reference_checks() -> Result<Vec<Check>, Error> {
-    let mut checks = Vec::new();
     let blm3 = reference::blm_3d()?;
-    let (mut ud, mut x, mut eps, mut verdict) = blm_worst();
-    for c in &blm3 {
-        let t = implicit::term(&c.pair)?;
-        blm_add(
-            (&mut ud, &mut x, &mut eps, &mut verdict),
-            &c.id,
-            &c.category,
-            (t.u, t.d2, t.eps, t.f),
-            (c.u, c.d2, c.eps, c.f, c.mu2),
-            c.x.map(|r| (t.x.to_vec(), r.to_vec())),
-        );
-    }
-    checks.extend(blm_checks("blm_3d.csv", ud, x, eps, verdict));
+    let mut checks = blm_file!("blm_3d.csv", blm3, |c| implicit::term(&c.pair)?);
     let blm2 = reference::blm_2d()?;
-    let (mut ud, mut x, mut eps, mut verdict) = blm_worst();
-    for c in &blm2 {
+    checks.extend(blm_file!("blm_2d.csv", blm2, |c| {
         let (i, j) = implicit::ellipses(&c.pair)?;
-        let t = implicit::term_of(&i, &j);
-        blm_add(
-            (&mut ud, &mut x, &mut eps, &mut verdict),
-            &c.id,
-            &c.category,
-            (t.u, t.d2, t.eps, t.f),
-            (c.u, c.d2, c.eps, c.f, c.mu2),
-            c.x.map(|r| (t.x.to_vec(), r.to_vec())),
-        );
-    }
-    checks.extend(blm_checks("blm_2d.csv", ud, x, eps, verdict));
+        implicit::term_of(&i, &j)
+    }));
     Ok(checks)
 }
 
@@ -852,5 +829,27 @@ mod tests {
         );
         let c = condition(&[2.0, 1.0, 0.0, 2.0, 0.0, 5.0]);
         assert!((c - 5.0).abs() < 1e-13, "{c}");
+    }
+
+    #[test]
+    fn the_grid_finds_the_pairs_brute_force_finds_in_3d_and_2d() {
+        let checks = grid_checks(300, 5).unwrap();
+        let names: Vec<&str> = checks.iter().map(|c| &c.name[..2]).collect();
+        assert_eq!(names, ["3D", "2D"]);
+        for c in &checks {
+            assert_eq!(c.residual, 0.0, "{}: {}", c.name, c.detail);
+            assert_ne!(c.detail, "0 pairs", "{}", c.name);
+        }
+    }
+
+    #[test]
+    fn each_implicit_reference_file_gives_its_four_checks() {
+        let checks = blm_reference_checks().unwrap();
+        let files: Vec<&str> = checks.iter().map(|c| &c.name[..10]).collect();
+        assert_eq!(files, [["blm_3d.csv"; 4], ["blm_2d.csv"; 4]].concat());
+        for c in &checks {
+            assert!(c.passed(), "{c:?}");
+            assert!(c.cases > 0, "{c:?}");
+        }
     }
 }

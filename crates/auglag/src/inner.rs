@@ -220,10 +220,11 @@ const MAX_BACKTRACKS: usize = 60;
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Acceptance {
     /// Monotone, on the projected path: F(x(α)) ≤ F(x) + γ ∇F(x)ᵀ(x(α) − x), where
-    /// ∇F(x)ᵀ(x(α) − x) < 0. Backtracking keeps α within [0.1, 0.5] of the previous one.
+    /// ∇F(x)ᵀ(x(α) − x) < 0. Each backtrack takes α to between 0.1 and 0.5 times its value.
     ProjectedPath,
     /// Nonmonotone (GLL): F(x + αd) ≤ `reference` + γ α ∇F(x)ᵀd, `reference` being the largest
-    /// of the last few accepted values. Backtracking keeps α within [0.1, 0.9] of the previous one.
+    /// of the last few accepted values. Each backtrack takes α to between 0.1 and 0.9 times its
+    /// value.
     Nonmonotone {
         /// The largest of the recent values.
         reference: f64,

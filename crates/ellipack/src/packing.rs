@@ -788,10 +788,12 @@ pub fn csv_string(items: &Items) -> String {
 /// # Errors
 /// [`PackingError::Write`] naming the file.
 pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
-    Ok(crate::output::write_atomically(
-        path,
-        csv_string(items).as_bytes(),
-    )?)
+    write_text(path, &csv_string(items))
+}
+
+/// Writes `text` to `path` atomically.
+fn write_text(path: &Path, text: &str) -> Result<(), PackingError> {
+    Ok(crate::output::write_atomically(path, text.as_bytes())?)
 }
 
 /// Reads [`CSV_FILE`] text. The header decides the dimension: with any of `z, c, qw, qx, qy,
@@ -998,8 +1000,7 @@ pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
 /// # Errors
 /// [`PackingError::NonFinite`] or [`PackingError::Write`].
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError> {
-    let text = summary_json(summary)?;
-    Ok(crate::output::write_atomically(path, text.as_bytes())?)
+    write_text(path, &summary_json(summary)?)
 }
 
 /// Reads [`SUMMARY_FILE`] text.
@@ -1245,10 +1246,7 @@ pub fn xyz_string_in(packing: &Packing, cell: &crate::export::Cell) -> String {
 /// # Errors
 /// [`PackingError::Write`] naming the file.
 pub fn write_xyz(path: &Path, packing: &Packing) -> Result<(), PackingError> {
-    Ok(crate::output::write_atomically(
-        path,
-        xyz_string(packing).as_bytes(),
-    )?)
+    write_text(path, &xyz_string(packing))
 }
 
 /// Splits an extended XYZ comment line into `key=value` pairs (values may be double-quoted).
@@ -1350,6 +1348,14 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
     const NAMES: [&str; 12] = [
         "species", "x", "y", "z", "group", "a", "b", "c", "qx", "qy", "qz", "qw",
     ];
+    // The error of a bad value in field `k` (0-based, as in NAMES) of `line`.
+    let bad_value = |line, k: usize, message| PackingError::BadValue {
+        source_name: source_name.to_string(),
+        line,
+        column: k as u64 + 1,
+        name: NAMES[k].to_string(),
+        message,
+    };
     let mut ellipses = Vec::new();
     let mut ellipsoids = Vec::new();
     let mut rows = 0;
@@ -1373,13 +1379,8 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
             ));
         }
         if fields[4].parse::<u64>().map_or(true, |g| g == 0) {
-            return Err(PackingError::BadValue {
-                source_name: source_name.to_string(),
-                line,
-                column: 5,
-                name: "group".to_string(),
-                message: format!("`{}` is not a group number (1, 2, …)", fields[4]),
-            });
+            let message = format!("`{}` is not a group number (1, 2, …)", fields[4]);
+            return Err(bad_value(line, 4, message));
         }
         let mut v = [0.0; 10];
         for (k, slot) in v.iter_mut().enumerate() {
@@ -1388,25 +1389,15 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
             *slot = match fields[f].parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
                 _ => {
-                    return Err(PackingError::BadValue {
-                        source_name: source_name.to_string(),
-                        line,
-                        column: f as u64 + 1,
-                        name: NAMES[f].to_string(),
-                        message: format!("`{}` is not a finite number", fields[f]),
-                    });
+                    let message = format!("`{}` is not a finite number", fields[f]);
+                    return Err(bad_value(line, f, message));
                 }
             };
         }
         let [x, y, z, a, b, c, qx, qy, qz, qw] = v;
         if let Some(k) = [a, b, c].iter().position(|l| *l <= 0.0) {
-            return Err(PackingError::BadValue {
-                source_name: source_name.to_string(),
-                line,
-                column: k as u64 + 6,
-                name: NAMES[k + 5].to_string(),
-                message: format!("semi-axis {} is not positive", v[k + 3]),
-            });
+            let message = format!("semi-axis {} is not positive", v[k + 3]);
+            return Err(bad_value(line, k + 5, message));
         }
         if kind.dimension() == 2 {
             ellipses.push(EllipseItem {

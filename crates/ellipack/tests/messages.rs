@@ -108,35 +108,40 @@ fn extreme_numbers_in_scene_messages_are_short() {
     assert!(err.ends_with("not -1e300"), "{err}");
 }
 
+/// A packing file that cannot be read says why, with the file and the line.
 #[test]
-fn an_empty_packing_file_says_so() {
-    let err = packing_error("");
-    assert!(
-        err.starts_with("packing.csv: line 1: the file is empty")
-            && err.contains("id,x,y,a,b,theta"),
-        "{err}"
-    );
-}
-
-#[test]
-fn a_packing_without_items_says_so() {
-    let err = packing_error("id,x,y,a,b,theta\n");
-    assert!(
-        err.starts_with("packing.csv: line 2: no items") && !err.contains("ellipsoid"),
-        "{err}"
-    );
-}
-
-#[test]
-fn a_duplicated_packing_column_is_an_error_naming_it() {
-    let text = "id,x,x,y,a,b,theta\n0,0,9,0,1,1,0\n";
-    let err = packing_error(text);
-    assert!(
-        err.contains(
-            "packing.csv: line 1: column `x` appears twice in the header (columns 2 and 3)"
+fn packing_file_errors_say_what_is_wrong() {
+    // (text, how the message starts, what it contains, what it does not mention)
+    let cases: [(&str, &str, &[&str], &[&str]); 3] = [
+        (
+            "",
+            "packing.csv: line 1: the file is empty",
+            &["id,x,y,a,b,theta"],
+            &[],
         ),
-        "{err}"
-    );
+        (
+            "id,x,y,a,b,theta\n",
+            "packing.csv: line 2: no items",
+            &[],
+            &["ellipsoid"],
+        ),
+        (
+            "id,x,x,y,a,b,theta\n0,0,9,0,1,1,0\n",
+            "",
+            &["packing.csv: line 1: column `x` appears twice in the header (columns 2 and 3)"],
+            &[],
+        ),
+    ];
+    for (text, start, parts, absent) in cases {
+        let err = packing_error(text);
+        assert!(err.starts_with(start), "{err}");
+        for part in parts {
+            assert!(err.contains(part), "{err}");
+        }
+        for word in absent {
+            assert!(!err.contains(word), "{err}");
+        }
+    }
 }
 
 #[test]
