@@ -47,12 +47,10 @@ fn inner_solvers(c: &mut Criterion) {
         ("spg", InnerSolver::Spg),
         ("projected_lbfgs", InnerSolver::ProjectedLbfgs),
     ] {
-        let options = Options {
-            optimality_tolerance: 1e-6,
-            inner_solver: solver,
-            max_inner_iterations: 1_000_000,
-            ..Options::default()
-        };
+        let options = Options::default()
+            .with_optimality_tolerance(1e-6)
+            .with_inner_solver(solver)
+            .with_max_inner_iterations(1_000_000);
         let s = minimize(&problem, &x0, &options).expect("valid problem");
         assert_eq!(s.report.stop_reason, StopReason::Converged);
         eprintln!("{name}: {}", s.report);

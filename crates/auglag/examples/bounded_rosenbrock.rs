@@ -42,10 +42,7 @@ fn main() -> Result<(), auglag::Error> {
         ("projected L-BFGS", InnerSolver::ProjectedLbfgs),
         ("truncated Newton", InnerSolver::TruncatedNewton),
     ] {
-        let options = Options {
-            inner_solver: inner,
-            ..Options::default()
-        };
+        let options = Options::default().with_inner_solver(inner);
         let solution = minimize(&BoundedRosenbrock, &start, &options)?;
         let report = &solution.report;
         println!(

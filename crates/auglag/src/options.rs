@@ -29,6 +29,7 @@ pub enum InnerSolver {
 /// assert_eq!(options.max_outer_iterations, 50);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct Options {
     /// ε_feas: stop when max(‖h‖∞, ‖g₊‖∞) ≤ this (unscaled). Default 1e-4.
     pub feasibility_tolerance: f64,

@@ -62,12 +62,10 @@ fn safeguarded_multipliers_stay_in_their_box() {
         with_ineq: Some(0.5),
     };
     for solver in SOLVERS {
-        let options = Options {
-            equality_multiplier_bounds: (-0.5, 0.5),
-            max_inequality_multiplier: 0.25,
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = Options::default()
+            .with_equality_multiplier_bounds((-0.5, 0.5))
+            .with_max_inequality_multiplier(0.25)
+            .with_inner_solver(solver);
         let mut seen = 0;
         let mut clipped = false;
         let s = minimize_with_callback(&p, &[0.0, 0.0], &options, |pr| {
@@ -141,15 +139,13 @@ fn approach_history(
 }
 
 fn approach_options(solver: InnerSolver) -> Options {
-    Options {
-        feasibility_tolerance: 1e-3,
-        optimality_tolerance: 1e-10,
+    Options::default()
+        .with_feasibility_tolerance(1e-3)
+        .with_optimality_tolerance(1e-10)
         // Unreachable, so that the run goes on past the first feasible iterate.
-        complementarity_tolerance: 1e-300,
-        max_outer_iterations: 8,
-        inner_solver: solver,
-        ..Options::default()
-    }
+        .with_complementarity_tolerance(1e-300)
+        .with_max_outer_iterations(8)
+        .with_inner_solver(solver)
 }
 
 fn check_best_feasible(s: &auglag::Solution, history: &[(f64, f64)], tol: f64) {
@@ -183,10 +179,7 @@ fn best_feasible_point_is_kept_when_later_iterates_are_worse() {
 #[test]
 fn interrupt_at_an_outer_iteration_returns_the_best_feasible_point() {
     for solver in SOLVERS {
-        let options = Options {
-            max_outer_iterations: 50,
-            ..approach_options(solver)
-        };
+        let options = approach_options(solver).with_max_outer_iterations(50);
         let (s, history) = approach_history(&options, Some(6));
         assert_eq!(s.report.stop_reason, StopReason::Interrupted);
         assert_eq!(s.report.outer_iterations, 6);
@@ -225,10 +218,7 @@ fn interrupt_inside_an_inner_solve_stops_early_with_a_better_point() {
     let f0 = p.objective(&x0, None);
     for solver in SOLVERS {
         let mut calls = 0;
-        let options = Options {
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = Options::default().with_inner_solver(solver);
         let s = minimize_with_callback(&p, &x0, &options, |pr| {
             calls += 1;
             if pr.total_inner_iterations >= 5 {
@@ -256,10 +246,7 @@ fn runs_are_bit_identical() {
     let r = Rosenbrock(20);
     let x0: Vec<f64> = (0..20).map(|i| (i as f64 * 0.37).sin()).collect();
     for solver in SOLVERS {
-        let options = Options {
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = Options::default().with_inner_solver(solver);
         let a = minimize(&p, &[0.1, -0.3], &options).unwrap();
         let b = minimize(&p, &[0.1, -0.3], &options).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -317,10 +304,7 @@ fn nan_outside_the_domain_is_backtracked_over() {
             poison_after: usize::MAX,
             nan_constraint: false,
         };
-        let options = Options {
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = Options::default().with_inner_solver(solver);
         // The first trial steps from x = −20 overshoot far beyond x = 2.
         let s = minimize(&p, &[-20.0], &options).unwrap();
         assert_eq!(s.report.stop_reason, StopReason::Converged, "{solver:?}");
@@ -336,10 +320,7 @@ fn persistent_nan_is_a_stop_reason_and_a_finite_point_is_returned() {
             poison_after: 4,
             nan_constraint: false,
         };
-        let options = Options {
-            inner_solver: solver,
-            ..Options::default()
-        };
+        let options = Options::default().with_inner_solver(solver);
         let s = minimize(&p, &[-20.0], &options).unwrap();
         match s.report.stop_reason {
             StopReason::NonFinite {
@@ -437,16 +418,10 @@ fn invalid_input_is_reported_with_its_index() {
     ));
     let e = minimize(&p, &[0.0, f64::INFINITY], &Options::default()).unwrap_err();
     assert!(matches!(e, Error::NonFiniteStart { index: 1, .. }));
-    let bad = Options {
-        feasibility_tolerance: -1.0,
-        ..Options::default()
-    };
+    let bad = Options::default().with_feasibility_tolerance(-1.0);
     let e = minimize(&p, &[0.0; 2], &bad).unwrap_err();
     assert!(e.to_string().contains("feasibility_tolerance"), "{e}");
-    let bad = Options {
-        required_decrease: 1.5,
-        ..Options::default()
-    };
+    let bad = Options::default().with_required_decrease(1.5);
     assert!(minimize(&p, &[0.0; 2], &bad).is_err());
 }
 
@@ -498,14 +473,12 @@ impl Problem for Fused {
 fn fused_hook_gives_the_same_solution_as_the_default_path() {
     for solver in SOLVERS {
         for scaling in [false, true] {
-            let options = Options {
-                inner_solver: solver,
-                scaling,
-                feasibility_tolerance: 1e-9,
-                optimality_tolerance: 1e-9,
-                complementarity_tolerance: 1e-9,
-                ..Options::default()
-            };
+            let options = Options::default()
+                .with_inner_solver(solver)
+                .with_scaling(scaling)
+                .with_feasibility_tolerance(1e-9)
+                .with_optimality_tolerance(1e-9)
+                .with_complementarity_tolerance(1e-9);
             let plain = Quadratic {
                 a: 3.0,
                 with_ineq: Some(0.5),
@@ -531,10 +504,7 @@ fn fused_hook_gives_the_same_solution_as_the_default_path() {
 
 /// The default options with `solver` as the inner solver, then changed by `set`.
 fn options_for(solver: InnerSolver, set: impl FnOnce(&mut Options)) -> Options {
-    let mut options = Options {
-        inner_solver: solver,
-        ..Options::default()
-    };
+    let mut options = Options::default().with_inner_solver(solver);
     set(&mut options);
     options
 }

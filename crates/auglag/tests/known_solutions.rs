@@ -12,14 +12,12 @@ const SOLVERS: [InnerSolver; 3] = [
 /// Tolerances tighter than the assertions below (1e-6), so that a pass means the solver
 /// reached the optimum and not merely stopped near it.
 fn tight(solver: InnerSolver) -> Options {
-    Options {
-        feasibility_tolerance: 1e-8,
-        optimality_tolerance: 1e-8,
-        complementarity_tolerance: 1e-8,
-        inner_solver: solver,
-        max_inner_iterations: 100_000,
-        ..Options::default()
-    }
+    Options::default()
+        .with_feasibility_tolerance(1e-8)
+        .with_optimality_tolerance(1e-8)
+        .with_complementarity_tolerance(1e-8)
+        .with_inner_solver(solver)
+        .with_max_inner_iterations(100_000)
 }
 
 fn print_run(name: &str, solver: InnerSolver, s: &Solution) {
@@ -223,10 +221,7 @@ impl Problem for Dense {
 fn check_hs(name: &str, p: &Dense, x0: &[f64], f_star: f64, x_star: Option<&[f64]>) {
     for solver in SOLVERS {
         for scaling in [false, true] {
-            let options = Options {
-                scaling,
-                ..tight(solver)
-            };
+            let options = tight(solver).with_scaling(scaling);
             let s = minimize(p, x0, &options).expect("valid problem");
             print_run(&format!("{name} scaling={scaling}"), solver, &s);
             assert_eq!(

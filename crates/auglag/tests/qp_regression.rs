@@ -105,12 +105,10 @@ fn both_inner_solvers_converge_on_the_saved_case() {
         InnerSolver::ProjectedLbfgs,
         InnerSolver::TruncatedNewton,
     ] {
-        let options = Options {
-            optimality_tolerance: 1e-9,
-            inner_solver: solver,
-            max_inner_iterations: 1_000_000,
-            ..Options::default()
-        };
+        let options = Options::default()
+            .with_optimality_tolerance(1e-9)
+            .with_inner_solver(solver)
+            .with_max_inner_iterations(1_000_000);
         let s = minimize(&Qp, &X0, &options).unwrap();
         eprintln!("{solver:?}: {:?}", s.report);
         assert_eq!(s.report.stop_reason, StopReason::Converged, "{solver:?}");

@@ -100,12 +100,7 @@ proptest! {
         InnerSolver::ProjectedLbfgs,
         InnerSolver::TruncatedNewton,
     ] {
-            let options = Options {
-                optimality_tolerance: TOL,
-                inner_solver: solver,
-                max_inner_iterations: 1_000_000,
-                ..Options::default()
-            };
+            let options = Options::default().with_optimality_tolerance(TOL).with_inner_solver(solver).with_max_inner_iterations(1_000_000);
             let s = minimize(&qp, &x0, &options).unwrap();
             prop_assert_eq!(s.report.stop_reason, StopReason::Converged);
             let g = qp.gradient(&s.x);
