@@ -3,7 +3,7 @@
 //! packing object, reading a packing folder and verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
-use ellipack::pack::{MultiStartProgress, Observer, RunOptions, run, time_limit_of};
+use ellipack::pack::{History, MultiStartProgress, Observer, RunOptions, run, time_limit_of};
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
 use ellipack::scene::Scene;
 use numpy::{PyArray1, PyArray2};
@@ -239,18 +239,12 @@ impl PyPacking {
 struct Relay<'a> {
     progress: mpsc::Sender<MultiStartProgress>,
     stop: &'a AtomicBool,
-    history: String,
+    history: History,
 }
 
 impl Observer for Relay<'_> {
     fn finished(&mut self, p: &MultiStartProgress) {
-        self.history.push_str(&format!(
-            "{},{:.3},{:.9},{:.9}\n",
-            p.local_minimisations,
-            p.elapsed.as_secs_f64(),
-            p.last_density,
-            p.best_density
-        ));
+        self.history.record(p);
         // The calling thread has stopped listening only when it is about to return.
         let _ = self.progress.send(*p);
     }
@@ -299,7 +293,7 @@ pub fn _pack(
     let relay = Relay {
         progress: sender,
         stop: &stop,
-        history: String::from("local_minimisation,seconds,density,best_density\n"),
+        history: History::new(),
     };
     let mut interrupted = false;
     let mut pending: Option<PyErr> = None;
@@ -308,7 +302,7 @@ pub fn _pack(
         let worker = s.spawn(move || {
             let mut relay = relay;
             let result = run(scene, options, &mut relay);
-            (result, relay.history)
+            (result, relay.history.into_text())
         });
         let mut receiver = receiver;
         let mut stop_with = |e: PyErr, py: Python<'_>| {

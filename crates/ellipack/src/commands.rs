@@ -3,7 +3,7 @@
 use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
-    MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
+    History, MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
     time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
@@ -20,15 +20,33 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
-/// The arguments of `ellipack pack`.
+// The arguments of `ellipack pack`; their doc comments are its --help.
+#[derive(clap::Args)]
 pub struct PackArgs {
+    /// The scene (TOML): dimension, container, shape groups, solver settings, seed.
     pub scene: Option<PathBuf>,
+    /// One of the paper's instances instead of a scene (see `ellipack instances`).
+    #[arg(long, conflicts_with = "scene")]
     pub instance: Option<String>,
+    /// Output folder (created if needed). Default: the scene's, else `out`.
+    #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Wall-clock limit in seconds (overrides the scene's; positive, at most 1.8e19).
+    #[arg(long)]
     pub time_limit: Option<f64>,
+    /// Seed of the multi-start perturbations (overrides the scene's).
+    #[arg(long)]
     pub seed: Option<u64>,
+    /// Parallel starts (overrides the scene's; 0: every core).
+    #[arg(long)]
     pub threads: Option<usize>,
+    /// Start from the packing already in the output folder.
+    #[arg(long)]
     pub resume: bool,
+    /// Run shard K of N of the multi-start (`--shard 2/8`, K from 0): the N shards of one
+    /// seed try disjoint starts, and each reproduces exactly. Combine their folders with
+    /// `ellipack merge`.
+    #[arg(long, value_parser = crate::parse_shard)]
     pub shard: Option<ellipack::pack::Shard>,
 }
 
@@ -92,12 +110,11 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let mut terminal = Terminal {
         bar: bar.clone(),
         best: AtomicU64::new(0f64.to_bits()),
-        // One row per finished local minimisation, written beside the packing as history.csv.
-        history: String::from("local_minimisation,seconds,density,best_density\n"),
+        history: History::new(),
         interrupted: Arc::clone(&interrupted),
     };
     let outcome = run(&scene, &options, &mut terminal)?;
-    let history = terminal.history;
+    let history = terminal.history.into_text();
     bar.finish_and_clear();
 
     // The whole set is written into a staging folder and swapped in, so that the folder never
@@ -394,19 +411,13 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
 struct Terminal {
     bar: ProgressBar,
     best: AtomicU64,
-    history: String,
+    history: History,
     interrupted: Arc<AtomicBool>,
 }
 
 impl Observer for Terminal {
     fn finished(&mut self, p: &MultiStartProgress) {
-        self.history.push_str(&format!(
-            "{},{:.3},{:.9},{:.9}\n",
-            p.local_minimisations,
-            p.elapsed.as_secs_f64(),
-            p.last_density,
-            p.best_density
-        ));
+        self.history.record(p);
         self.best.store(p.best_density.to_bits(), Ordering::Relaxed);
         self.bar.set_message(format!(
             "{} local minimisations, last density {:.5}, best certified density {:.5}",

@@ -38,33 +38,7 @@ enum Command {
     ///
     /// Exit status: 0 a certified packing was written (the run finished, reached its time
     /// limit or was stopped by a signal); 1 an error, nothing written; 2 bad arguments.
-    Pack {
-        /// The scene (TOML): dimension, container, shape groups, solver settings, seed.
-        scene: Option<PathBuf>,
-        /// One of the paper's instances instead of a scene (see `ellipack instances`).
-        #[arg(long, conflicts_with = "scene")]
-        instance: Option<String>,
-        /// Output folder (created if needed). Default: the scene's, else `out`.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Wall-clock limit in seconds (overrides the scene's; positive, at most 1.8e19).
-        #[arg(long)]
-        time_limit: Option<f64>,
-        /// Seed of the multi-start perturbations (overrides the scene's).
-        #[arg(long)]
-        seed: Option<u64>,
-        /// Parallel starts (overrides the scene's; 0: every core).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Start from the packing already in the output folder.
-        #[arg(long)]
-        resume: bool,
-        /// Run shard K of N of the multi-start (`--shard 2/8`, K from 0): the N shards of one
-        /// seed try disjoint starts, and each reproduces exactly. Combine their folders with
-        /// `ellipack merge`.
-        #[arg(long, value_parser = parse_shard)]
-        shard: Option<ellipack::pack::Shard>,
-    },
+    Pack(commands::PackArgs),
     /// Keep the best certified packing of several runs of one scene (the shards of a
     /// multi-start, or repeated runs): every input is verified again, packings of different
     /// scenes are refused, and a certified packing already in the output folder takes part, so
@@ -231,25 +205,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
     Ok(match cli.command {
-        Command::Pack {
-            scene,
-            instance,
-            out,
-            time_limit,
-            seed,
-            threads,
-            resume,
-            shard,
-        } => commands::pack(commands::PackArgs {
-            scene,
-            instance,
-            out,
-            time_limit,
-            seed,
-            threads,
-            resume,
-            shard,
-        })?,
+        Command::Pack(args) => commands::pack(args)?,
         Command::Merge { folders, out } => commands::merge(&folders, &out)?,
         Command::Verify {
             packing,

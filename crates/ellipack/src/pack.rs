@@ -193,6 +193,44 @@ pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, PackError> 
     Ok(packing)
 }
 
+/// The table written beside a run's packing as history.csv: one row per finished local
+/// minimisation (its number, the seconds since the start, its density and the best certified
+/// density so far).
+#[derive(Clone, Debug)]
+pub struct History(String);
+
+impl History {
+    /// The table with its header and no rows.
+    pub fn new() -> Self {
+        Self(String::from(
+            "local_minimisation,seconds,density,best_density
+",
+        ))
+    }
+
+    /// Adds the row of a finished local minimisation.
+    pub fn record(&mut self, p: &MultiStartProgress) {
+        self.0.push_str(&format!(
+            "{},{:.3},{:.9},{:.9}\n",
+            p.local_minimisations,
+            p.elapsed.as_secs_f64(),
+            p.last_density,
+            p.best_density
+        ));
+    }
+
+    /// The CSV text.
+    pub fn into_text(self) -> String {
+        self.0
+    }
+}
+
+impl Default for History {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// Command-line overrides of the scene's settings.
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
@@ -603,6 +641,29 @@ fn variables_of<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_history_has_its_header_and_a_row_per_local_minimisation() {
+        let mut history = History::new();
+        history.record(&MultiStartProgress {
+            local_minimisations: 1,
+            best_density: 0.5,
+            last_density: 0.25,
+            elapsed: Duration::from_millis(1500),
+        });
+        history.record(&MultiStartProgress {
+            local_minimisations: 2,
+            best_density: 0.625,
+            last_density: 0.625,
+            elapsed: Duration::from_secs(3),
+        });
+        assert_eq!(
+            history.into_text(),
+            "local_minimisation,seconds,density,best_density\n\
+             1,1.500,0.250000000,0.500000000\n\
+             2,3.000,0.625000000,0.625000000\n"
+        );
+    }
 
     #[test]
     fn a_small_scene_packs_certified_and_verify_agrees() {
