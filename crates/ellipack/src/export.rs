@@ -508,23 +508,23 @@ pub fn read_lammps_data(text: &str, source_name: &str) -> Result<LammpsData, Exp
         let axis = ["x", "y", "z"][k];
         return Err(bad(0, format!("no `{axis}lo {axis}hi` line")));
     }
-    if atoms != Some(data.atoms.len() as u64) {
-        return Err(bad(
-            last,
-            format!(
-                "the header announces {atoms:?} atoms, the Atoms section has {}",
-                data.atoms.len()
-            ),
-        ));
-    }
-    if ellipsoids != Some(data.ellipsoids.len() as u64) {
-        return Err(bad(
-            last,
-            format!(
-                "the header announces {ellipsoids:?} ellipsoids, the Ellipsoids section has {}",
-                data.ellipsoids.len()
-            ),
-        ));
+    for (what, section, announced, found) in [
+        ("atoms", "Atoms", atoms, data.atoms.len()),
+        (
+            "ellipsoids",
+            "Ellipsoids",
+            ellipsoids,
+            data.ellipsoids.len(),
+        ),
+    ] {
+        if announced != Some(found as u64) {
+            return Err(bad(
+                last,
+                format!(
+                    "the header announces {announced:?} {what}, the {section} section has {found}"
+                ),
+            ));
+        }
     }
     Ok(data)
 }

@@ -158,25 +158,20 @@ pub struct BodyError {
 /// finite, a zero or non-finite quaternion, a non-finite centre).
 pub fn pair_term_3d(row: &[f64; 20]) -> Result<PairTerm<3>, BodyError> {
     let v = &in_own_units(row, 3, [0, 10], [3, 13])[..];
-    let i = Body::from_quaternion(
-        [v[0], v[1], v[2]],
-        [v[3], v[4], v[5]],
-        [v[6], v[7], v[8], v[9]],
-    )
-    .map_err(|source| BodyError {
-        body: "ellipsoid i",
-        source,
-    })?;
-    let j = Body::from_quaternion(
-        [v[10], v[11], v[12]],
-        [v[13], v[14], v[15]],
-        [v[16], v[17], v[18], v[19]],
-    )
-    .map_err(|source| BodyError {
-        body: "ellipsoid j",
-        source,
-    })?;
-    Ok(pair_term(&i, &j))
+    // Body i's ten values come first, body j's next.
+    let body = |name, at: usize| {
+        let w = &v[at..at + 10];
+        Body::from_quaternion(
+            [w[0], w[1], w[2]],
+            [w[3], w[4], w[5]],
+            [w[6], w[7], w[8], w[9]],
+        )
+        .map_err(|source| BodyError { body: name, source })
+    };
+    Ok(pair_term(
+        &body("ellipsoid i", 0)?,
+        &body("ellipsoid j", 10)?,
+    ))
 }
 
 /// The pair term of one row of the 2D layout (the values of [`COLUMNS_2D`], in that order),
@@ -186,15 +181,11 @@ pub fn pair_term_3d(row: &[f64; 20]) -> Result<PairTerm<3>, BodyError> {
 /// [`BodyError`] naming the ellipse the model refuses.
 pub fn pair_term_2d(row: &[f64; 10]) -> Result<PairTerm<2>, BodyError> {
     let v = &in_own_units(row, 2, [0, 5], [2, 7])[..];
-    let i = Body::ellipse([v[0], v[1]], [v[2], v[3]], v[4]).map_err(|source| BodyError {
-        body: "ellipse i",
-        source,
-    })?;
-    let j = Body::ellipse([v[5], v[6]], [v[7], v[8]], v[9]).map_err(|source| BodyError {
-        body: "ellipse j",
-        source,
-    })?;
-    Ok(pair_term(&i, &j))
+    let body = |name, at: usize| {
+        Body::ellipse([v[at], v[at + 1]], [v[at + 2], v[at + 3]], v[at + 4])
+            .map_err(|source| BodyError { body: name, source })
+    };
+    Ok(pair_term(&body("ellipse i", 0)?, &body("ellipse j", 5)?))
 }
 
 /// The row's values as the array of its layout (the reader gives one value per column).
