@@ -144,16 +144,10 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
     let out = dir.join("out");
     let run = pack_into(&scene, &out);
     assert_success(&run);
-    for file in [
-        "packing.csv",
-        "summary.json",
-        "packing.xyz",
-        "packing.data",
-        "packing.gsd",
-        "container.obj",
-        "packing.svg",
-        "packing.png",
-    ] {
+    for file in ["packing.csv", "summary.json"]
+        .into_iter()
+        .chain(common::EXPORTS_AND_PICTURES)
+    {
         let len = std::fs::metadata(out.join(file))
             .map(|m| m.len())
             .unwrap_or(0);

@@ -8,9 +8,7 @@ mod common;
 use ellipack::export::{
     self, Body, Cell, ExportError, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
 };
-use ellipack::packing::{
-    self, CertificateCounts, Container, EllipseItem, EllipsoidItem, Items, Packing, Summary,
-};
+use ellipack::packing::{self, Container, EllipseItem, EllipsoidItem, Items, Packing};
 use std::collections::HashMap;
 
 /// Every kind of container with items of its dimension; the 2D items of several sizes (so
@@ -40,17 +38,7 @@ fn every_kind() -> Vec<Packing> {
             half_sides: [r3, r3, r3],
         },
     ];
-    let mut out: Vec<Packing> = containers
-        .into_iter()
-        .map(|c| {
-            let items = if c.dimension() == 2 {
-                e2.items().clone()
-            } else {
-                e3.items().clone()
-            };
-            Packing::new(c, items).unwrap()
-        })
-        .collect();
+    let mut out = common::filled(containers, &e2, &e3);
     // Off the origin, with a quaternion that is not of norm 1.
     out.push(
         Packing::new(
@@ -402,20 +390,21 @@ fn read_gsd(bytes: &[u8]) -> (String, String, HashMap<String, Chunk>) {
     (text_at(48), text_at(112), chunks)
 }
 
-fn f32s(c: &Chunk) -> Vec<f32> {
-    assert_eq!(c.kind, 9);
+/// The values of a chunk of four-byte words of GSD type `kind`.
+fn words<T>(c: &Chunk, kind: u8, from_le_bytes: fn([u8; 4]) -> T) -> Vec<T> {
+    assert_eq!(c.kind, kind);
     c.bytes
         .chunks(4)
-        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+        .map(|b| from_le_bytes(b.try_into().unwrap()))
         .collect()
 }
 
+fn f32s(c: &Chunk) -> Vec<f32> {
+    words(c, 9, f32::from_le_bytes)
+}
+
 fn u32s(c: &Chunk) -> Vec<u32> {
-    assert_eq!(c.kind, 3);
-    c.bytes
-        .chunks(4)
-        .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
-        .collect()
+    words(c, 3, u32::from_le_bytes)
 }
 
 fn strings(c: &Chunk) -> Vec<String> {
@@ -605,25 +594,11 @@ fn the_container_mesh_is_an_outward_surface_on_the_container() {
     }
 }
 
-fn summary_of(p: &Packing) -> Summary {
-    Summary::new(
-        p,
-        p.container().measure(),
-        1.0,
-        1,
-        CertificateCounts {
-            overlapping_pairs: 0,
-            containment_violations: 0,
-            min_mu2: Some(1.5),
-        },
-    )
-}
-
 #[test]
 fn convert_writes_the_chosen_files_of_a_packing_folder() {
     let p = &every_kind()[1];
     let dir = common::temp_dir("export-convert");
-    packing::write_files(&dir, p, &summary_of(p), false).unwrap();
+    packing::write_files(&dir, p, &common::certified_summary(p), false).unwrap();
     export::convert(&dir, &[Format::Gsd]).unwrap();
     assert_eq!(
         common::names(&dir),
@@ -675,7 +650,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     assert!(e.to_string().contains("packing.csv"), "{e}");
     // A broken row is named by its line, and nothing is written.
     let p = &every_kind()[0];
-    packing::write_files(&empty, p, &summary_of(p), false).unwrap();
+    packing::write_files(&empty, p, &common::certified_summary(p), false).unwrap();
     let csv = std::fs::read_to_string(empty.join(packing::CSV_FILE)).unwrap();
     let broken = csv.replacen("\n0,", "\n0,nan-ish,", 1);
     std::fs::write(empty.join(packing::CSV_FILE), broken).unwrap();

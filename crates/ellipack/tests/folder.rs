@@ -69,15 +69,10 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
     std::fs::create_dir(out.join("older")).unwrap();
     std::fs::write(out.join("older").join("packing.csv"), "kept").unwrap();
     pack(&scene_path, &out);
-    for file in [
-        "packing.xyz",
-        "packing.data",
-        "packing.gsd",
-        "container.obj",
-        "packing.svg",
-        "packing.png",
-        "history.csv",
-    ] {
+    for file in common::EXPORTS_AND_PICTURES
+        .into_iter()
+        .chain(["history.csv"])
+    {
         assert!(out.join(file).exists(), "{file}");
     }
     std::fs::write(&scene_path, scene(false, false)).unwrap();

@@ -53,17 +53,7 @@ fn every_kind() -> Vec<Packing> {
             half_sides: [7.0, 7.0, 7.5],
         },
     ];
-    containers
-        .into_iter()
-        .map(|c| {
-            let items = if c.dimension() == 2 {
-                e2.items().clone()
-            } else {
-                e3.items().clone()
-            };
-            Packing::new(c, items).unwrap()
-        })
-        .collect()
+    common::filled(containers, &e2, &e3)
 }
 
 #[test]

@@ -3,10 +3,58 @@
 
 #![allow(dead_code)]
 
-use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
+use ellipack::packing::{
+    CertificateCounts, Container, EllipseItem, EllipsoidItem, Items, Packing, Summary,
+};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use testkit::Rng;
+
+/// The files a run writes beside packing.csv and summary.json: for other programs and for
+/// the eye.
+pub const EXPORTS_AND_PICTURES: [&str; 6] = [
+    "packing.xyz",
+    "packing.data",
+    "packing.gsd",
+    "container.obj",
+    "packing.svg",
+    "packing.png",
+];
+
+/// Each container filled with the items of its dimension: those of `e2` or of `e3`.
+pub fn filled(
+    containers: impl IntoIterator<Item = Container>,
+    e2: &Packing,
+    e3: &Packing,
+) -> Vec<Packing> {
+    containers
+        .into_iter()
+        .map(|c| {
+            let items = if c.dimension() == 2 {
+                e2.items().clone()
+            } else {
+                e3.items().clone()
+            };
+            Packing::new(c, items).unwrap()
+        })
+        .collect()
+}
+
+/// The summary of a certified run of `p`: one local minimisation taking a second, the
+/// closest pair at μ² = 1.5.
+pub fn certified_summary(p: &Packing) -> Summary {
+    Summary::new(
+        p,
+        p.container().measure(),
+        1.0,
+        1,
+        CertificateCounts {
+            overlapping_pairs: 0,
+            containment_violations: 0,
+            min_mu2: Some(1.5),
+        },
+    )
+}
 
 /// Ellipses (2, 1) (or of varied sizes when `mixed`) on a lattice of 4.2 × 4.2 cells, each
 /// rotated freely (a (2, 1) ellipse fits in its cell whatever its angle), inside an ellipse
