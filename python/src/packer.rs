@@ -89,6 +89,16 @@ pub struct PyPacking {
 }
 
 impl PyPacking {
+    /// A packing that no run of this process made: it has no history.
+    fn without_run(packing: Packing, summary: Summary) -> Self {
+        PyPacking {
+            packing,
+            summary,
+            history: None,
+            interrupted: false,
+        }
+    }
+
     fn json(py: Python<'_>, text: &str) -> PyResult<Py<PyAny>> {
         Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
     }
@@ -378,12 +388,7 @@ pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
             ellipack::packing::PackingError::Read { .. } => PyOSError::new_err(e.to_string()),
             _ => value_error(e),
         })?;
-    Ok(PyPacking {
-        packing,
-        summary,
-        history: None,
-        interrupted: false,
-    })
+    Ok(PyPacking::without_run(packing, summary))
 }
 
 /// `_packing_from_arrays(container_json, centres, semi_axes, orientations)`: a packing of
@@ -417,48 +422,43 @@ pub fn _packing_from_arrays(
             )))
         }
     };
-    let items = match container.dimension() {
-        2 => {
-            let mut v = Vec::with_capacity(m);
-            for i in 0..m {
-                row("centre", i, &centres[i], 2)?;
-                row("semi_axes", i, &semi_axes[i], 2)?;
-                row("angle", i, &orientations[i], 1)?;
-                v.push(EllipseItem {
-                    center: [centres[i][0], centres[i][1]],
-                    semi_axes: [semi_axes[i][0], semi_axes[i][1]],
-                    theta: orientations[i][0],
-                });
-            }
-            Items::Ellipses(v)
-        }
-        _ => {
-            let mut v = Vec::with_capacity(m);
-            for i in 0..m {
-                row("centre", i, &centres[i], 3)?;
-                row("semi_axes", i, &semi_axes[i], 3)?;
-                row("quaternion", i, &orientations[i], 4)?;
-                let (c, a, q) = (&centres[i], &semi_axes[i], &orientations[i]);
-                v.push(EllipsoidItem {
-                    center: [c[0], c[1], c[2]],
-                    semi_axes: [a[0], a[1], a[2]],
-                    quaternion: [q[0], q[1], q[2], q[3]],
-                });
-            }
-            Items::Ellipsoids(v)
-        }
+    let dim = container.dimension();
+    let orientation = if dim == 2 {
+        ("angle", 1)
+    } else {
+        ("quaternion", 4)
+    };
+    for i in 0..m {
+        row("centre", i, &centres[i], dim)?;
+        row("semi_axes", i, &semi_axes[i], dim)?;
+        row(orientation.0, i, &orientations[i], orientation.1)?;
+    }
+    let rows = centres.iter().zip(&semi_axes).zip(&orientations);
+    let items = if dim == 2 {
+        Items::Ellipses(
+            rows.map(|((c, a), o)| EllipseItem {
+                center: [c[0], c[1]],
+                semi_axes: [a[0], a[1]],
+                theta: o[0],
+            })
+            .collect(),
+        )
+    } else {
+        Items::Ellipsoids(
+            rows.map(|((c, a), q)| EllipsoidItem {
+                center: [c[0], c[1], c[2]],
+                semi_axes: [a[0], a[1], a[2]],
+                quaternion: [q[0], q[1], q[2], q[3]],
+            })
+            .collect(),
+        )
     };
     let packing = Packing::new(container, items).map_err(value_error)?;
     let certificate = py
         .detach(|| ellipack::pack::verify(&packing))
         .map_err(value_error)?;
     let summary = Summary::new(&packing, packing.container().measure(), 0.0, 0, certificate);
-    Ok(PyPacking {
-        packing,
-        summary,
-        history: None,
-        interrupted: false,
-    })
+    Ok(PyPacking::without_run(packing, summary))
 }
 
 /// `verify(packing)`: the packing checked again from its items, independently of how it was

@@ -122,6 +122,12 @@ struct RowError {
 struct Buffers {
     pairs: Vec<Pair>,
     pairs_2d: Vec<Pair2d>,
+    results: PairResults,
+}
+
+/// What pw85's batch functions give for a chunk of pairs, kept between chunks.
+#[derive(Default)]
+struct PairResults {
     contacts: Vec<Result<pw85::Contact, pw85::Error>>,
     verdicts: Vec<Result<bool, pw85::Error>>,
 }
@@ -135,42 +141,23 @@ fn chunk(
     buffers: &mut Buffers,
 ) -> Result<(), RowError> {
     let width = kind.output_width();
-    let rows = out.len() / width;
-    let fail = |i: usize, e: &pw85::Error| RowError {
-        row: start + i,
-        message: e.to_string(),
-    };
     match kind {
-        Kind::Contact3 | Kind::Overlap3 => {
-            buffers.pairs.clear();
-            buffers.pairs.extend((0..rows).map(|i| Pair {
-                r12: inputs[0].row(start + i),
-                q1: inputs[1].row(start + i),
-                q2: inputs[2].row(start + i),
-            }));
-            let Buffers {
-                pairs,
-                contacts,
-                verdicts,
-                ..
-            } = buffers;
-            evaluate_pairs(kind, pairs, out, contacts, verdicts, &fail)
-        }
-        Kind::Contact2 | Kind::Overlap2 => {
-            buffers.pairs_2d.clear();
-            buffers.pairs_2d.extend((0..rows).map(|i| Pair2d {
-                r12: inputs[0].row(start + i),
-                q1: inputs[1].row(start + i),
-                q2: inputs[2].row(start + i),
-            }));
-            let Buffers {
-                pairs_2d,
-                contacts,
-                verdicts,
-                ..
-            } = buffers;
-            evaluate_pairs(kind, pairs_2d, out, contacts, verdicts, &fail)
-        }
+        Kind::Contact3 | Kind::Overlap3 => evaluate_pairs(
+            kind,
+            inputs,
+            start,
+            out,
+            &mut buffers.pairs,
+            &mut buffers.results,
+        ),
+        Kind::Contact2 | Kind::Overlap2 => evaluate_pairs(
+            kind,
+            inputs,
+            start,
+            out,
+            &mut buffers.pairs_2d,
+            &mut buffers.results,
+        ),
         _ => {
             for (i, o) in out.chunks_exact_mut(width).enumerate() {
                 one_row(kind, inputs, start + i, o).map_err(|message| RowError {
@@ -183,15 +170,47 @@ fn chunk(
     }
 }
 
-/// The contact functions or verdicts of one chunk of pairs, through pw85's batch functions.
-fn evaluate_pairs<P: pw85::batch::BatchPair>(
+/// A pair of pw85's batch functions, read from the r12, q1 and q2 inputs of a row.
+trait FromRow: pw85::batch::BatchPair {
+    fn from_row(inputs: &[Input<'_>], i: usize) -> Self;
+}
+
+macro_rules! from_row {
+    ($($pair:ty),*) => {$(
+        impl FromRow for $pair {
+            #[inline(always)]
+            fn from_row(inputs: &[Input<'_>], i: usize) -> Self {
+                Self {
+                    r12: inputs[0].row(i),
+                    q1: inputs[1].row(i),
+                    q2: inputs[2].row(i),
+                }
+            }
+        }
+    )*};
+}
+
+from_row!(Pair, Pair2d);
+
+/// The contact functions or verdicts of the chunk of pairs from row `start` on, through pw85's
+/// batch functions; `pairs` and `results` are buffers kept between chunks.
+fn evaluate_pairs<P: FromRow>(
     kind: Kind,
-    pairs: &[P],
+    inputs: &[Input<'_>],
+    start: usize,
     out: &mut [f64],
-    contacts: &mut Vec<Result<pw85::Contact, pw85::Error>>,
-    verdicts: &mut Vec<Result<bool, pw85::Error>>,
-    fail: &dyn Fn(usize, &pw85::Error) -> RowError,
+    pairs: &mut Vec<P>,
+    results: &mut PairResults,
 ) -> Result<(), RowError> {
+    let PairResults { contacts, verdicts } = results;
+    let rows = out.len() / kind.output_width();
+    pairs.clear();
+    pairs.extend((0..rows).map(|i| P::from_row(inputs, start + i)));
+    let fail = |i: usize, e: &pw85::Error| RowError {
+        row: start + i,
+        message: e.to_string(),
+    };
+    let pairs = &pairs[..];
     if matches!(kind, Kind::Contact3 | Kind::Contact2) {
         contacts.resize(pairs.len(), Ok(pw85::batch::EMPTY_CONTACT));
         contact_functions(pairs, contacts, Parallelism::Serial);
