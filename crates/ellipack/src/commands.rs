@@ -24,30 +24,30 @@ use std::time::Duration;
 #[derive(clap::Args)]
 pub struct PackArgs {
     /// The scene (TOML): dimension, container, shape groups, solver settings, seed.
-    pub scene: Option<PathBuf>,
+    scene: Option<PathBuf>,
     /// One of the paper's instances instead of a scene (see `ellipack instances`).
     #[arg(long, conflicts_with = "scene")]
-    pub instance: Option<String>,
+    instance: Option<String>,
     /// Output folder (created if needed). Default: the scene's, else `out`.
     #[arg(long)]
-    pub out: Option<PathBuf>,
+    out: Option<PathBuf>,
     /// Wall-clock limit in seconds (overrides the scene's; positive, at most 1.8e19).
     #[arg(long)]
-    pub time_limit: Option<f64>,
+    time_limit: Option<f64>,
     /// Seed of the multi-start perturbations (overrides the scene's).
     #[arg(long)]
-    pub seed: Option<u64>,
+    seed: Option<u64>,
     /// Parallel starts (overrides the scene's; 0: every core).
     #[arg(long)]
-    pub threads: Option<usize>,
+    threads: Option<usize>,
     /// Start from the packing already in the output folder.
     #[arg(long)]
-    pub resume: bool,
+    resume: bool,
     /// Run shard K of N of the multi-start (`--shard 2/8`, K from 0): the N shards of one
     /// seed try disjoint starts, and each reproduces exactly. Combine their folders with
     /// `ellipack merge`.
     #[arg(long, value_parser = crate::parse_shard)]
-    pub shard: Option<ellipack::pack::Shard>,
+    shard: Option<ellipack::pack::Shard>,
 }
 
 pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {

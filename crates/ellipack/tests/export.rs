@@ -109,30 +109,10 @@ fn bodies_are_unit_quaternion_ellipsoids_and_groups_are_distinct_semi_axes() {
     assert_eq!(export::group_name(24), "C1");
 }
 
-/// The rotation of a unit quaternion (w, x, y, z): column k is the image of axis k.
-fn rotation([w, x, y, z]: [f64; 4]) -> [[f64; 3]; 3] {
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
-}
-
 /// Whether the ends of the item's three axes lie in the cell's box.
 fn inside(cell: &Cell, b: &Body) -> bool {
-    let r = rotation(b.quaternion);
+    // The test kit's rotation, not the exporter's: column k is the image of axis k.
+    let r = testkit::shape::rotation(b.quaternion);
     let hi = cell.hi();
     (0..3).all(|j| {
         [-1.0, 1.0].into_iter().all(|sign| {
