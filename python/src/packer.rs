@@ -99,6 +99,20 @@ impl PyPacking {
         }
     }
 
+    /// One row per item, as `ellipse` or `ellipsoid` reads it.
+    fn item_rows<'py>(
+        &self,
+        py: Python<'py>,
+        ellipse: impl Fn(&EllipseItem) -> Vec<f64>,
+        ellipsoid: impl Fn(&EllipsoidItem) -> Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rows: Vec<Vec<f64>> = match self.packing.items() {
+            Items::Ellipses(v) => v.iter().map(ellipse).collect(),
+            Items::Ellipsoids(v) => v.iter().map(ellipsoid).collect(),
+        };
+        PyArray2::from_vec2(py, &rows).map_err(value_error)
+    }
+
     fn json(py: Python<'_>, text: &str) -> PyResult<Py<PyAny>> {
         Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
     }
@@ -119,21 +133,13 @@ impl PyPacking {
     /// The centres, shape (m, dimension).
     #[getter]
     fn centres<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let rows: Vec<Vec<f64>> = match self.packing.items() {
-            Items::Ellipses(v) => v.iter().map(|e| e.center.to_vec()).collect(),
-            Items::Ellipsoids(v) => v.iter().map(|e| e.center.to_vec()).collect(),
-        };
-        PyArray2::from_vec2(py, &rows).map_err(value_error)
+        self.item_rows(py, |e| e.center.to_vec(), |e| e.center.to_vec())
     }
 
     /// The semi-axes, shape (m, dimension): semi-axis k lies along column k of the rotation.
     #[getter]
     fn semi_axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let rows: Vec<Vec<f64>> = match self.packing.items() {
-            Items::Ellipses(v) => v.iter().map(|e| e.semi_axes.to_vec()).collect(),
-            Items::Ellipsoids(v) => v.iter().map(|e| e.semi_axes.to_vec()).collect(),
-        };
-        PyArray2::from_vec2(py, &rows).map_err(value_error)
+        self.item_rows(py, |e| e.semi_axes.to_vec(), |e| e.semi_axes.to_vec())
     }
 
     /// 3D: the unit quaternions (w, x, y, z), shape (m, 4), Hamilton active rotations; 2D: None.

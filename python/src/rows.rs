@@ -274,18 +274,12 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
             o.copy_from_slice(&q);
         }
         Kind::Measure3 => {
-            let t =
-                ellipack::measure::pair_term_3d(&inputs[0].row(i)).map_err(|e| e.to_string())?;
-            o[..4].copy_from_slice(&[t.u, t.d2, t.eps, t.f]);
-            o[4..7].copy_from_slice(&t.x);
-            o[7] = f64::from(u8::from(t.x_unique));
+            let t = ellipack::measure::pair_term_3d(&inputs[0].row(i));
+            measure_row(&t.map_err(|e| e.to_string())?, o);
         }
         Kind::Measure2 => {
-            let t =
-                ellipack::measure::pair_term_2d(&inputs[0].row(i)).map_err(|e| e.to_string())?;
-            o[..4].copy_from_slice(&[t.u, t.d2, t.eps, t.f]);
-            o[4..6].copy_from_slice(&t.x);
-            o[6] = f64::from(u8::from(t.x_unique));
+            let t = ellipack::measure::pair_term_2d(&inputs[0].row(i));
+            measure_row(&t.map_err(|e| e.to_string())?, o);
         }
         // `chunk` hands these to pw85's batch functions; one row gives the same bits.
         Kind::Contact3 => {
@@ -310,6 +304,13 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
         }
     }
     Ok(())
+}
+
+/// The output row of a pair term: U, d², ε, f, X, and whether X is unique (1 or 0).
+fn measure_row<const N: usize>(t: &implicit_packing::PairTerm<N>, o: &mut [f64]) {
+    o[..4].copy_from_slice(&[t.u, t.d2, t.eps, t.f]);
+    o[4..4 + N].copy_from_slice(&t.x);
+    o[4 + N] = f64::from(u8::from(t.x_unique));
 }
 
 /// The rayon pool of `threads` threads, built once per count.
