@@ -155,12 +155,16 @@ def _check_out(out: Any, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
     return out
 
 
+def _pair_args(r12: Any, q1: Any, q2: Any, dim: int) -> list:
+    """The (name, value, width) triples of a pair of ellipsoids (dim 3) or ellipses (dim 2)."""
+    forms = 6 if dim == 3 else 3
+    return [("r12", r12, dim), ("q1", q1, forms), ("q2", q2, forms)]
+
+
 def _pair(
     kind: str, r12: Any, q1: Any, q2: Any, dim: int, out: Any, threads: Optional[int]
 ) -> tuple:
-    forms = 6 if dim == 3 else 3
-    args = [("r12", r12, dim), ("q1", q1, forms), ("q2", q2, forms)]
-    result = _evaluate(kind, args, 2, out, threads)
+    result = _evaluate(kind, _pair_args(r12, q1, q2, dim), 2, out, threads)
     if result.ndim == 1:
         return float(result[0]), float(result[1])
     return result[:, 0], result[:, 1]
@@ -214,8 +218,7 @@ def contact_function_2d(
 
 
 def _verdict(kind, r12, q1, q2, dim, out, threads):
-    forms = 6 if dim == 3 else 3
-    args = [("r12", r12, dim), ("q1", q1, forms), ("q2", q2, forms)]
+    args = _pair_args(r12, q1, q2, dim)
     shape = _output_shape(args, 1)
     if out is not None:
         out = _check_out(out, shape[:-1], np.bool_)
