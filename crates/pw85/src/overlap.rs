@@ -357,6 +357,9 @@ impl AxisTest {
         }
     }
 
+    /// The claims of the axis test, with the radial extents ρᵢ (lower bounds, in units of
+    /// |r12|) that the contact-point test starts from; `None` where |r12|², d₁ or d₂ is
+    /// outside [1e-60, 1e60] and the test is not made.
     #[inline(always)]
     fn claims<const FMA: bool>(&self) -> Option<(Claims, [f64; 2])> {
         let Self {
