@@ -20,7 +20,7 @@ pub enum Evaluation {
     },
     /// A component of Jᵀw, the constraints' contribution to the gradient.
     ConstraintGradient,
-    /// The fused [`Problem::augmented_lagrangian`](crate::Problem::augmented_lagrangian) hook,
+    /// The fused [`Problem::lagrangian`](crate::Problem::lagrangian) hook,
     /// or a penalty term that overflowed although every part was finite.
     AugmentedLagrangian,
 }

@@ -29,7 +29,7 @@ use crate::inner::Smooth;
 use crate::problem::Problem;
 
 /// The data of one augmented-Lagrangian subproblem, handed to
-/// [`Problem::augmented_lagrangian`] so that a fused implementation can form the penalty terms.
+/// [`Problem::lagrangian`] so that a fused implementation can form the penalty terms.
 #[derive(Debug, Clone, Copy)]
 pub struct Phr<'a> {
     penalty: f64,
@@ -195,10 +195,7 @@ impl<'p, P: Problem + ?Sized> AugmentedLagrangian<'p, P> {
             &self.constraint_scales,
             &self.multipliers,
         );
-        if let Some(v) = self
-            .problem
-            .augmented_lagrangian(x, &phr, grad.as_deref_mut())
-        {
+        if let Some(v) = self.problem.lagrangian(x, &phr, grad.as_deref_mut()) {
             if !self.multipliers.is_empty() {
                 self.constraint_evaluations += 1;
             }

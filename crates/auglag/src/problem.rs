@@ -71,12 +71,7 @@ pub trait Problem {
     /// and, when `grad` is `Some`, overwrite it with
     /// `phr.objective_scale() · ∇f(x) + Σᵢ phr.derivative(i, cᵢ(x)) · ∇cᵢ(x)`.
     /// The result must agree with the unfused path up to rounding.
-    fn augmented_lagrangian(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        grad: Option<&mut [f64]>,
-    ) -> Option<f64> {
+    fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
         let _ = (x, phr, grad);
         None
     }
@@ -123,13 +118,8 @@ impl<P: Problem + ?Sized> Problem for &P {
     fn constraints_jt_times(&self, x: &[f64], w: &[f64], out: &mut [f64]) {
         (**self).constraints_jt_times(x, w, out);
     }
-    fn augmented_lagrangian(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        grad: Option<&mut [f64]>,
-    ) -> Option<f64> {
-        (**self).augmented_lagrangian(x, phr, grad)
+    fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
+        (**self).lagrangian(x, phr, grad)
     }
     fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
         (**self).hessian_times(x, phr, v, out)

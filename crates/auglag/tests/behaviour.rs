@@ -444,12 +444,7 @@ impl Problem for Fused {
     fn constraints(&self, x: &[f64], c: &mut [f64]) {
         self.0.constraints(x, c);
     }
-    fn augmented_lagrangian(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        grad: Option<&mut [f64]>,
-    ) -> Option<f64> {
+    fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
         let a = self.0.a;
         let h = x[0] + x[1] - 2.0;
         let mut value = phr.objective_scale() * self.0.objective(x, None) + phr.term(0, h);

@@ -55,6 +55,15 @@ struct Rosenbrock {
 }
 
 impl Rosenbrock {
+    /// The chained function in the box [lower, upper].
+    fn chained(lower: Vec<f64>, upper: Vec<f64>) -> Self {
+        Rosenbrock {
+            chained: true,
+            lower,
+            upper,
+        }
+    }
+
     fn terms(&self) -> Vec<(usize, usize)> {
         let n = self.lower.len();
         if self.chained {
@@ -116,11 +125,7 @@ fn check_rosenbrock(name: &str, problem: &Rosenbrock, x_star: &[f64], f_star: f6
 
 #[test]
 fn rosenbrock_2_with_inactive_bounds() {
-    let p = Rosenbrock {
-        chained: true,
-        lower: vec![-5.0; 2],
-        upper: vec![5.0; 2],
-    };
+    let p = Rosenbrock::chained(vec![-5.0; 2], vec![5.0; 2]);
     check_rosenbrock("rosenbrock2-inactive", &p, &[1.0, 1.0], 0.0);
 }
 
@@ -128,21 +133,13 @@ fn rosenbrock_2_with_inactive_bounds() {
 /// with ∂f/∂x₀ = −1 < 0 at the active upper bound.
 #[test]
 fn rosenbrock_2_with_active_bound() {
-    let p = Rosenbrock {
-        chained: true,
-        lower: vec![-2.0, -2.0],
-        upper: vec![0.5, 2.0],
-    };
+    let p = Rosenbrock::chained(vec![-2.0, -2.0], vec![0.5, 2.0]);
     check_rosenbrock("rosenbrock2-active", &p, &[0.5, 0.25], 0.25);
 }
 
 #[test]
 fn rosenbrock_10_chained_with_inactive_bounds() {
-    let p = Rosenbrock {
-        chained: true,
-        lower: vec![-5.0; 10],
-        upper: vec![5.0; 10],
-    };
+    let p = Rosenbrock::chained(vec![-5.0; 10], vec![5.0; 10]);
     check_rosenbrock("rosenbrock10-inactive", &p, &[1.0; 10], 0.0);
 }
 
@@ -170,11 +167,10 @@ fn rosenbrock_10_extended_with_active_bounds() {
 
 /// A small dense test problem given by closures; gradients by hand.
 struct Dense {
-    n: usize,
     n_eq: usize,
     n_ineq: usize,
-    lower: Vec<f64>,
-    upper: Vec<f64>,
+    /// Lower and upper bounds; their length is the dimension.
+    bounds: (Vec<f64>, Vec<f64>),
     f: fn(&[f64]) -> f64,
     df: fn(&[f64], &mut [f64]),
     /// Writes c(x) and, row by row, the Jacobian (m × n, row-major).
@@ -183,11 +179,11 @@ struct Dense {
 
 impl Problem for Dense {
     fn dim(&self) -> usize {
-        self.n
+        self.bounds.0.len()
     }
     fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        lower.copy_from_slice(&self.lower);
-        upper.copy_from_slice(&self.upper);
+        lower.copy_from_slice(&self.bounds.0);
+        upper.copy_from_slice(&self.bounds.1);
     }
     fn n_eq(&self) -> usize {
         self.n_eq
@@ -202,16 +198,16 @@ impl Problem for Dense {
         (self.f)(x)
     }
     fn constraints(&self, x: &[f64], c: &mut [f64]) {
-        let mut jac = vec![0.0; c.len() * self.n];
+        let mut jac = vec![0.0; c.len() * self.dim()];
         (self.c)(x, c, &mut jac);
     }
     fn constraints_jt_times(&self, x: &[f64], w: &[f64], out: &mut [f64]) {
-        let m = w.len();
+        let (m, n) = (w.len(), self.dim());
         let mut c = vec![0.0; m];
-        let mut jac = vec![0.0; m * self.n];
+        let mut jac = vec![0.0; m * n];
         (self.c)(x, &mut c, &mut jac);
         for (i, &wi) in w.iter().enumerate() {
-            for (o, &j) in out.iter_mut().zip(&jac[i * self.n..(i + 1) * self.n]) {
+            for (o, &j) in out.iter_mut().zip(&jac[i * n..(i + 1) * n]) {
                 *o += wi * j;
             }
         }
@@ -249,16 +245,19 @@ fn check_hs(name: &str, p: &Dense, x0: &[f64], f_star: f64, x_star: Option<&[f64
 
 const INF: f64 = f64::INFINITY;
 
+/// The bounds of a problem without bounds in `n` variables.
+fn unbounded(n: usize) -> (Vec<f64>, Vec<f64>) {
+    (vec![-INF; n], vec![INF; n])
+}
+
 /// HS 6: min (1 − x₁)² s.t. 10(x₂ − x₁²) = 0; x⁰ = (−1.2, 1); x* = (1, 1), f* = 0 (the
 /// relative test then is absolute).
 #[test]
 fn hock_schittkowski_6() {
     let p = Dense {
-        n: 2,
         n_eq: 1,
         n_ineq: 0,
-        lower: vec![-INF; 2],
-        upper: vec![INF; 2],
+        bounds: unbounded(2),
         f: |x| (1.0 - x[0]).powi(2),
         df: |x, g| {
             g[0] = -2.0 * (1.0 - x[0]);
@@ -278,11 +277,9 @@ fn hock_schittkowski_6() {
 #[test]
 fn hock_schittkowski_7() {
     let p = Dense {
-        n: 2,
         n_eq: 1,
         n_ineq: 0,
-        lower: vec![-INF; 2],
-        upper: vec![INF; 2],
+        bounds: unbounded(2),
         f: |x| (1.0 + x[0] * x[0]).ln() - x[1],
         df: |x, g| {
             g[0] = 2.0 * x[0] / (1.0 + x[0] * x[0]);
@@ -304,11 +301,9 @@ fn hock_schittkowski_7() {
 #[test]
 fn hock_schittkowski_21() {
     let p = Dense {
-        n: 2,
         n_eq: 0,
         n_ineq: 1,
-        lower: vec![2.0, -50.0],
-        upper: vec![50.0, 50.0],
+        bounds: (vec![2.0, -50.0], vec![50.0, 50.0]),
         f: |x| 0.01 * x[0] * x[0] + x[1] * x[1] - 100.0,
         df: |x, g| {
             g[0] = 0.02 * x[0];
@@ -328,11 +323,9 @@ fn hock_schittkowski_21() {
 #[test]
 fn hock_schittkowski_35() {
     let p = Dense {
-        n: 3,
         n_eq: 0,
         n_ineq: 1,
-        lower: vec![0.0; 3],
-        upper: vec![INF; 3],
+        bounds: (vec![0.0; 3], vec![INF; 3]),
         f: |x| {
             9.0 - 8.0 * x[0] - 6.0 * x[1] - 4.0 * x[2]
                 + 2.0 * x[0] * x[0]
@@ -365,11 +358,9 @@ fn hock_schittkowski_35() {
 #[test]
 fn hock_schittkowski_71() {
     let p = Dense {
-        n: 4,
         n_eq: 1,
         n_ineq: 1,
-        lower: vec![1.0; 4],
-        upper: vec![5.0; 4],
+        bounds: (vec![1.0; 4], vec![5.0; 4]),
         f: |x| x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2],
         df: |x, g| {
             let s = x[0] + x[1] + x[2];

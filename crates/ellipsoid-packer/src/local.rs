@@ -498,12 +498,7 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         true
     }
 
-    fn augmented_lagrangian(
-        &self,
-        x: &[f64],
-        phr: &Phr<'_>,
-        grad: Option<&mut [f64]>,
-    ) -> Option<f64> {
+    fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
         let mut model = self.model.borrow_mut();
         let sf = phr.objective_scale();
         Some(match grad {
@@ -565,9 +560,7 @@ mod tests {
             let gradient_at = |t: f64| {
                 let y: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + t * b).collect();
                 let mut g = vec![0.0; n];
-                adapter
-                    .augmented_lagrangian(&y, &phr, Some(&mut g))
-                    .unwrap();
+                adapter.lagrangian(&y, &phr, Some(&mut g)).unwrap();
                 g
             };
             let (plus, minus) = (gradient_at(h), gradient_at(-h));

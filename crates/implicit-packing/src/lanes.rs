@@ -43,18 +43,7 @@ impl Real for f64 {
     fn splat(x: f64) -> Self {
         x
     }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f64::abs(self)
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        f64::max(self, o)
-    }
+    simd::inherent_methods!(f64: sqrt() -> Self, abs() -> Self, max(o) -> Self);
     #[inline(always)]
     fn ge(self, o: Self) -> bool {
         self >= o
@@ -114,26 +103,9 @@ mod avx {
             // SAFETY: as in `lanes_of`.
             unsafe { F64x4::splat_unchecked(x) }
         }
-        #[inline(always)]
-        fn sqrt(self) -> Self {
-            F64x4::sqrt(self)
-        }
-        #[inline(always)]
-        fn abs(self) -> Self {
-            F64x4::abs(self)
-        }
-        #[inline(always)]
-        fn max(self, o: Self) -> Self {
-            F64x4::max(self, o)
-        }
-        #[inline(always)]
-        fn ge(self, o: Self) -> Mask4 {
-            F64x4::ge(self, o)
-        }
-        #[inline(always)]
-        fn le(self, o: Self) -> Mask4 {
-            F64x4::le(self, o)
-        }
+        simd::inherent_methods!(
+            F64x4: sqrt() -> Self, abs() -> Self, max(o) -> Self, ge(o) -> Mask4, le(o) -> Mask4
+        );
         #[inline(always)]
         fn select(m: Mask4, a: Self, b: Self) -> Self {
             F64x4::select(m, a, b)

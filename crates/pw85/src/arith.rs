@@ -119,29 +119,41 @@ pub(crate) fn select_sign<const FMA: bool>(mask: f64, a: f64, b: f64) -> f64 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Mag(pub f64);
 
-impl Add for Mag {
-    type Output = Mag;
-    #[inline(always)]
-    fn add(self, o: Mag) -> Mag {
-        Mag(self.0 + o.0)
-    }
+/// `Add`, `Sub` and `Mul` of a newtype `$ty` over an arithmetic: the sum and the product of
+/// the wrapped values, and a − b as the expression `$sub` of the wrapped `$a` and `$b` (the
+/// newtypes here are magnitudes or mixed lanes, whose a − b is not the wrapped difference).
+macro_rules! newtype_arith {
+    ($ty:ident, |$a:ident, $b:ident| $sub:expr) => {
+        impl core::ops::Add for $ty {
+            type Output = Self;
+            #[inline(always)]
+            fn add(self, o: Self) -> Self {
+                Self(self.0 + o.0)
+            }
+        }
+        impl core::ops::Sub for $ty {
+            type Output = Self;
+            // Deliberate: see `$sub` at the invocation.
+            #[allow(clippy::suspicious_arithmetic_impl)]
+            #[inline(always)]
+            fn sub(self, o: Self) -> Self {
+                let ($a, $b) = (self.0, o.0);
+                Self($sub)
+            }
+        }
+        impl core::ops::Mul for $ty {
+            type Output = Self;
+            #[inline(always)]
+            fn mul(self, o: Self) -> Self {
+                Self(self.0 * o.0)
+            }
+        }
+    };
 }
-impl Sub for Mag {
-    type Output = Mag;
-    // Deliberate: the magnitude of a − b is bounded by |a| + |b|.
-    #[allow(clippy::suspicious_arithmetic_impl)]
-    #[inline(always)]
-    fn sub(self, o: Mag) -> Mag {
-        Mag(self.0 + o.0)
-    }
-}
-impl Mul for Mag {
-    type Output = Mag;
-    #[inline(always)]
-    fn mul(self, o: Mag) -> Mag {
-        Mag(self.0 * o.0)
-    }
-}
+pub(crate) use newtype_arith;
+
+// The magnitude of a − b is bounded by |a| + |b|.
+newtype_arith!(Mag, |a, b| a + b);
 impl Arith for Mag {
     #[inline(always)]
     fn lift(x: f64) -> Self {

@@ -596,6 +596,21 @@ mod portable_tests {
 mod parallel_tests {
     use super::*;
 
+    /// Serial and threaded runs of `pairs` agree, and the verdicts are not all alike.
+    fn assert_threads_match_serial<P: BatchPair>(pairs: &[P]) {
+        let mut seq = vec![Ok(EMPTY_CONTACT); pairs.len()];
+        let mut par = vec![Ok(EMPTY_CONTACT); pairs.len()];
+        contact_functions(pairs, &mut seq, Parallelism::Serial);
+        contact_functions(pairs, &mut par, Parallelism::Threads);
+        assert_eq!(seq, par);
+        let mut vs = vec![Ok(false); pairs.len()];
+        let mut vp = vec![Ok(false); pairs.len()];
+        overlaps(pairs, &mut vs, Parallelism::Serial);
+        overlaps(pairs, &mut vp, Parallelism::Threads);
+        assert_eq!(vs, vp);
+        assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
+    }
+
     #[test]
     fn parallel_batches_equal_sequential_ones() {
         let q = crate::shape::from_axes_angles(&[1.0, 0.75, 0.5], &[0.3, 0.2, 0.1]).unwrap();
@@ -609,17 +624,7 @@ mod parallel_tests {
                 }
             })
             .collect();
-        let mut seq = vec![Ok(EMPTY_CONTACT); pairs.len()];
-        let mut par = vec![Ok(EMPTY_CONTACT); pairs.len()];
-        contact_functions(&pairs, &mut seq, Parallelism::Serial);
-        contact_functions(&pairs, &mut par, Parallelism::Threads);
-        assert_eq!(seq, par);
-        let mut vs = vec![Ok(false); pairs.len()];
-        let mut vp = vec![Ok(false); pairs.len()];
-        overlaps(&pairs, &mut vs, Parallelism::Serial);
-        overlaps(&pairs, &mut vp, Parallelism::Threads);
-        assert_eq!(vs, vp);
-        assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
+        assert_threads_match_serial(&pairs);
 
         let e = crate::shape::from_axes_angle_2d(&[1.0, 0.5], 0.3).unwrap();
         let pairs_2d: Vec<Pair2d> = pairs
@@ -630,16 +635,6 @@ mod parallel_tests {
                 q2: e,
             })
             .collect();
-        let mut seq = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
-        let mut par = vec![Ok(EMPTY_CONTACT); pairs_2d.len()];
-        contact_functions(&pairs_2d, &mut seq, Parallelism::Serial);
-        contact_functions(&pairs_2d, &mut par, Parallelism::Threads);
-        assert_eq!(seq, par);
-        let mut vs = vec![Ok(false); pairs_2d.len()];
-        let mut vp = vec![Ok(false); pairs_2d.len()];
-        overlaps(&pairs_2d, &mut vs, Parallelism::Serial);
-        overlaps(&pairs_2d, &mut vp, Parallelism::Threads);
-        assert_eq!(vs, vp);
-        assert!(vs.contains(&Ok(true)) && vs.contains(&Ok(false)));
+        assert_threads_match_serial(&pairs_2d);
     }
 }

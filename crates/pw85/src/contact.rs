@@ -177,7 +177,9 @@ pub(crate) fn contact_function_portable<const FMA: bool>(
                     .flatten()
             },
         ),
-        Err(e) if rescue => crate::extreme::after_error(e, r12, q1, q2),
+        Err(e) if rescue => {
+            crate::extreme::after_error(e, || crate::extreme::contact_function(r12, q1, q2))
+        }
         Err(e) => Err(e),
     }
 }
@@ -472,7 +474,9 @@ pub(crate) fn contact_function_2d_portable<const FMA: bool>(
             || exact_coefficients_2d(r12, q1, q2),
             || crate::extreme::rescue_2d(r12, q1, q2),
         ),
-        Err(e) => crate::extreme::after_error_2d(e, r12, q1, q2),
+        Err(e) => {
+            crate::extreme::after_error(e, || crate::extreme::contact_function_2d(r12, q1, q2))
+        }
     }
 }
 

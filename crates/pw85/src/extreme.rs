@@ -365,17 +365,16 @@ pub(crate) fn rescue_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Option<Result<C
 /// After the fast path refused a pair as not positive definite: the balanced test decides
 /// (the refusal may come from an overflow or underflow of the fast path's determinants, for
 /// very large, very small or very elongated ellipsoids), and a pair that passes it is answered
-/// on the balanced pair.
+/// on the balanced pair: `balanced` is [`contact_function`] or [`contact_function_2d`] of the
+/// pair.
 #[cold]
 #[inline(never)]
 pub(crate) fn after_error(
     error: Error,
-    r12: &[f64; 3],
-    q1: &Sym3,
-    q2: &Sym3,
+    balanced: impl FnOnce() -> Result<Contact, Error>,
 ) -> Result<Contact, Error> {
     match error {
-        Error::NotPositiveDefinite { .. } => contact_function(r12, q1, q2),
+        Error::NotPositiveDefinite { .. } => balanced(),
         e => Err(e),
     }
 }
@@ -393,21 +392,6 @@ pub(crate) fn overlap(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Erro
 #[inline(never)]
 pub(crate) fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error> {
     contact_function_2d(r12, q1, q2).map(|c| c.mu2 < 1.0)
-}
-
-/// [`after_error`] for ellipses.
-#[cold]
-#[inline(never)]
-pub(crate) fn after_error_2d(
-    error: Error,
-    r12: &[f64; 2],
-    q1: &Sym2,
-    q2: &Sym2,
-) -> Result<Contact, Error> {
-    match error {
-        Error::NotPositiveDefinite { .. } => contact_function_2d(r12, q1, q2),
-        e => Err(e),
-    }
 }
 
 #[cfg(test)]

@@ -32,22 +32,17 @@ pub(crate) mod sealed {
     use super::QuadraticForm;
     use crate::{Contact, Error};
 
+    /// The type of r12 for the form `Q`.
+    pub(super) type Vector<Q> = <Q as QuadraticForm>::Vector;
+
     /// The dimension's kernels, out of the public surface.
     pub trait Sealed {
         /// μ² and λ₀ (see [`crate::contact_function`]).
-        fn contact(
-            r12: &<Self as QuadraticForm>::Vector,
-            q1: &Self,
-            q2: &Self,
-        ) -> Result<Contact, Error>
+        fn contact(r12: &Vector<Self>, q1: &Self, q2: &Self) -> Result<Contact, Error>
         where
             Self: QuadraticForm;
         /// The verdict (see [`crate::overlap`]).
-        fn overlap(
-            r12: &<Self as QuadraticForm>::Vector,
-            q1: &Self,
-            q2: &Self,
-        ) -> Result<bool, Error>
+        fn overlap(r12: &Vector<Self>, q1: &Self, q2: &Self) -> Result<bool, Error>
         where
             Self: QuadraticForm;
     }
@@ -133,15 +128,11 @@ impl<Q: QuadraticForm> QuadraticForm for &Q {
 
 impl<Q: QuadraticForm> sealed::Sealed for &Q {
     #[inline(always)]
-    fn contact(
-        r12: &<Self as QuadraticForm>::Vector,
-        q1: &Self,
-        q2: &Self,
-    ) -> Result<Contact, Error> {
+    fn contact(r12: &sealed::Vector<Self>, q1: &Self, q2: &Self) -> Result<Contact, Error> {
         Q::contact(r12, q1, q2)
     }
     #[inline(always)]
-    fn overlap(r12: &<Self as QuadraticForm>::Vector, q1: &Self, q2: &Self) -> Result<bool, Error> {
+    fn overlap(r12: &sealed::Vector<Self>, q1: &Self, q2: &Self) -> Result<bool, Error> {
         Q::overlap(r12, q1, q2)
     }
 }

@@ -7,7 +7,7 @@
 //! order, so the batched results equal the scalar ones bit for bit; the lanes only differ in
 //! when they stop, and a lane that has stopped keeps its state (selects, not branches).
 
-use crate::arith::{Arith, Fused};
+use crate::arith::{Arith, Fused, newtype_arith};
 use crate::poly::OddsForm;
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -117,28 +117,7 @@ pub(crate) struct Ends4(pub V4);
 /// ±1 is exact, so each lane rounds exactly as its own subtraction or addition would.
 const SUB_SIGNS: V4 = V4([-1.0, -1.0, 1.0, 1.0]);
 
-impl Add for Ends4 {
-    type Output = Ends4;
-    #[inline(always)]
-    fn add(self, o: Ends4) -> Ends4 {
-        Ends4(self.0 + o.0)
-    }
-}
-impl Sub for Ends4 {
-    type Output = Ends4;
-    #[allow(clippy::suspicious_arithmetic_impl)] // see SUB_SIGNS
-    #[inline(always)]
-    fn sub(self, o: Ends4) -> Ends4 {
-        Ends4(self.0 + o.0 * SUB_SIGNS)
-    }
-}
-impl Mul for Ends4 {
-    type Output = Ends4;
-    #[inline(always)]
-    fn mul(self, o: Ends4) -> Ends4 {
-        Ends4(self.0 * o.0)
-    }
-}
+newtype_arith!(Ends4, |a, b| a + b * SUB_SIGNS);
 impl Arith for Ends4 {
     #[inline(always)]
     fn lift(x: f64) -> Self {
@@ -183,12 +162,11 @@ pub(crate) use avx::{Ends4Avx, M4Avx};
 #[cfg(target_arch = "x86_64")]
 mod avx {
     use super::{EndsLanes, LANES, Lane4};
-    use crate::arith::{Arith, Fused};
+    use crate::arith::{Arith, Fused, newtype_arith};
     use core::arch::x86_64::{
         _mm_cvtsd_f64, _mm_unpackhi_pd, _mm256_and_pd, _mm256_blend_pd, _mm256_castpd256_pd128,
         _mm256_castsi256_pd, _mm256_extractf128_pd, _mm256_set1_pd, _mm256_setr_epi64x,
     };
-    use core::ops::{Add, Mul, Sub};
     use simd::{F64x4, Mask4};
 
     /// [`super::Ends4`] as one AVX register, lanes [x(Q1), Σ|terms|(Q1), x(Q2), Σ|terms|(Q2)]:
@@ -204,28 +182,8 @@ mod avx {
     #[derive(Clone, Copy, Debug)]
     pub(crate) struct Ends4Avx(F64x4);
 
-    impl Add for Ends4Avx {
-        type Output = Self;
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Self(self.0 + o.0)
-        }
-    }
-    impl Sub for Ends4Avx {
-        type Output = Self;
-        #[allow(clippy::suspicious_arithmetic_impl)] // see the type
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Self(self.0.sub_add(o.0))
-        }
-    }
-    impl Mul for Ends4Avx {
-        type Output = Self;
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Self(self.0 * o.0)
-        }
-    }
+    // ADDSUBPD: see the type.
+    newtype_arith!(Ends4Avx, |a, b| a.sub_add(b));
     impl Arith for Ends4Avx {
         #[inline(always)]
         fn lift(x: f64) -> Self {
@@ -312,29 +270,8 @@ mod avx {
         }
     }
 
-    impl Add for M4Avx {
-        type Output = Self;
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Self(self.0 + o.0)
-        }
-    }
-    impl Sub for M4Avx {
-        type Output = Self;
-        // Deliberate: the magnitude of a − b is |a| + |b|.
-        #[allow(clippy::suspicious_arithmetic_impl)]
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Self(self.0 + o.0)
-        }
-    }
-    impl Mul for M4Avx {
-        type Output = Self;
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Self(self.0 * o.0)
-        }
-    }
+    // The magnitude of a − b is |a| + |b|.
+    newtype_arith!(M4Avx, |a, b| a + b);
     impl Arith for M4Avx {
         #[inline(always)]
         fn lift(x: f64) -> Self {
@@ -358,34 +295,10 @@ mod avx {
         fn to_array(self) -> [f64; LANES] {
             self.to_array()
         }
-        #[inline(always)]
-        fn abs(self) -> Self {
-            self.abs()
-        }
-        #[inline(always)]
-        fn sqrt(self) -> Self {
-            self.sqrt()
-        }
-        #[inline(always)]
-        fn gt(self, o: Self) -> Mask4 {
-            self.gt(o)
-        }
-        #[inline(always)]
-        fn ge(self, o: Self) -> Mask4 {
-            self.ge(o)
-        }
-        #[inline(always)]
-        fn lt(self, o: Self) -> Mask4 {
-            self.lt(o)
-        }
-        #[inline(always)]
-        fn le(self, o: Self) -> Mask4 {
-            self.le(o)
-        }
-        #[inline(always)]
-        fn eq(self, o: Self) -> Mask4 {
-            self.eq(o)
-        }
+        simd::inherent_methods!(F64x4: abs() -> Self, sqrt() -> Self);
+        simd::inherent_methods!(
+            F64x4: gt(o) -> Mask4, ge(o) -> Mask4, lt(o) -> Mask4, le(o) -> Mask4, eq(o) -> Mask4
+        );
         #[inline(always)]
         fn or_else(self, mask: Mask4, other: Self) -> Self {
             F64x4::select(mask, self, other)

@@ -27,11 +27,10 @@ use crate::contact::{
 use crate::error::{Argument, Error};
 use crate::form::QuadraticForm;
 use crate::poly::{
-    OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at,
+    OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at, pencil3,
 };
 use crate::sym::{
-    Sym2, Sym3, adjugate_generic, det_generic, frobenius_generic, mixed_adjugate_generic,
-    outer_generic, quadratic_form_generic,
+    Sym2, Sym3, adjugate_generic, det_generic, outer_generic, quadratic_form_generic,
 };
 use simd::multiversion;
 
@@ -89,25 +88,11 @@ fn overlap_portable<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Re
     // Q11 Q22 Q33 bounds each of the six terms of det Q (|Qᵢⱼ| ≤ √(QᵢᵢQⱼⱼ)).
     let (p1, p2) = (q1[0] * q1[3] * q1[5], q2[0] * q2[3] * q2[5]);
     if let Err(e) = check_both_positive_definite(q1, q2, [det1, det2], [p1, p2]) {
-        return crate::extreme::after_error(e, r12, q1, q2).map(|c| c.mu2 < 1.0);
+        return crate::extreme::after_error(e, || crate::extreme::contact_function(r12, q1, q2))
+            .map(|c| c.mu2 < 1.0);
     }
 
-    let rr = outer_generic::<f64>(r12);
-    let axis = AxisTest {
-        r2: rr[0] + rr[3] + rr[5],
-        d: [largest_diagonal(q1), largest_diagonal(q2)],
-        support2: [
-            quadratic_form_generic(&rr, q1),
-            quadratic_form_generic(&rr, q2),
-        ],
-        // α₀ = r12ᵀ adj Q1 r12 and α₂ (eq. 16a at λ = 0, 1).
-        alpha: [
-            quadratic_form_generic(&rr, &adj1),
-            quadratic_form_generic(&rr, &adj2),
-        ],
-        det: [det1, det2],
-        det_terms: [p1, p2],
-    };
+    let axis = AxisTest::new(r12, [q1, q2], [&adj1, &adj2], [det1, det2], [p1, p2]);
     let Some((claims, extents)) = axis.claims::<FMA>() else {
         return undecided::<FMA>(r12, q1, q2, None);
     };
@@ -169,22 +154,8 @@ multiversion! {
 
 #[inline(always)]
 fn searched_in<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error> {
-    let (adj1, adj2) = (adjugate_generic(q1), adjugate_generic(q2));
+    let fast = pencil3::<f64>(r12, q1, q2).coefficients.to_f64();
     let rr = outer_generic::<f64>(r12);
-    let mixed = mixed_adjugate_generic(q1, q2);
-    let fast = RationalForm {
-        alpha: [
-            quadratic_form_generic(&rr, &adj1),
-            quadratic_form_generic(&rr, &mixed),
-            quadratic_form_generic(&rr, &adj2),
-        ],
-        beta: [
-            det_generic(q1, &adj1),
-            frobenius_generic(&adj1, q2),
-            frobenius_generic(&adj2, q1),
-            det_generic(q2, &adj2),
-        ],
-    };
     let bound = CrudeBound {
         d1: largest_diagonal(q1),
         d2: largest_diagonal(q2),
@@ -225,7 +196,8 @@ fn overlap_2d_portable<const FMA: bool>(
     if let Err(e) = check_positive_definite_2d(Argument::Q1, q1)
         .and_then(|()| check_positive_definite_2d(Argument::Q2, q2))
     {
-        return crate::extreme::after_error_2d(e, r12, q1, q2).map(|c| c.mu2 < 1.0);
+        return crate::extreme::after_error(e, || crate::extreme::contact_function_2d(r12, q1, q2))
+            .map(|c| c.mu2 < 1.0);
     }
     let r2 = r12[0] * r12[0] + r12[1] * r12[1];
     let (det1, det2) = (q1[0] * q1[2] - q1[1] * q1[1], q2[0] * q2[2] - q2[1] * q2[1]);
@@ -357,6 +329,37 @@ struct AxisTest {
 }
 
 impl AxisTest {
+    /// The test on the pair (r12, Q1, Q2), given adj Qᵢ, det Qᵢ and the bounds Q11 Q22 Q33
+    /// on the terms of det Qᵢ.
+    #[inline(always)]
+    fn new(
+        r12: &[f64; 3],
+        [q1, q2]: [&Sym3; 2],
+        [adj1, adj2]: [&Sym3; 2],
+        det: [f64; 2],
+        det_terms: [f64; 2],
+    ) -> Self {
+        let rr = outer_generic::<f64>(r12);
+        AxisTest {
+            r2: rr[0] + rr[3] + rr[5],
+            d: [largest_diagonal(q1), largest_diagonal(q2)],
+            support2: [
+                quadratic_form_generic(&rr, q1),
+                quadratic_form_generic(&rr, q2),
+            ],
+            // α₀ = r12ᵀ adj Q1 r12 and α₂ (eq. 16a at λ = 0, 1).
+            alpha: [
+                quadratic_form_generic(&rr, adj1),
+                quadratic_form_generic(&rr, adj2),
+            ],
+            det,
+            det_terms,
+        }
+    }
+
+    /// The claims of the axis test, with the radial extents ρᵢ (lower bounds, in units of
+    /// |r12|) that the contact-point test starts from; `None` where |r12|², d₁ or d₂ is
+    /// outside [1e-60, 1e60] and the test is not made.
     #[inline(always)]
     fn claims<const FMA: bool>(&self) -> Option<(Claims, [f64; 2])> {
         let Self {
@@ -702,23 +705,9 @@ mod tests {
         q2: &Sym3,
     ) -> (Option<bool>, Option<bool>) {
         let (adj1, adj2) = (adjugate_generic(q1), adjugate_generic(q2));
-        let rr = outer_generic::<f64>(r12);
         let (det1, det2) = (det_generic(q1, &adj1), det_generic(q2, &adj2));
         let (p1, p2) = (q1[0] * q1[3] * q1[5], q2[0] * q2[3] * q2[5]);
-        let axis = AxisTest {
-            r2: rr[0] + rr[3] + rr[5],
-            d: [largest_diagonal(q1), largest_diagonal(q2)],
-            support2: [
-                quadratic_form_generic(&rr, q1),
-                quadratic_form_generic(&rr, q2),
-            ],
-            alpha: [
-                quadratic_form_generic(&rr, &adj1),
-                quadratic_form_generic(&rr, &adj2),
-            ],
-            det: [det1, det2],
-            det_terms: [p1, p2],
-        };
+        let axis = AxisTest::new(r12, [q1, q2], [&adj1, &adj2], [det1, det2], [p1, p2]);
         let Some((claims, extents)) = axis.claims::<FMA>() else {
             return (None, None);
         };

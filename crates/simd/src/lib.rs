@@ -162,6 +162,22 @@ macro_rules! multiversion {
     }};
 }
 
+/// Trait methods that a type has as inherent methods of the same name and meaning, written
+/// inside the trait's `impl`: `inherent_methods!(Type: name(args) -> Output, ...)` defines
+/// each `fn name(self, args: Self) -> Output` as `Type::name(self, args)`, `#[inline(always)]`
+/// so that a lane type's method is its one instruction.
+#[macro_export]
+macro_rules! inherent_methods {
+    ($ty:ident: $($name:ident($($arg:ident),*) -> $out:ty),* $(,)?) => {
+        $(
+            #[inline(always)]
+            fn $name(self $(, $arg: Self)*) -> $out {
+                $ty::$name(self $(, $arg)*)
+            }
+        )*
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
