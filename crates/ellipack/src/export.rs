@@ -43,22 +43,13 @@ pub enum ExportError {
         /// What it is instead.
         reason: String,
     },
-    /// The packing could not be read, or the XYZ file written.
+    /// The packing could not be read, the XYZ file written, or a LAMMPS data file read by
+    /// [`read_lammps_data`] is not what [`lammps_data`] writes.
     #[error(transparent)]
     Packing(#[from] PackingError),
     /// A file could not be written.
     #[error(transparent)]
     Write(#[from] crate::Error),
-    /// A file that [`read_lammps_data`] reads is not what [`lammps_data`] writes.
-    #[error("{source_name}: line {line}: {message}")]
-    Malformed {
-        /// The file.
-        source_name: String,
-        /// 1-based line.
-        line: u64,
-        /// What is wrong.
-        message: String,
-    },
 }
 
 /// A file that `ellipack convert` and `ellipack pack` write.
@@ -395,13 +386,16 @@ pub struct LammpsData {
 /// sections; not every data file LAMMPS reads). `source_name` names it in messages.
 ///
 /// # Errors
-/// [`ExportError::Malformed`] naming the line: a header line or section that is not ours, a
-/// field that is not a number, a row with the wrong number of fields, counts that disagree.
+/// [`PackingError::Malformed`] (as [`ExportError::Packing`]) naming the line: a header line or
+/// section that is not ours, a field that is not a number, a row with the wrong number of
+/// fields, counts that disagree.
 pub fn read_lammps_data(text: &str, source_name: &str) -> Result<LammpsData, ExportError> {
-    let bad = |line: usize, message: String| ExportError::Malformed {
-        source_name: source_name.to_string(),
-        line: line as u64 + 1,
-        message,
+    let bad = |line: usize, message: String| {
+        ExportError::Packing(PackingError::Malformed {
+            source_name: source_name.to_string(),
+            line: line as u64 + 1,
+            message,
+        })
     };
     let number = |line: usize, field: &str| -> Result<f64, ExportError> {
         field

@@ -8,7 +8,9 @@ mod common;
 use ellipack::export::{
     self, Body, Cell, ExportError, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
 };
-use ellipack::packing::{self, Container, EllipseItem, EllipsoidItem, Items, Packing};
+use ellipack::packing::{
+    self, Container, EllipseItem, EllipsoidItem, Items, Packing, PackingError,
+};
 use std::collections::HashMap;
 
 /// Every kind of container with items of its dimension; the 2D items of several sizes (so
@@ -261,7 +263,10 @@ fn a_sheared_cell_writes_its_tilt_factors() {
 #[track_caller]
 fn assert_lammps_error(text: &str, says: &[&str]) {
     let e = export::read_lammps_data(text, "p.data").unwrap_err();
-    assert!(matches!(e, ExportError::Malformed { .. }), "{e:?}");
+    assert!(
+        matches!(e, ExportError::Packing(PackingError::Malformed { .. })),
+        "{e:?}"
+    );
     let e = e.to_string();
     for s in says {
         assert!(e.contains(s), "{e} should say {s:?}");
