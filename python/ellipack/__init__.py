@@ -38,6 +38,7 @@ __all__ = [
     "overlap_2d",
     "contact_details",
     "ContactDetails",
+    "contact_details_2d",
     "f_neg",
     "spheroid",
     "from_axes_quaternion",
@@ -289,6 +290,21 @@ def contact_details(
         return ContactDetails(float(d[0]), float(d[1]), d[2:5], d[5:8], d[8:11], d[11:17], d[17:23])
     return ContactDetails(
         d[..., 0], d[..., 1], d[..., 2:5], d[..., 5:8], d[..., 8:11], d[..., 11:17], d[..., 17:23]
+    )
+
+
+def contact_details_2d(
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, *, threads: Optional[int] = None
+) -> ContactDetails:
+    """:func:`contact_details` of two ellipses: r12 (2,) or (n, 2), q1, q2 ``[Q11, Q12, Q22]``
+    (3,) or (n, 3); the point, normal and ``grad_r12`` have 2 entries, ``grad_q1`` and
+    ``grad_q2`` 3 (off-diagonal entries counted twice). mu^2 and lambda are those of
+    :func:`contact_function_2d`."""
+    d = _evaluate("details2", _pair_args(r12, q1, q2, 2), 14, None, threads)
+    if d.ndim == 1:
+        return ContactDetails(float(d[0]), float(d[1]), d[2:4], d[4:6], d[6:8], d[8:11], d[11:14])
+    return ContactDetails(
+        d[..., 0], d[..., 1], d[..., 2:4], d[..., 4:6], d[..., 6:8], d[..., 8:11], d[..., 11:14]
     )
 
 

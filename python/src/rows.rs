@@ -24,6 +24,7 @@ enum Kind {
     Overlap3,
     Overlap2,
     Details3,
+    Details2,
     FNeg3,
     Spheroid,
     AxesQuaternion,
@@ -41,6 +42,7 @@ impl Kind {
             "overlap3" => Kind::Overlap3,
             "overlap2" => Kind::Overlap2,
             "details3" => Kind::Details3,
+            "details2" => Kind::Details2,
             "f_neg3" => Kind::FNeg3,
             "spheroid" => Kind::Spheroid,
             "axes_quaternion" => Kind::AxesQuaternion,
@@ -60,7 +62,7 @@ impl Kind {
     fn input_widths(self) -> &'static [usize] {
         match self {
             Kind::Contact3 | Kind::Overlap3 | Kind::Details3 => &[3, 6, 6],
-            Kind::Contact2 | Kind::Overlap2 => &[2, 3, 3],
+            Kind::Contact2 | Kind::Overlap2 | Kind::Details2 => &[2, 3, 3],
             Kind::FNeg3 => &[1, 3, 6, 6],
             Kind::Spheroid => &[1, 1, 3],
             Kind::AxesQuaternion => &[3, 4],
@@ -78,6 +80,8 @@ impl Kind {
             Kind::Overlap3 | Kind::Overlap2 | Kind::FNeg3 => 1,
             // μ², λ, point, normal, ∂μ²/∂r12, ∂μ²/∂q1, ∂μ²/∂q2.
             Kind::Details3 => 23,
+            // The same in 2D: 2 + 2 + 2 + 2 + 3 + 3.
+            Kind::Details2 => 14,
             Kind::Spheroid | Kind::AxesQuaternion | Kind::AxesRotation => 6,
             Kind::AxesAngle2d => 3,
             // U, d², ε, f, X, X unique (1 or 0).
@@ -243,6 +247,28 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
             o[8..11].copy_from_slice(&d.grad_r12);
             o[11..17].copy_from_slice(&d.grad_q1);
             o[17..23].copy_from_slice(&d.grad_q2);
+        }
+        Kind::Details2 => {
+            let (r, a, b): ([f64; 2], [f64; 3], [f64; 3]) =
+                (inputs[0].row(i), inputs[1].row(i), inputs[2].row(i));
+            // The ellipses' own contact function checks the input, so that errors name their
+            // entries, and gives μ² and λ as `contact_function_2d` does.
+            let c = pw85::contact_function::<[f64; 3]>(&r, &a, &b).map_err(text)?;
+            // Two ellipses are the z = 0 sections of two ellipsoids with a common third axis
+            // along z: with r12 in the plane, Q(λ)⁻¹ r12 stays in the plane and f(λ) is the
+            // ellipses' own, so the ellipsoids' point, normal and gradients are the ellipses'
+            // with a zero z part. The third axis is scaled like the forms.
+            let z = a[0].max(a[2]).max(b[0]).max(b[2]);
+            let lift = |q: [f64; 3]| [q[0], q[1], 0.0, q[2], 0.0, z];
+            let d = pw85::contact_details(&[r[0], r[1], 0.0], &lift(a), &lift(b)).map_err(text)?;
+            let plane = |g: [f64; 6]| [g[0], g[1], g[3]];
+            o[0] = c.mu2;
+            o[1] = c.lambda;
+            o[2..4].copy_from_slice(&d.point[..2]);
+            o[4..6].copy_from_slice(&d.normal[..2]);
+            o[6..8].copy_from_slice(&d.grad_r12[..2]);
+            o[8..11].copy_from_slice(&plane(d.grad_q1));
+            o[11..14].copy_from_slice(&plane(d.grad_q2));
         }
         Kind::FNeg3 => {
             let lambda = inputs[0].scalar(i);

@@ -178,6 +178,52 @@ def test_two_dimensions_match_ellipsoids_in_the_plane():
     assert np.allclose(ellipack.from_axes_angle_2d([2.0, 1.0], np.pi / 2), [1.0, 0.0, 4.0])
 
 
+def test_ellipse_details_are_checked_independently():
+    rng = np.random.default_rng(5)
+    n = 100
+    axes_1, axes_2 = rng.uniform(0.3, 2.0, size=(2, n, 2))
+    th_1, th_2 = rng.uniform(-np.pi, np.pi, size=(2, n))
+    q1 = ellipack.from_axes_angle_2d(axes_1, th_1)
+    q2 = ellipack.from_axes_angle_2d(axes_2, th_2)
+    r = rng.normal(scale=2.0, size=(n, 2))
+    d = ellipack.contact_details_2d(r, q1, q2)
+    assert d.point.shape == (n, 2) and d.grad_q1.shape == (n, 3)
+    assert np.array_equal(d.mu2, ellipack.contact_function_2d(r, q1, q2)[0])
+    assert np.allclose(np.linalg.norm(d.normal, axis=1), 1.0)
+
+    def inverse(q):
+        a, b, c = q[:, 0], q[:, 1], q[:, 2]
+        det = a * c - b * b
+        return np.stack([np.stack([c, -b], -1), np.stack([-b, a], -1)], -2) / det[:, None, None]
+
+    # The point is on both ellipses scaled by mu: (x - ci)^T Qi^-1 (x - ci) = mu^2.
+    x1, x2 = d.point, d.point - r
+    on_1 = np.einsum("ni,nij,nj->n", x1, inverse(q1), x1)
+    on_2 = np.einsum("ni,nij,nj->n", x2, inverse(q2), x2)
+    assert np.allclose(on_1, d.mu2, rtol=1e-10) and np.allclose(on_2, d.mu2, rtol=1e-10)
+    # The normal is the gradient direction of the first scaled ellipse at the point.
+    g = np.einsum("nij,nj->ni", inverse(q1), x1)
+    assert np.allclose(g / np.linalg.norm(g, axis=1)[:, None], d.normal, atol=1e-10)
+    # The gradients against central differences of the ellipses' own contact function.
+    h = 1e-6
+    i = 7
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = h
+        plus = ellipack.contact_function_2d(r[i] + e, q1[i], q2[i])[0]
+        minus = ellipack.contact_function_2d(r[i] - e, q1[i], q2[i])[0]
+        assert (plus - minus) / (2 * h) == pytest.approx(d.grad_r12[i, k], rel=1e-6)
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = h
+        plus = ellipack.contact_function_2d(r[i], q1[i] + e, q2[i])[0]
+        minus = ellipack.contact_function_2d(r[i], q1[i] - e, q2[i])[0]
+        # An off-diagonal stored entry stands for Q12 and Q21: the difference moves both.
+        assert (plus - minus) / (2 * h) == pytest.approx(d.grad_q1[i, k], rel=1e-5, abs=1e-9)
+    with pytest.raises(ValueError, match="Q1 is not positive definite"):
+        ellipack.contact_details_2d([1.0, 0.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0])
+
+
 def test_shape_constructors_agree():
     axes = np.array([1.0, 2.0, 3.0])
     # The quaternion of a rotation by 90° about z: x → y.
