@@ -155,14 +155,19 @@ def test_bad_values_name_the_row():
         ellipack.contact_function(np.ones((5000, 3)), many, many[0], threads=0)
 
 
-def test_two_dimensions_match_ellipsoids_in_the_plane():
-    rng = np.random.default_rng(3)
-    n = 200
+def random_ellipse_pairs(seed, n):
+    """r12, q1, q2 of n random pairs of ellipses (semi-axes 0.3 to 2, any angle)."""
+    rng = np.random.default_rng(seed)
     axes_1, axes_2 = rng.uniform(0.3, 2.0, size=(2, n, 2))
     th_1, th_2 = rng.uniform(-np.pi, np.pi, size=(2, n))
     q1 = ellipack.from_axes_angle_2d(axes_1, th_1)
     q2 = ellipack.from_axes_angle_2d(axes_2, th_2)
-    r = rng.normal(scale=2.0, size=(n, 2))
+    return rng.normal(scale=2.0, size=(n, 2)), q1, q2
+
+
+def test_two_dimensions_match_ellipsoids_in_the_plane():
+    n = 200
+    r, q1, q2 = random_ellipse_pairs(3, n)
     mu2, lam = ellipack.contact_function_2d(r, q1, q2)
 
     # The same ellipses as ellipsoids with a third axis along z: f(λ) is the same.
@@ -179,13 +184,8 @@ def test_two_dimensions_match_ellipsoids_in_the_plane():
 
 
 def test_ellipse_details_are_checked_independently():
-    rng = np.random.default_rng(5)
     n = 100
-    axes_1, axes_2 = rng.uniform(0.3, 2.0, size=(2, n, 2))
-    th_1, th_2 = rng.uniform(-np.pi, np.pi, size=(2, n))
-    q1 = ellipack.from_axes_angle_2d(axes_1, th_1)
-    q2 = ellipack.from_axes_angle_2d(axes_2, th_2)
-    r = rng.normal(scale=2.0, size=(n, 2))
+    r, q1, q2 = random_ellipse_pairs(5, n)
     d = ellipack.contact_details_2d(r, q1, q2)
     assert d.point.shape == (n, 2) and d.grad_q1.shape == (n, 3)
     assert np.array_equal(d.mu2, ellipack.contact_function_2d(r, q1, q2)[0])
