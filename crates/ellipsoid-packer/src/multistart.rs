@@ -303,22 +303,24 @@ pub fn multistart<const N: usize>(
     let mut failed_starts = 0;
     let mut done = 0;
     let shard = settings.shard;
-    let first_start = if shard.index == 0 {
-        x0.to_vec()
+    let perturbed;
+    let first_start: &[f64] = if shard.index == 0 {
+        x0
     } else {
         let stream = shard.global(0) as u64;
-        perturb::<N>(
+        perturbed = perturb::<N>(
             x0,
             semi_axes.len(),
             settings.perturbation,
             settings.seed,
             stream,
-        )
+        );
+        &perturbed
     };
     let first = if observer.should_stop() || out_of_time() {
         None
     } else {
-        let result = local_minimisation(&mut problem, &first_start, &settings.local, &mut |p| {
+        let result = local_minimisation(&mut problem, first_start, &settings.local, &mut |p| {
             observer.iteration(p);
             observer.should_stop() || out_of_time()
         });
