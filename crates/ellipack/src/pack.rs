@@ -536,6 +536,11 @@ fn packing_of<const N: usize>(
         SizedContainer::Ball { radius } => vec![radius; N],
         SizedContainer::Ellipsoid { semi_axes } => semi_axes.to_vec(),
         SizedContainer::Box { half_sides } => half_sides.to_vec(),
+        SizedContainer::Periodic { .. } => {
+            return Err(PackError::Mismatch(
+                "periodic cells are not written by this version".into(),
+            ));
+        }
     };
     let d = |k: usize| dims.get(k).copied().unwrap_or(0.0);
     let container = match kind {

@@ -178,6 +178,8 @@ fn independent_check<const N: usize>(
                     .sum::<f64>()
                     .sqrt(),
                 ContainerShape::Box => (0..N).map(|k| point[k].abs() / dims[k]).fold(0.0, f64::max),
+                // Nothing sticks out of a periodic cell.
+                ContainerShape::Periodic => 0.0,
             };
             worst = worst.max(g);
         }

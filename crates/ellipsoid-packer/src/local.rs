@@ -26,6 +26,7 @@
 
 use crate::Error;
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
+use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Certificate, Model, ModelGradient};
 use std::cell::RefCell;
 
@@ -329,20 +330,9 @@ pub fn repair<const N: usize>(
     Ok((y, hi, cert))
 }
 
-/// Centres and container dimensions multiplied by `s`; angles unchanged.
+/// Centres and container dimensions multiplied by `s`; angles unchanged ([`Model::dilated`]).
 fn dilate<const N: usize>(problem: &Model<N>, x: &[f64], s: f64) -> Vec<f64> {
-    let stride = Model::<N>::vars_per_body();
-    let bodies_end = problem.len() * stride;
-    x.iter()
-        .enumerate()
-        .map(|(k, &v)| {
-            if k >= bodies_end || k % stride < N {
-                v * s
-            } else {
-                v
-            }
-        })
-        .collect()
+    problem.dilated(x, s)
 }
 
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality
@@ -400,6 +390,12 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
         let start = self.body_variables();
         lower[start..].fill(self.lower);
+        if self.model.borrow().container_kind() == ContainerShape::Periodic {
+            // The tilts of a periodic cell (after its N diagonal entries) have either sign;
+            // the bound only keeps them finite (the model is exact for any tilt).
+            lower[start + N..].fill(-self.centre_bound);
+            upper[start + N..].fill(self.centre_bound);
+        }
         // Centres stay within a box far larger than any packing the start leads to: without
         // it a quasi-Newton step from a badly overlapping start could throw an item out to
         // 1e30, where the model refuses the point and the start is lost.
@@ -534,7 +530,6 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
 mod tests {
     use super::*;
     use crate::starts::lattice_start;
-    use implicit_packing::containment::ContainerShape;
 
     /// The adapter's exact Hessian products against central differences of its own fused
     /// gradient, on an overlapping point, for ellipses and ellipsoids.

@@ -148,6 +148,10 @@ impl<const N: usize> LatticeStart<N> {
 pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart<N>) -> Vec<f64> {
     let m = problem.len();
     let kind = problem.container_kind();
+    if kind == ContainerShape::Periodic {
+        let per_cell = PER_CELL[start.orientation % PER_CELL.len()];
+        return periodic_lattice_start(problem, per_cell, &start.shift);
+    }
     let l = lattice_semi_axes(problem);
     let reach = l.iter().fold(0.0_f64, |a, &b| a.max(b));
     let aspect = if kind == ContainerShape::Ball {
@@ -166,6 +170,7 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
         ContainerShape::Box => (0..N)
             .map(|k| (p[k].abs() + l[k]) / aspect[k])
             .fold(0.0, f64::max),
+        ContainerShape::Periodic => 0.0,
     };
     let points = deepest_points(m, &start.basis(), &start.shift, &l, &aspect, gauge);
     let stride = Model::<N>::vars_per_body();
@@ -274,6 +279,8 @@ fn container_holding<const N: usize>(
             }
             half.map(|h| h * grow)
         }
+        // Never asked: periodic starts are built by `periodic_lattice_start`.
+        ContainerShape::Periodic => [reach; N],
     }
 }
 
@@ -303,9 +310,121 @@ pub fn lattice_start<const N: usize>(problem: &Model<N>) -> Vec<f64> {
     let (radius, reach) = (radius * (1.0 + 1e-9), reach.map(|r| r * (1.0 + 1e-9)));
     let dims = &mut x[m * stride..];
     match problem.container_kind() {
-        implicit_packing::containment::ContainerShape::Ball => dims[0] = radius,
-        implicit_packing::containment::ContainerShape::Ellipsoid => dims.fill(radius),
-        implicit_packing::containment::ContainerShape::Box => dims.copy_from_slice(&reach),
+        ContainerShape::Ball => dims[0] = radius,
+        ContainerShape::Ellipsoid => dims.fill(radius),
+        ContainerShape::Box => dims.copy_from_slice(&reach),
+        ContainerShape::Periodic => return periodic_lattice_start(problem, 1, &[0.0; N]),
+    }
+    x
+}
+
+/// The items per unit cell of the periodic lattice starts, by [`LatticeStart::orientation`].
+pub const PER_CELL: [usize; 3] = [1, 2, 4];
+
+/// A unit cell of a densest lattice packing of balls of radius 1 (upper-triangular `H`,
+/// columns the lattice vectors) and its sites (fractional coordinates): with 1 site, the
+/// hexagonal (2D) or face-centred cubic primitive cell (3D); with 2, the centred rectangular
+/// cell (2D) or the hexagonal close-packed cell (3D); with 4, the rectangular cell of four
+/// rows (2D) or the cubic FCC cell (3D). All have density π/√12 (2D) or π/√18 (3D), HCP too.
+fn unit_cell<const N: usize>(per_cell: usize) -> ([[f64; N]; N], Vec<[f64; N]>) {
+    let h = 3f64.sqrt();
+    let pick = |rows: &[&[f64]]| -> [[f64; N]; N] {
+        std::array::from_fn(|r| std::array::from_fn(|c| rows[r][c]))
+    };
+    let sites = |list: &[&[f64]]| -> Vec<[f64; N]> {
+        list.iter().map(|s| std::array::from_fn(|k| s[k])).collect()
+    };
+    if N == 2 {
+        match per_cell {
+            1 => (pick(&[&[2.0, 1.0], &[0.0, h]]), sites(&[&[0.0, 0.0]])),
+            2 => (
+                pick(&[&[2.0, 0.0], &[0.0, 2.0 * h]]),
+                sites(&[&[0.0, 0.0], &[0.5, 0.5]]),
+            ),
+            _ => (
+                pick(&[&[4.0, 0.0], &[0.0, 2.0 * h]]),
+                sites(&[&[0.0, 0.0], &[0.5, 0.0], &[0.25, 0.5], &[0.75, 0.5]]),
+            ),
+        }
+    } else {
+        let z = (8.0f64 / 3.0).sqrt();
+        let a = 2.0 * std::f64::consts::SQRT_2;
+        match per_cell {
+            1 => (
+                pick(&[&[2.0, 1.0, 1.0], &[0.0, h, 1.0 / h], &[0.0, 0.0, z]]),
+                sites(&[&[0.0, 0.0, 0.0]]),
+            ),
+            2 => (
+                pick(&[&[2.0, 1.0, 0.0], &[0.0, h, 0.0], &[0.0, 0.0, 2.0 * z]]),
+                sites(&[&[0.0, 0.0, 0.0], &[1.0 / 3.0, 1.0 / 3.0, 0.5]]),
+            ),
+            _ => (
+                pick(&[&[a, 0.0, 0.0], &[0.0, a, 0.0], &[0.0, 0.0, a]]),
+                sites(&[
+                    &[0.0, 0.0, 0.0],
+                    &[0.5, 0.5, 0.0],
+                    &[0.5, 0.0, 0.5],
+                    &[0.0, 0.5, 0.5],
+                ]),
+            ),
+        }
+    }
+}
+
+/// A periodic lattice start: the items unrotated on a densest lattice of unit balls mapped by
+/// `diag(l)` (so that items do not overlap, as in [`LatticeStart`]), in a periodic cell made of
+/// `c_1 × … × c_N` unit cells of `per_cell` sites (1, 2 or 4), the `c_k` grown one at a time
+/// along the narrowest side until the sites hold every item; the first `m` sites are taken
+/// and the rest left empty. `shift` moves every site (in units of the unit cell).
+pub fn periodic_lattice_start<const N: usize>(
+    problem: &Model<N>,
+    per_cell: usize,
+    shift: &[f64; N],
+) -> Vec<f64> {
+    let m = problem.len();
+    let l = lattice_semi_axes(problem);
+    let (unit, sites) = unit_cell::<N>(per_cell);
+    let unit: [[f64; N]; N] = std::array::from_fn(|r| unit[r].map(|v| v * l[r]));
+    let mut counts = [1usize; N];
+    while sites.len() * counts.iter().product::<usize>() < m {
+        let narrowest = (0..N)
+            .min_by(|&a, &b| {
+                (unit[a][a] * counts[a] as f64).total_cmp(&(unit[b][b] * counts[b] as f64))
+            })
+            .unwrap_or(0);
+        counts[narrowest] += 1;
+    }
+    let stride = Model::<N>::vars_per_body();
+    let mut x = vec![0.0; problem.var_count()];
+    let mut item = 0;
+    let mut n = [0usize; N];
+    'cells: loop {
+        for site in &sites {
+            if item == m {
+                break 'cells;
+            }
+            for k in 0..N {
+                x[item * stride + k] = (n[k] as f64 + site[k] + shift[k]) / counts[k] as f64;
+            }
+            item += 1;
+        }
+        let mut k = 0;
+        while k < N {
+            n[k] += 1;
+            if n[k] < counts[k] {
+                break;
+            }
+            n[k] = 0;
+            k += 1;
+        }
+        if k == N {
+            break;
+        }
+    }
+    // The supercell H diag(c), with the same relative gap as the lattice.
+    for k in 0..N * (N + 1) / 2 {
+        let (r, c) = implicit_packing::periodic::entry::<N>(k);
+        x[m * stride + k] = unit[r][c] * counts[c] as f64 * (1.0 + 1e-9);
     }
     x
 }
@@ -377,7 +496,16 @@ pub fn perturb<const N: usize>(
     let stride = Model::<N>::vars_per_body();
     let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let dims = &x[items * stride..];
-    let extent = |k: usize| dims.get(k).or(dims.first()).copied().unwrap_or(1.0);
+    // A periodic cell is the only container with N (N + 1) / 2 dimensions; its centres are
+    // fractional, so the half-cell is 1/2.
+    let periodic = dims.len() == N * (N + 1) / 2;
+    let extent = |k: usize| {
+        if periodic {
+            0.5
+        } else {
+            dims.get(k).or(dims.first()).copied().unwrap_or(1.0)
+        }
+    };
     let mut y = x.to_vec();
     for i in 0..items {
         for v in 0..stride {

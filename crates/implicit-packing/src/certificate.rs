@@ -106,6 +106,9 @@ pub fn certify<const N: usize>(
     bodies: &[Body<N>],
     container: &Container<N>,
 ) -> Result<Certificate, Error> {
+    if let Container::Periodic { cell } = *container {
+        return certify_periodic(bodies, &cell);
+    }
     let mut cert = Certificate::default();
     if bodies.len() > 1 {
         let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
@@ -150,6 +153,87 @@ pub fn certify<const N: usize>(
     Ok(cert)
 }
 
+/// The certificate of `bodies` in a periodic cell: PW85 on every pair of the infinite packing
+/// whose enclosing balls meet, one per lattice translation class (an item with its own images
+/// included), found through the images of [`crate::periodic`]. An overlap names the two items
+/// (the same item twice when it overlaps its own image).
+fn certify_periodic<const N: usize>(
+    bodies: &[Body<N>],
+    cell: &[[f64; N]; N],
+) -> Result<Certificate, Error> {
+    let mut cert = Certificate::default();
+    let (images, extended) = periodic_images(bodies, cell, 0.0)?;
+    let centres: Vec<[f64; N]> = extended.iter().map(Body::centre).collect();
+    let radii: Vec<f64> = extended.iter().map(Body::bounding_radius).collect();
+    let grid = cell_grid::Grid::<N>::with_radii(&radii)
+        .build(&centres)
+        .map_err(Error::Grid)?;
+    let mut failure = None;
+    grid.for_each_close_pair(|a, b, _, _| {
+        let (a, b) = (a.min(b), a.max(b));
+        if !images.is_representative(a, b) {
+            return;
+        }
+        cert.pairs_checked += 1;
+        let (i, j) = (images.owner[a] as usize, images.owner[b] as usize);
+        match contact(&extended[a], &extended[b]) {
+            Ok(c) => {
+                cert.min_mu2 = Some(cert.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
+                if c.mu2 < 1.0 {
+                    cert.overlapping.push(Overlap {
+                        items: (i.min(j), i.max(j)),
+                        mu2: c.mu2,
+                    });
+                }
+            }
+            Err(e) => {
+                failure.get_or_insert(Error::Certification {
+                    pair: (i, j),
+                    source: e,
+                });
+            }
+        }
+    });
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    cert.overlapping
+        .sort_unstable_by(|x, y| x.items.cmp(&y.items).then(x.mu2.total_cmp(&y.mu2)));
+    Ok(cert)
+}
+
+/// The items of a periodic cell and their images within reach of any item (enclosing balls of
+/// radius up to `r_max`, plus `skin`): the image set and the bodies at its points.
+pub(crate) fn periodic_images<const N: usize>(
+    bodies: &[Body<N>],
+    cell: &[[f64; N]; N],
+    skin: f64,
+) -> Result<(crate::periodic::ImageSet<N>, Vec<Body<N>>), Error> {
+    use crate::periodic::{ImageSet, MAX_IMAGES_PER_ITEM, to_cartesian, to_fractional};
+    let fractional: Vec<[f64; N]> = bodies
+        .iter()
+        .map(|b| to_fractional(cell, &b.centre()))
+        .collect();
+    let r_max = bodies.iter().map(Body::bounding_radius).fold(0.0, f64::max);
+    let images = ImageSet::new(
+        cell,
+        &fractional,
+        2.0 * r_max + skin,
+        MAX_IMAGES_PER_ITEM.saturating_mul(bodies.len()),
+    )?;
+    let extended = (0..images.owner.len())
+        .map(|e| {
+            let b = &bodies[images.owner[e] as usize];
+            Body::from_parts_unchecked(
+                to_cartesian(cell, &images.fractional(e, &fractional)),
+                b.semi_axes(),
+                b.rotation(),
+            )
+        })
+        .collect();
+    Ok((images, extended))
+}
+
 /// The least factor t by which `container`, scaled about its centre, holds `body`: for a ball
 /// or an ellipsoid with semi-axes A, t² = max over the body of |A⁻¹ p|² (the farthest point in
 /// the container's own metric, [`farthest_point`]); for a box, the largest ratio of the body's
@@ -164,5 +248,6 @@ pub fn containment_scale<const N: usize>(body: &Body<N>, container: &Container<N
         }
         Container::Ball { radius } => farthest_point(body, &[radius; N]).0.sqrt(),
         Container::Ellipsoid { semi_axes } => farthest_point(body, &semi_axes).0.sqrt(),
+        Container::Periodic { .. } => 1.0,
     }
 }

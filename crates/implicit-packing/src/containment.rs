@@ -64,6 +64,12 @@ pub enum Container<const N: usize> {
         /// The half-sides `L_k`.
         half_sides: [f64; N],
     },
+    /// A periodic cell: space tiled by the lattice `{H n : n ∈ Zᴺ}`, nothing to contain.
+    Periodic {
+        /// The cell matrix `H`, upper triangular with a positive diagonal; its columns are the
+        /// lattice vectors (see [`crate::periodic`]).
+        cell: [[f64; N]; N],
+    },
 }
 
 /// The shape of a container (ball, ellipsoid, box), without its dimensions: [`Container`] is a
@@ -76,6 +82,9 @@ pub enum ContainerShape {
     Ellipsoid,
     /// An axis-aligned box: `N` dimensions, the half-sides.
     Box,
+    /// A periodic cell: `N (N + 1) / 2` dimensions, the entries of the upper-triangular cell
+    /// matrix in the order `[l_x, l_y, (l_z,) xy, (xz, yz)]` ([`crate::periodic`]).
+    Periodic,
 }
 
 impl ContainerShape {
@@ -83,6 +92,7 @@ impl ContainerShape {
     pub fn dimension_count(self, n: usize) -> usize {
         match self {
             ContainerShape::Ball => 1,
+            ContainerShape::Periodic => n * (n + 1) / 2,
             _ => n,
         }
     }
@@ -93,6 +103,11 @@ impl<const N: usize> Container<N> {
     pub fn from_dimensions(kind: ContainerShape, dims: &[f64]) -> Result<Self, Error> {
         let expected = kind.dimension_count(N);
         Error::check_length("container dimensions", expected, dims.len())?;
+        if kind == ContainerShape::Periodic {
+            return Ok(Container::Periodic {
+                cell: crate::periodic::cell_from_dimensions(dims)?,
+            });
+        }
         for (dimension, &value) in dims.iter().enumerate() {
             if !(value.is_finite() && value > 0.0) {
                 return Err(Error::InvalidContainer { dimension, value });
@@ -105,7 +120,7 @@ impl<const N: usize> Container<N> {
         Ok(match kind {
             ContainerShape::Ball => Container::Ball { radius: dims[0] },
             ContainerShape::Ellipsoid => Container::Ellipsoid { semi_axes: a },
-            ContainerShape::Box => Container::Box { half_sides: a },
+            ContainerShape::Box | ContainerShape::Periodic => Container::Box { half_sides: a },
         })
     }
 
@@ -115,17 +130,34 @@ impl<const N: usize> Container<N> {
             Container::Ball { .. } => ContainerShape::Ball,
             Container::Ellipsoid { .. } => ContainerShape::Ellipsoid,
             Container::Box { .. } => ContainerShape::Box,
+            Container::Periodic { .. } => ContainerShape::Periodic,
+        }
+    }
+
+    /// The container's variables, the inverse of [`Container::from_dimensions`] (`N (N + 1) / 2`
+    /// entries are written for a periodic cell, `N` for the others, of which a ball uses one).
+    pub fn dimensions(&self) -> Vec<f64> {
+        match *self {
+            Container::Ball { radius } => vec![radius],
+            Container::Ellipsoid { semi_axes: a } | Container::Box { half_sides: a } => a.to_vec(),
+            Container::Periodic { cell } => crate::periodic::cell_dimensions(&cell),
         }
     }
 
     /// Area (2D) or volume (3D) of the container, and its derivative with respect to each
     /// container variable (only the first is used for a ball).
     ///
-    /// Ball: `π r²`, `4π r³/3`; ellipsoid: `π A₁A₂`, `4π A₁A₂A₃/3`; box: `Π 2 L_k`.
+    /// Ball: `π r²`, `4π r³/3`; ellipsoid: `π A₁A₂`, `4π A₁A₂A₃/3`; box: `Π 2 L_k`; periodic
+    /// cell: `det H = Π H_kk`, whose derivatives with respect to the tilts (the variables after
+    /// the first `N`) are zero.
     pub fn measure(&self) -> (f64, [f64; N]) {
         let mut grad = [0.0; N];
         let unit = unit_ball_measure::<N>();
         match *self {
+            Container::Periodic { cell } => {
+                let d: [f64; N] = std::array::from_fn(|k| cell[k][k]);
+                product_and_partials(1.0, &d)
+            }
             Container::Ball { radius } => {
                 let v = unit * radius.powi(N as i32);
                 grad[0] = N as f64 * v / radius;
@@ -137,14 +169,17 @@ impl<const N: usize> Container<N> {
                 } else {
                     unit
                 };
-                let v = factor * a.iter().product::<f64>();
-                for k in 0..N {
-                    grad[k] = factor * (0..N).filter(|&m| m != k).map(|m| a[m]).product::<f64>();
-                }
-                (v, grad)
+                product_and_partials(factor, &a)
             }
         }
     }
+}
+
+/// `factor · Π a_k` and its partial derivatives.
+fn product_and_partials<const N: usize>(factor: f64, a: &[f64; N]) -> (f64, [f64; N]) {
+    let grad =
+        std::array::from_fn(|k| factor * (0..N).filter(|&m| m != k).map(|m| a[m]).product::<f64>());
+    (factor * a.iter().product::<f64>(), grad)
 }
 
 /// Area of the unit disc (2D) or volume of the unit ball (3D).
@@ -158,30 +193,28 @@ fn unit_ball_measure<const N: usize>() -> f64 {
 
 impl<const N: usize> Container<N> {
     /// Hessian of [`Container::measure`] with respect to the container variables (only the
-    /// `[0][0]` entry for a ball: `N (N − 1) · unit · r^(N−2)`).
+    /// `[0][0]` entry for a ball: `N (N − 1) · unit · r^(N−2)`; for a periodic cell the block of
+    /// the diagonal entries, the tilts having none).
     pub fn measure_hessian(&self) -> [[f64; N]; N] {
         let mut h = [[0.0; N]; N];
         let unit = unit_ball_measure::<N>();
-        match *self {
+        let (factor, a) = match *self {
             Container::Ball { radius } => {
                 h[0][0] = (N * (N - 1)) as f64 * unit * radius.powi(N as i32 - 2);
+                return h;
             }
-            Container::Ellipsoid { semi_axes: a } | Container::Box { half_sides: a } => {
-                let factor = if matches!(self, Container::Box { .. }) {
-                    2f64.powi(N as i32)
-                } else {
-                    unit
-                };
-                for r in 0..N {
-                    for c in 0..N {
-                        if r != c {
-                            h[r][c] = factor
-                                * (0..N)
-                                    .filter(|&m| m != r && m != c)
-                                    .map(|m| a[m])
-                                    .product::<f64>();
-                        }
-                    }
+            Container::Ellipsoid { semi_axes } => (unit, semi_axes),
+            Container::Box { half_sides } => (2f64.powi(N as i32), half_sides),
+            Container::Periodic { cell } => (1.0, std::array::from_fn(|k| cell[k][k])),
+        };
+        for r in 0..N {
+            for c in 0..N {
+                if r != c {
+                    h[r][c] = factor
+                        * (0..N)
+                            .filter(|&m| m != r && m != c)
+                            .map(|m| a[m])
+                            .product::<f64>();
                 }
             }
         }
@@ -316,6 +349,8 @@ fn container_axes<const N: usize>(container: &Container<N>) -> [f64; N] {
         Container::Ball { radius } => [radius; N],
         Container::Ellipsoid { semi_axes } => semi_axes,
         Container::Box { half_sides } => half_sides,
+        // Never asked: a periodic cell contains everything.
+        Container::Periodic { .. } => [f64::INFINITY; N],
     }
 }
 
@@ -344,6 +379,7 @@ fn containment_impl<const N: usize>(
     };
     let c = body.centre();
     match *container {
+        Container::Periodic { .. } => (0.0, grad),
         Container::Box { half_sides } => {
             // Cheap exact exclusion: the enclosing ball is inside the box. The computed
             // support `s_k` exceeds the largest semi-axis by a few ulps at most (the rows of Q
@@ -522,6 +558,8 @@ pub fn containment_gradient_derivative<const N: usize>(
             }
             Some((value, grad, hv))
         }
+        // The residual is zero in a periodic cell, returned above.
+        Container::Periodic { .. } => Some((value, grad, hv)),
         Container::Ball { .. } | Container::Ellipsoid { .. } => {
             let is_ball = matches!(container, Container::Ball { .. });
             let a = container_axes(container);

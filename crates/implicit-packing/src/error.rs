@@ -78,6 +78,24 @@ pub enum Error {
     },
     /// The problem has no item.
     Empty,
+    /// A periodic cell so thin for its items that one pair term would reach more images than
+    /// the workspace allows.
+    PeriodicImages {
+        /// The most points (items and images) allowed.
+        points: usize,
+        /// The cell's smallest width across its lattice planes.
+        width: f64,
+        /// The distance from the cell within which images are needed.
+        reach: f64,
+    },
+    /// A fractional coordinate of an item in a periodic cell so large that its lattice
+    /// translation is not an `i32` (beyond ±2³⁰ cells).
+    FractionalOutOfRange {
+        /// Index in the variable vector.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
     /// The neighbour grid rejected the input.
     Grid(cell_grid::Error),
     /// The PW85 contact function rejected a pair during certification.
@@ -205,6 +223,23 @@ impl fmt::Display for Error {
                 "pair {pair} is ({i}, {j}), but there are only {len} items"
             ),
             Error::Empty => write!(f, "the problem has no item"),
+            Error::PeriodicImages {
+                points,
+                width,
+                reach,
+            } => write!(
+                f,
+                "periodic cell of width {} is too thin for items that reach {} beyond it: \
+                 more than {points} images would be needed",
+                short(width),
+                short(reach)
+            ),
+            Error::FractionalOutOfRange { index, value } => write!(
+                f,
+                "variable {index} is the fractional coordinate {}; items of a periodic cell \
+                 must lie within 2^30 cells of it",
+                short(value)
+            ),
             Error::Grid(ref e) => write!(f, "neighbour grid: {e}"),
             Error::Certification {
                 pair: (i, j),

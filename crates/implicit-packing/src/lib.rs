@@ -15,6 +15,7 @@
 //!   and exact Hessian–vector products;
 //! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first
 //!   derivatives and exact Hessian–vector products;
+//! * [`periodic`]: periodic cells (fractional coordinates, lattice images);
 //! * [`model`]: the whole sum over the grid's candidate pairs (Section 5.2), containment and
 //!   objective, with gradients and Hessian–vector products;
 //! * [`certificate`]: the verdict that decides whether a configuration is a packing, independent
@@ -43,6 +44,7 @@ pub(crate) mod lanes;
 pub(crate) mod linalg;
 pub mod model;
 pub mod pair;
+pub mod periodic;
 #[cfg(feature = "internals")]
 pub mod projection;
 #[cfg(not(feature = "internals"))]

@@ -55,6 +55,7 @@ use crate::derivatives::{
 };
 use crate::error::Error;
 use crate::pair::overlap_measure;
+use crate::periodic::{Lattice, entry};
 use crate::shape::{
     Body, MAX_MAGNITUDE, angles_from_rotation, angular_velocities_3d, check_semi_axes, rotation_2d,
     rotation_and_velocities_3d,
@@ -118,6 +119,8 @@ pub struct Model<const N: usize> {
     // The candidate pairs: a Verlet list over the grid (cell edge 2R plus the skin), rebuilt
     // only when an ellipsoid has moved more than half the skin since the last build.
     pairs: cell_grid::PairList<N>,
+    // In a periodic cell: the fractional positions, the images and their own list.
+    lattice: Option<Lattice<N>>,
 }
 
 /// The skin of the model's pair list, relative to the smallest enclosing radius: pairs
@@ -161,9 +164,13 @@ impl<const N: usize> Model<N> {
             PAIR_LIST_SKIN * r_min,
         )
         .map_err(grid_error)?;
+        let r_max = radii.iter().fold(0.0f64, |m, &r| m.max(r));
+        let lattice =
+            (kind == ContainerShape::Periodic).then(|| Lattice::new(r_max, PAIR_LIST_SKIN * r_min));
         Ok(Model {
             semi_axes,
             kind,
+            lattice,
             bodies: Vec::new(),
             centres: Vec::new(),
             spins: Vec::new(),
@@ -224,6 +231,29 @@ impl<const N: usize> Model<N> {
         self.centres.clear();
         self.spins.clear();
         let stride = Self::vars_per_body();
+        if let (Some(lattice), Container::Periodic { cell }) = (&mut self.lattice, container) {
+            // The centre variables are fractional coordinates: the body sits at H s.
+            lattice.fractional.clear();
+            let mut vars = [0.0; 6];
+            for (i, l) in self.semi_axes.iter().enumerate() {
+                let v = &x[i * stride..(i + 1) * stride];
+                let s: [f64; N] = std::array::from_fn(|k| v[k]);
+                if let Some(k) = (0..N).find(|&k| s[k].abs() > MAX_CELLS) {
+                    return Err(Error::FractionalOutOfRange {
+                        index: i * stride + k,
+                        value: s[k],
+                    });
+                }
+                vars[..stride].copy_from_slice(v);
+                vars[..N].copy_from_slice(&crate::periodic::to_cartesian(&cell, &s));
+                let (body, spin) = make_body_and_spins(l, &vars[..stride]);
+                lattice.fractional.push(s);
+                self.bodies.push(body);
+                self.spins.push(spin);
+            }
+            lattice.update(&cell, &self.bodies)?;
+            return Ok(container);
+        }
         for (i, l) in self.semi_axes.iter().enumerate() {
             let (body, spin) = make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
             self.centres.push(body.centre());
@@ -245,6 +275,9 @@ impl<const N: usize> Model<N> {
         gradient: Option<&mut ModelGradient>,
     ) -> Result<Evaluation, Error> {
         let container = self.load(x)?;
+        if let Container::Periodic { cell } = container {
+            return self.evaluate_periodic(&cell, x.len(), gradient);
+        }
         let (objective, dobj) = container.measure();
         let mut ev = Evaluation {
             objective,
@@ -328,6 +361,9 @@ impl<const N: usize> Model<N> {
             });
         }
         let container = self.load(x)?;
+        if let Container::Periodic { .. } = container {
+            return self.hessian_product_periodic(x, v, &container, out);
+        }
         out.reset(n);
         let stride = Self::vars_per_body();
         let nb = self.len() * stride;
@@ -490,9 +526,12 @@ impl<const N: usize> Model<N> {
         crate::certificate::certify(&self.bodies, &container)
     }
 
-    /// Reference: the overlap sum of eq. 19 over **all** `m(m−1)/2` pairs, `O(m²)`.
+    /// Reference: the overlap sum of eq. 19 over **all** `m(m−1)/2` pairs, `O(m²)` (in a
+    /// periodic cell, over every item and every image within reach).
     pub fn overlap_all_pairs(&mut self, x: &[f64]) -> Result<f64, Error> {
-        self.load(x)?;
+        if let Container::Periodic { cell } = self.load(x)? {
+            return Ok(self.overlap_all_images(&cell));
+        }
         let b = &self.bodies;
         let mut sum = 0.0;
         for i in 0..b.len() {
@@ -506,7 +545,7 @@ impl<const N: usize> Model<N> {
     /// How many times the pair list has been built (see [`PAIR_LIST_SKIN`]): once per
     /// evaluation would mean that the skin is outrun at every step.
     pub fn pair_list_builds(&self) -> usize {
-        self.pairs.builds()
+        self.pairs.builds() + self.lattice.as_ref().map_or(0, Lattice::builds)
     }
 
     /// The bodies of the last evaluation.
@@ -542,6 +581,10 @@ impl<const N: usize> Model<N> {
         Error::check_length("bodies", self.len(), bodies.len())?;
         let nc = self.kind.dimension_count(N);
         Error::check_length("container dimensions", nc, container.len())?;
+        let cell = match Container::<N>::from_dimensions(self.kind, container)? {
+            Container::Periodic { cell } => Some(cell),
+            _ => None,
+        };
         let mut x = Vec::with_capacity(self.var_count());
         for (i, b) in bodies.iter().enumerate() {
             let l = b.semi_axes();
@@ -552,7 +595,12 @@ impl<const N: usize> Model<N> {
                     value: l[axis],
                 });
             }
-            x.extend_from_slice(&b.centre());
+            match &cell {
+                Some(cell) => {
+                    x.extend_from_slice(&crate::periodic::to_fractional(cell, &b.centre()))
+                }
+                None => x.extend_from_slice(&b.centre()),
+            }
             let q = b.rotation();
             if N == 2 {
                 x.push(q[1][0].atan2(q[0][0]));
@@ -568,6 +616,226 @@ impl<const N: usize> Model<N> {
         }
         x.extend_from_slice(container);
         Ok(x)
+    }
+}
+
+/// The running sums of the periodic gradient: `Σf`, the force on every point (item or
+/// image) and the torque on every item.
+struct PeriodicSums<'a, const N: usize> {
+    sum: f64,
+    forces: Vec<[f64; N]>,
+    torques: &'a mut Vec<[f64; 3]>,
+}
+
+impl<const N: usize> PeriodicSums<'_, N> {
+    fn add(&mut self, owner: &[u32], a: usize, b: usize, &(f, ref g): &Term<N>) {
+        if f > 0.0 {
+            self.sum += f;
+            for k in 0..N {
+                self.forces[a][k] += g.centre_i[k];
+                self.forces[b][k] += g.centre_j[k];
+            }
+            let (oa, ob) = (owner[a] as usize, owner[b] as usize);
+            for k in 0..3 {
+                self.torques[oa][k] += g.torque_i[k];
+                self.torques[ob][k] += g.torque_j[k];
+            }
+        }
+    }
+}
+
+/// Fractional coordinates beyond this many cells are refused: their lattice translations
+/// must be `i32`.
+const MAX_CELLS: f64 = (1u32 << 30) as f64;
+
+/// The periodic cell ([`crate::periodic`]): pair terms over the lattice images, no containment,
+/// the objective `det H`.
+impl<const N: usize> Model<N> {
+    fn evaluate_periodic(
+        &mut self,
+        cell: &[[f64; N]; N],
+        n: usize,
+        gradient: Option<&mut ModelGradient>,
+    ) -> Result<Evaluation, Error> {
+        let (objective, dobj) = Container::Periodic { cell: *cell }.measure();
+        let mut ev = Evaluation {
+            objective,
+            ..Evaluation::default()
+        };
+        let lattice = self.lattice.as_mut().ok_or(Error::Empty)?;
+        match gradient {
+            None => {
+                let mut queue = KernelQueue::<N, ValueOnly>::default();
+                let mut sum = 0.0;
+                let mut emit = |_: usize, _: usize, &f: &f64| sum += f;
+                lattice.for_each_pair(|(bodies, _), a, b| {
+                    ev.pairs += 1;
+                    queue.push(bodies, a, b, &mut emit);
+                })?;
+                queue.flush(lattice.points().0, &mut emit);
+                ev.overlap = sum;
+            }
+            Some(g) => {
+                g.reset(n);
+                ev.overlap = self.periodic_gradient(cell, &mut g.overlap, &mut ev.pairs)?;
+                let nb = self.len() * Self::vars_per_body();
+                g.objective[nb..nb + N].copy_from_slice(&dobj);
+            }
+        }
+        Ok(ev)
+    }
+
+    /// Σf over the lattice pairs, its gradient added to `out` (fractional centres, angles,
+    /// cell entries), the pair count added to `pairs`.
+    fn periodic_gradient(
+        &mut self,
+        cell: &[[f64; N]; N],
+        out: &mut [f64],
+        pairs: &mut usize,
+    ) -> Result<f64, Error> {
+        let m = self.len();
+        let lattice = self.lattice.as_mut().ok_or(Error::Empty)?;
+        // Forces per point (item or image), torques per item.
+        let mut acc = PeriodicSums {
+            sum: 0.0,
+            forces: vec![[0.0; N]; lattice.images.owner.len()],
+            torques: &mut self.torques,
+        };
+        acc.torques.clear();
+        acc.torques.resize(m, [0.0; 3]);
+        let mut queue = KernelQueue::<N, WithGradient>::default();
+        lattice.for_each_pair(|(bodies, owner), a, b| {
+            *pairs += 1;
+            queue.push(bodies, a, b, &mut |a, b, t| acc.add(owner, a, b, t));
+        })?;
+        let (bodies, owner) = lattice.points();
+        queue.flush(bodies, &mut |a, b, t| acc.add(owner, a, b, t));
+        // ∂/∂s_i = Hᵀ Σ_e F_e and ∂/∂H_ab = Σ_e F_e,a u_e,b (module `periodic`).
+        let mut item_force = vec![[0.0; N]; m];
+        let mut dcell = [[0.0; N]; N];
+        for (e, f) in acc.forces.iter().enumerate() {
+            let o = owner[e] as usize;
+            let u = lattice.images.fractional(e, &lattice.fractional);
+            for a in 0..N {
+                item_force[o][a] += f[a];
+                for b in a..N {
+                    dcell[a][b] += f[a] * u[b];
+                }
+            }
+        }
+        let sum = acc.sum;
+        for (i, b) in self.bodies.iter().enumerate() {
+            let spin = spin_rows(b, self.spins[i]);
+            let ds: [f64; N] =
+                std::array::from_fn(|k| (0..=k).map(|r| cell[r][k] * item_force[i][r]).sum());
+            scatter_force_torque(out, i, &ds, &self.torques[i], &spin);
+        }
+        let nb = m * Self::vars_per_body();
+        for k in 0..N * (N + 1) / 2 {
+            let (r, c) = entry::<N>(k);
+            out[nb + k] += dcell[r][c];
+        }
+        Ok(sum)
+    }
+
+    /// Hessian–vector products in a periodic cell: the overlap's by a central difference of
+    /// its exact gradient, `(∇(x + h v) − ∇(x − h v)) / 2h` with `h` as in
+    /// [`Model::hessian_vector_product`]; the objective's exactly; no containment.
+    fn hessian_product_periodic(
+        &mut self,
+        x: &[f64],
+        v: &[f64],
+        container: &Container<N>,
+        out: &mut ModelGradient,
+    ) -> Result<(), Error> {
+        let n = x.len();
+        out.reset(n);
+        let vmax = v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        if vmax == 0.0 {
+            return Ok(());
+        }
+        let h = 6e-6 * x.iter().fold(1.0f64, |m, a| m.max(a.abs())) / vmax;
+        let mut gp = ModelGradient::default();
+        let mut gm = ModelGradient::default();
+        let xp: Vec<f64> = x.iter().zip(v).map(|(a, b)| a + h * b).collect();
+        let xm: Vec<f64> = x.iter().zip(v).map(|(a, b)| a - h * b).collect();
+        self.evaluate(&xp, Some(&mut gp))?;
+        self.evaluate(&xm, Some(&mut gm))?;
+        for k in 0..n {
+            out.overlap[k] = (gp.overlap[k] - gm.overlap[k]) / (2.0 * h);
+        }
+        let hess = container.measure_hessian();
+        let nb = self.len() * Self::vars_per_body();
+        for r in 0..N {
+            out.objective[nb + r] = (0..N).map(|c| hess[r][c] * v[nb + c]).sum();
+        }
+        // Leave the workspace at x, as the other paths do.
+        self.load(x)?;
+        Ok(())
+    }
+
+    /// The variables `x` of a configuration dilated by `s > 0` about the origin: every length
+    /// (centres and container dimensions) times `s`, angles unchanged. Every pair's contact
+    /// function is multiplied by `s²` (PW85 theory). In a periodic cell the centres are
+    /// fractional and only the cell is scaled.
+    pub fn dilated(&self, x: &[f64], s: f64) -> Vec<f64> {
+        let stride = Self::vars_per_body();
+        let bodies_end = self.len() * stride;
+        let periodic = self.kind == ContainerShape::Periodic;
+        x.iter()
+            .enumerate()
+            .map(|(k, &v)| {
+                if k >= bodies_end || (!periodic && k % stride < N) {
+                    v * s
+                } else {
+                    v
+                }
+            })
+            .collect()
+    }
+
+    /// Reference for the periodic cell: the overlap sum over every pair of the lattice by brute
+    /// force, each item against every image of every item within reach, `O(m²)`.
+    fn overlap_all_images(&mut self, cell: &[[f64; N]; N]) -> f64 {
+        let w = crate::periodic::widths(cell);
+        let b = &self.bodies;
+        let s: Vec<[f64; N]> = b
+            .iter()
+            .map(|x| crate::periodic::to_fractional(cell, &x.centre()))
+            .collect();
+        let mut sum = 0.0;
+        for i in 0..b.len() {
+            for j in i..b.len() {
+                let reach = b[i].bounding_radius() + b[j].bounding_radius();
+                let d: [f64; N] = std::array::from_fn(|k| s[j][k] - s[i][k]);
+                let lo: [i32; N] = std::array::from_fn(|k| (-d[k] - reach / w[k]).floor() as i32);
+                let hi: [i32; N] = std::array::from_fn(|k| (-d[k] + reach / w[k]).ceil() as i32);
+                let mut n = lo;
+                loop {
+                    let positive = n.iter().find(|&&v| v != 0).is_some_and(|&v| v > 0);
+                    if i < j || positive {
+                        let t: [f64; N] = std::array::from_fn(|k| s[j][k] + f64::from(n[k]));
+                        let c = crate::periodic::to_cartesian(cell, &t);
+                        let image =
+                            Body::from_parts_unchecked(c, b[j].semi_axes(), b[j].rotation());
+                        sum += overlap_measure(&b[i], &image);
+                    }
+                    let mut k = 0;
+                    while k < N {
+                        if n[k] < hi[k] {
+                            n[k] += 1;
+                            break;
+                        }
+                        n[k] = lo[k];
+                        k += 1;
+                    }
+                    if k == N {
+                        break;
+                    }
+                }
+            }
+        }
+        sum
     }
 }
 
