@@ -1,0 +1,68 @@
+//! Variable periodic cells find the densest lattice packings from loose, perturbed starts:
+//! discs and ellipses (2, 1) 0.9069 (π/√12, the hexagonal packing and its affine images),
+//! spheres 0.7405 (π/√18, FCC/HCP), with 1, 2 and 4 items per cell.
+
+use ellipsoid_packer::local::{LocalSettings, local_minimisation};
+use ellipsoid_packer::starts::periodic_lattice_start;
+use implicit_packing::containment::ContainerShape;
+use implicit_packing::model::Model;
+
+/// The lattice start with `per_cell` items, loosened by `loose` (the cell dilated, the items
+/// turned and moved a little, deterministically), minimised.
+fn densest<const N: usize>(axes: [f64; N], per_cell: usize, loose: f64) -> (f64, f64) {
+    let mut model = Model::<N>::new(vec![axes; per_cell], ContainerShape::Periodic).unwrap();
+    let x0 = periodic_lattice_start(&model, per_cell, &[0.0; N]);
+    let mut x = model.dilated(&x0, loose);
+    let stride = Model::<N>::vars_per_body();
+    for (k, v) in x[..per_cell * stride].iter_mut().enumerate() {
+        *v += 0.05 * (((k * 7919) % 13) as f64 / 6.0 - 1.0);
+    }
+    let start_cert = model.certify(&x).unwrap();
+    assert!(start_cert.is_feasible(), "{start_cert:?}");
+    let settings = LocalSettings::default()
+        .with_feasibility_tolerance(1e-10)
+        .with_optimality_tolerance(1e-8);
+    let r = local_minimisation(&mut model, &x, &settings, &mut |_| false).unwrap();
+    assert!(r.certificate.is_feasible());
+    let unit = if N == 2 {
+        std::f64::consts::PI
+    } else {
+        4.0 / 3.0 * std::f64::consts::PI
+    };
+    let start = per_cell as f64 * unit * axes.iter().product::<f64>()
+        / model.evaluate(&x, None).unwrap().objective;
+    (r.density, start)
+}
+
+#[test]
+fn discs_and_ellipses_reach_the_hexagonal_density() {
+    let hexagonal = std::f64::consts::PI / 12f64.sqrt();
+    for axes in [[1.0, 1.0], [2.0, 1.0]] {
+        for per_cell in [1, 2, 4] {
+            let (density, start) = densest::<2>(axes, per_cell, 1.4);
+            eprintln!("{axes:?} x{per_cell}: {start:.4} -> {density:.6}");
+            assert!(
+                density <= hexagonal * (1.0 + 1e-9),
+                "{density} beats the optimum"
+            );
+            assert!(
+                density >= hexagonal * (1.0 - 1e-3),
+                "{axes:?}, {per_cell} per cell: {density} from {start}"
+            );
+        }
+    }
+}
+
+#[test]
+fn spheres_reach_the_fcc_density() {
+    let fcc = std::f64::consts::PI / 18f64.sqrt();
+    for per_cell in [1, 2, 4] {
+        let (density, start) = densest::<3>([1.0, 1.0, 1.0], per_cell, 1.3);
+        eprintln!("spheres x{per_cell}: {start:.4} -> {density:.6}");
+        assert!(density <= fcc * (1.0 + 1e-9), "{density} beats the optimum");
+        assert!(
+            density >= fcc * (1.0 - 1e-3),
+            "{per_cell} per cell: {density} from {start}"
+        );
+    }
+}
