@@ -149,12 +149,22 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         "density {:.5} ({} {}), found after {:.1} s of {:.1} s, {} local minimisations{}",
         s.density,
         s.container.size_name(),
-        s.container
-            .size()
-            .iter()
-            .map(|v| format!("{v:.6}"))
-            .collect::<Vec<_>>()
-            .join(" × "),
+        {
+            let size = s.container.size();
+            let text = |v: &[f64]| {
+                v.iter()
+                    .map(|v| format!("{v:.6}"))
+                    .collect::<Vec<_>>()
+                    .join(" × ")
+            };
+            match s.container.cell_matrix() {
+                Some(h) => {
+                    let n = h.len();
+                    format!("{}, tilts {}", text(&size[..n]), text(&size[n..]))
+                }
+                None => text(&size),
+            }
+        },
         outcome.seconds_to_best,
         s.wall_seconds,
         s.local_minimisations,

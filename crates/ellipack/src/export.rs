@@ -143,6 +143,25 @@ impl Cell {
                 half[k] = half[k].max((body.center[k] - center[k]).abs() + reach);
             }
         }
+        if let Container::Periodic {
+            origin,
+            lengths,
+            tilts,
+        } = container
+        {
+            // The periodic cell itself; in 2D a slab around z = 0 as above.
+            let mut cell = Cell {
+                lo: [0.0, 0.0, -half[2]],
+                lengths: [0.0, 0.0, 2.0 * half[2]],
+                tilt: [0.0; 3],
+                periodic: [true, true, dimension == 3],
+                dimension,
+            };
+            cell.lo[..dimension].copy_from_slice(origin);
+            cell.lengths[..dimension].copy_from_slice(lengths);
+            cell.tilt[..tilts.len()].copy_from_slice(tilts);
+            return cell;
+        }
         Cell {
             lo: [0, 1, 2].map(|k| center[k] - half[k]),
             lengths: half.map(|h| 2.0 * h),
@@ -787,10 +806,18 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
                 ]);
             }
         }
-        Container::Cuboid { .. } => {
+        Container::Cuboid { .. } | Container::Periodic { .. } if container.dimension() == 3 => {
+            let edges = cell.vectors();
             for k in 0..8 {
-                let sign = |bit: usize| if k & (1 << bit) == 0 { -1.0 } else { 1.0 };
-                vertices.push([0, 1, 2].map(|j| c[j] + sign(j) * half[j]));
+                let bit = |j: usize| k & (1 << j) != 0;
+                vertices.push(if let Container::Periodic { .. } = container {
+                    // The cell spanned by its edge vectors (right-handed: det H > 0).
+                    [0, 1, 2].map(|i| {
+                        cell.lo[i] + (0..3).filter(|&j| bit(j)).map(|j| edges[j][i]).sum::<f64>()
+                    })
+                } else {
+                    [0, 1, 2].map(|j| c[j] + if bit(j) { half[j] } else { -half[j] })
+                });
             }
             // Vertex k has bit j set when it is on the + side along axis j.
             faces.extend([
@@ -802,8 +829,18 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
                 vec![4, 5, 7, 6], // z+
             ]);
         }
-        Container::Circle { .. } | Container::Ellipse { .. } | Container::Rectangle { .. } => {
-            let outline: Vec<[f64; 2]> = if let Container::Rectangle { .. } = container {
+        _ => {
+            let edges = cell.vectors();
+            let outline: Vec<[f64; 2]> = if let Container::Periodic { .. } = container {
+                let [x0, y0, _] = cell.lo;
+                let ([ax, ay, _], [bx, by, _]) = (edges[0], edges[1]);
+                vec![
+                    [x0, y0],
+                    [x0 + ax, y0 + ay],
+                    [x0 + ax + bx, y0 + ay + by],
+                    [x0 + bx, y0 + by],
+                ]
+            } else if let Container::Rectangle { .. } = container {
                 vec![
                     [c[0] - half[0], c[1] - half[1]],
                     [c[0] + half[0], c[1] - half[1]],

@@ -486,7 +486,16 @@ pub fn model_container(kind: ContainerKind) -> ModelContainer {
         ContainerKind::Circle | ContainerKind::Ball => ModelContainer::Ball,
         ContainerKind::Ellipse | ContainerKind::Ellipsoid => ModelContainer::Ellipsoid,
         ContainerKind::Rectangle | ContainerKind::Cuboid => ModelContainer::Box,
+        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => ModelContainer::Periodic,
     }
+}
+
+/// A periodic cell's item centre `c` moved by a lattice translation into the cell (fractional
+/// coordinates in `[0, 1)`), where the files show it.
+fn wrapped<const N: usize>(cell: &[[f64; N]; N], c: [f64; N]) -> [f64; N] {
+    use implicit_packing::periodic::{to_cartesian, to_fractional};
+    let s = to_fractional(cell, &c);
+    to_cartesian(cell, &s.map(|v| v - v.floor()))
 }
 
 /// The packing of the model's variables `x`.
@@ -497,12 +506,16 @@ fn packing_of<const N: usize>(
 ) -> Result<Packing, PackError> {
     let shape = problem.container_at(x)?;
     let bodies = problem.bodies_at(x)?;
+    let centre = |b: &implicit_packing::Body<N>| match shape {
+        SizedContainer::Periodic { cell } => wrapped(&cell, b.centre()),
+        _ => b.centre(),
+    };
     let items = if N == 2 {
         Items::Ellipses(
             bodies
                 .iter()
                 .map(|b| {
-                    let (c, l, r) = (b.centre(), b.semi_axes(), b.rotation());
+                    let (c, l, r) = (centre(b), b.semi_axes(), b.rotation());
                     EllipseItem {
                         center: [c[0], c[1]],
                         semi_axes: [l[0], l[1]],
@@ -516,7 +529,7 @@ fn packing_of<const N: usize>(
             bodies
                 .iter()
                 .map(|b| {
-                    let (c, l) = (b.centre(), b.semi_axes());
+                    let (c, l) = (centre(b), b.semi_axes());
                     let r = b.rotation();
                     let rot3 = [
                         [r[0][0], r[0][1], r[0][2]],
@@ -536,11 +549,7 @@ fn packing_of<const N: usize>(
         SizedContainer::Ball { radius } => vec![radius; N],
         SizedContainer::Ellipsoid { semi_axes } => semi_axes.to_vec(),
         SizedContainer::Box { half_sides } => half_sides.to_vec(),
-        SizedContainer::Periodic { .. } => {
-            return Err(PackError::Mismatch(
-                "periodic cells are not written by this version".into(),
-            ));
-        }
+        SizedContainer::Periodic { .. } => shape.dimensions(),
     };
     let d = |k: usize| dims.get(k).copied().unwrap_or(0.0);
     let container = match kind {
@@ -567,6 +576,11 @@ fn packing_of<const N: usize>(
         ContainerKind::Cuboid => Container::Cuboid {
             center: [0.0; 3],
             half_sides: [d(0), d(1), d(2)],
+        },
+        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
+            origin: vec![0.0; N],
+            lengths: dims[..N].to_vec(),
+            tilts: dims[N..].to_vec(),
         },
     };
     Ok(Packing::new(container, items)?)

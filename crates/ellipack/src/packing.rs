@@ -138,20 +138,30 @@ pub enum ContainerKind {
     Ellipsoid,
     /// An axis-aligned cuboid (3D).
     Cuboid,
+    /// A periodic cell in the plane (2D), named `periodic`.
+    #[serde(rename = "periodic")]
+    Parallelogram,
+    /// A periodic cell in space (3D), named `periodic` (read as [`ContainerKind::Parallelogram`]
+    /// and made 3D by [`ContainerKind::named`] where the dimension is known).
+    #[serde(rename = "periodic", skip_deserializing)]
+    Parallelepiped,
 }
 
 impl ContainerKind {
     /// Every kind, 2D first.
-    pub const ALL: [ContainerKind; 6] = [
+    pub const ALL: [ContainerKind; 8] = [
         ContainerKind::Circle,
         ContainerKind::Ellipse,
         ContainerKind::Rectangle,
+        ContainerKind::Parallelogram,
         ContainerKind::Ball,
         ContainerKind::Ellipsoid,
         ContainerKind::Cuboid,
+        ContainerKind::Parallelepiped,
     ];
 
-    /// The name in files: `circle`, `ellipse`, `rectangle`, `ball`, `ellipsoid`, `cuboid`.
+    /// The name in files: `circle`, `ellipse`, `rectangle`, `ball`, `ellipsoid`, `cuboid`, and
+    /// `periodic` for the periodic cells of both dimensions.
     pub fn name(self) -> &'static str {
         match self {
             ContainerKind::Circle => "circle",
@@ -160,20 +170,42 @@ impl ContainerKind {
             ContainerKind::Ball => "ball",
             ContainerKind::Ellipsoid => "ellipsoid",
             ContainerKind::Cuboid => "cuboid",
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => "periodic",
         }
     }
 
-    /// The kind of a name, or `None`.
+    /// The kind of a name, or `None`; `periodic` is the 2D cell (see [`ContainerKind::named`]).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The kind of a name in a given dimension (`periodic` names a cell of either), or `None`.
+    pub fn named(name: &str, dimension: usize) -> Option<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name() == name && k.dimension() == dimension)
     }
 
     /// 2 or 3.
     pub fn dimension(self) -> usize {
         match self {
-            ContainerKind::Circle | ContainerKind::Ellipse | ContainerKind::Rectangle => 2,
-            ContainerKind::Ball | ContainerKind::Ellipsoid | ContainerKind::Cuboid => 3,
+            ContainerKind::Circle
+            | ContainerKind::Ellipse
+            | ContainerKind::Rectangle
+            | ContainerKind::Parallelogram => 2,
+            ContainerKind::Ball
+            | ContainerKind::Ellipsoid
+            | ContainerKind::Cuboid
+            | ContainerKind::Parallelepiped => 3,
         }
+    }
+
+    /// Whether it is a periodic cell.
+    pub fn is_periodic(self) -> bool {
+        matches!(
+            self,
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped
+        )
     }
 
     /// What the paper minimises: "area" in 2D, "volume" in 3D.
@@ -186,9 +218,14 @@ impl ContainerKind {
     }
 }
 
+/// The kind as a person reads it: its name, and `periodic cell` for the cells.
 impl fmt::Display for ContainerKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        f.write_str(self.name())?;
+        if self.is_periodic() {
+            f.write_str(" cell")?;
+        }
+        Ok(())
     }
 }
 
@@ -246,6 +283,18 @@ pub enum Container {
         /// Its half sides along x, y and z.
         half_sides: [f64; 3],
     },
+    /// A periodic cell, LAMMPS's triclinic box: lattice vectors `a = (l_x, 0, 0)`,
+    /// `b = (xy, l_y, 0)`, `c = (xz, yz, l_z)` (2D: `a = (l_x, 0)`, `b = (xy, l_y)`) from
+    /// `origin`; space is tiled by its translates.
+    Periodic {
+        /// The cell's corner (where the fractional coordinates are 0).
+        #[serde(default)]
+        origin: Vec<f64>,
+        /// `[l_x, l_y]` or `[l_x, l_y, l_z]`.
+        lengths: Vec<f64>,
+        /// `[xy]` or `[xy, xz, yz]`.
+        tilts: Vec<f64>,
+    },
 }
 
 impl Container {
@@ -268,10 +317,10 @@ impl Container {
         if center.len() != n {
             return Err(wrong("centre", n, center.len()));
         }
-        let size_len = if matches!(kind, ContainerKind::Circle | ContainerKind::Ball) {
-            1
-        } else {
-            n
+        let size_len = match kind {
+            ContainerKind::Circle | ContainerKind::Ball => 1,
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => n * (n + 1) / 2,
+            _ => n,
         };
         if size.len() != size_len {
             return Err(wrong("size", size_len, size.len()));
@@ -303,6 +352,11 @@ impl Container {
                 center: c3(),
                 half_sides: [size[0], size[1], size[2]],
             },
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
+                origin: center.to_vec(),
+                lengths: size[..n].to_vec(),
+                tilts: size[n..].to_vec(),
+            },
         };
         match container.defect() {
             None => Ok(container),
@@ -322,6 +376,30 @@ impl Container {
             Container::Ball { .. } => ContainerKind::Ball,
             Container::Ellipsoid { .. } => ContainerKind::Ellipsoid,
             Container::Cuboid { .. } => ContainerKind::Cuboid,
+            Container::Periodic { lengths, .. } => {
+                if lengths.len() == 2 {
+                    ContainerKind::Parallelogram
+                } else {
+                    ContainerKind::Parallelepiped
+                }
+            }
+        }
+    }
+
+    /// The cell matrix of a periodic cell (rows, upper triangular: columns are the lattice
+    /// vectors), `None` for the other containers or a cell of the wrong size.
+    pub fn cell_matrix(&self) -> Option<Vec<Vec<f64>>> {
+        let Container::Periodic { lengths, tilts, .. } = self else {
+            return None;
+        };
+        match (lengths.as_slice(), tilts.as_slice()) {
+            ([lx, ly], [xy]) => Some(vec![vec![*lx, *xy], vec![0.0, *ly]]),
+            ([lx, ly, lz], [xy, xz, yz]) => Some(vec![
+                vec![*lx, *xy, *xz],
+                vec![0.0, *ly, *yz],
+                vec![0.0, 0.0, *lz],
+            ]),
+            _ => None,
         }
     }
 
@@ -339,6 +417,7 @@ impl Container {
             Container::Ball { center, .. }
             | Container::Ellipsoid { center, .. }
             | Container::Cuboid { center, .. } => center,
+            Container::Periodic { origin, .. } => origin,
         }
     }
 
@@ -350,24 +429,40 @@ impl Container {
             Container::Rectangle { half_sides, .. } => half_sides.to_vec(),
             Container::Ellipsoid { semi_axes, .. } => semi_axes.to_vec(),
             Container::Cuboid { half_sides, .. } => half_sides.to_vec(),
+            Container::Periodic { lengths, tilts, .. } => {
+                lengths.iter().chain(tilts.iter()).copied().collect()
+            }
         }
     }
 
-    /// The name of [`Container::size`] in `summary.json`: `radius`, `semi_axes` or
-    /// `half_sides`.
+    /// The name of [`Container::size`] in `summary.json`: `radius`, `semi_axes`,
+    /// `half_sides`, or `lengths` (a periodic cell, whose size is its lengths and then its
+    /// tilts).
     pub fn size_name(&self) -> &'static str {
         match self.kind() {
             ContainerKind::Circle | ContainerKind::Ball => "radius",
             ContainerKind::Ellipse | ContainerKind::Ellipsoid => "semi_axes",
             ContainerKind::Rectangle | ContainerKind::Cuboid => "half_sides",
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => "lengths",
         }
     }
 
-    /// Half the extent of its bounding box along each axis.
+    /// Half the extent of its bounding box along each axis (of one cell, for a periodic cell).
     pub fn half_extents(&self) -> Vec<f64> {
         match self {
             Container::Circle { radius, .. } => vec![*radius; 2],
             Container::Ball { radius, .. } => vec![*radius; 3],
+            Container::Periodic { .. } => {
+                let h = self.cell_matrix().unwrap_or_default();
+                h.iter()
+                    .map(|row| {
+                        let (lo, hi) = row.iter().fold((0.0f64, 0.0f64), |(lo, hi), &v| {
+                            (lo + v.min(0.0), hi + v.max(0.0))
+                        });
+                        0.5 * (hi - lo)
+                    })
+                    .collect()
+            }
             _ => self.size(),
         }
     }
@@ -391,6 +486,7 @@ impl Container {
                 half_sides: [a, b, c],
                 ..
             } => 8.0 * a * b * c,
+            Container::Periodic { lengths, .. } => lengths.iter().product(),
         }
     }
 
@@ -402,6 +498,37 @@ impl Container {
                 "center",
                 format!("the centre has a non-finite coordinate {x}"),
             ));
+        }
+        if let Container::Periodic {
+            origin,
+            lengths,
+            tilts,
+        } = self
+        {
+            let n = lengths.len();
+            if !(n == 2 || n == 3) || origin.len() != n || tilts.len() != n * (n - 1) / 2 {
+                return Some((
+                    "lengths",
+                    format!(
+                        "a periodic cell has 2 or 3 lengths, as many origin coordinates and \
+                         1 or 3 tilts, not {n}, {} and {}",
+                        origin.len(),
+                        tilts.len()
+                    ),
+                ));
+            }
+            if let Some(t) = tilts.iter().find(|t| !t.is_finite()) {
+                return Some(("tilts", format!("tilts must be finite, not {t}")));
+            }
+            return lengths
+                .iter()
+                .find(|s| !(s.is_finite() && **s > 0.0))
+                .map(|s| {
+                    (
+                        "lengths",
+                        format!("lengths must be positive and finite, not {s}"),
+                    )
+                });
         }
         let size = self.size();
         size.iter()
@@ -1221,7 +1348,7 @@ pub fn xyz_string_in(packing: &Packing, cell: &crate::export::Cell) -> String {
         join(&cell.lo),
         pbc.join(" "),
         items.dimension(),
-        container.kind(),
+        container.kind().name(),
         join(container.center()),
         container.size_name(),
     );
@@ -1323,7 +1450,11 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
     };
     let dimension = get("dimension")?;
     let kind_name = get("container")?;
-    let kind = ContainerKind::from_name(kind_name)
+    let kind = ["2", "3"]
+        .iter()
+        .position(|d| *d == dimension)
+        .and_then(|d| ContainerKind::named(kind_name, d + 2))
+        .or_else(|| ContainerKind::from_name(kind_name))
         .ok_or_else(|| malformed(2, format!("container={kind_name}: unknown kind")))?;
     if dimension != kind.dimension().to_string() {
         return Err(malformed(
@@ -1336,6 +1467,7 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
         ContainerKind::Circle | ContainerKind::Ball => "container_radius",
         ContainerKind::Ellipse | ContainerKind::Ellipsoid => "container_semi_axes",
         ContainerKind::Rectangle | ContainerKind::Cuboid => "container_half_sides",
+        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => "container_lengths",
     };
     let size = numbers(size_key)?;
     let container = Container::from_parts(kind, &center, &size).map_err(|e| {

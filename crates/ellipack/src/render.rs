@@ -381,13 +381,21 @@ fn world_box(packing: &Packing) -> ([f64; 3], [f64; 3]) {
             }
         }
     };
-    if packing.container().defect().is_none() {
+    if let Some(corners) = cell_corners(packing.container()) {
+        // A periodic cell: the picture is the cell, its items cut by it.
+        for c in &corners {
+            include(c, &[0.0; 3]);
+        }
+    } else if packing.container().defect().is_none() {
         include(
             packing.container().center(),
             &packing.container().half_extents(),
         );
     }
     for (center, m) in quadratic_forms(packing.items()) {
+        if packing.container().kind().is_periodic() {
+            break;
+        }
         let half: Vec<f64> = (0..center.len()).map(|k| m[k][k].sqrt()).collect();
         include(&center, &half);
     }
@@ -515,7 +523,7 @@ fn draw<DB: DrawingBackend>(
         (FONT, title_font).into_font().color(&BLACK),
     ))
     .map_err(err)?;
-    let forms = quadratic_forms(packing.items());
+    let forms = with_images(packing.container(), quadratic_forms(packing.items()));
     // Colour by size when the items differ (mixed shapes), else one colour.
     let measures: Vec<f64> = forms
         .iter()
@@ -533,6 +541,7 @@ fn draw<DB: DrawingBackend>(
             (a.min(*x), b.max(*x))
         });
     let varied = mmax > mmin * (1.0 + 1e-9);
+    let periodic = packing.container().kind().is_periodic();
     for panel in &layout.panels {
         let scale = layout.scale;
         if !panel.label.is_empty() {
@@ -579,11 +588,17 @@ fn draw<DB: DrawingBackend>(
                 mix(LIGHT, LIGHT, 0.0)
             };
             let (u, v) = (panel.u, panel.v);
-            let Some(points) =
+            let Some(mut points) =
                 ellipse_polygon(panel, scale, (c[u], c[v]), m[u][u], m[u][v], m[v][v])
             else {
                 continue;
             };
+            if let (true, Some(cell)) = (periodic, &outline) {
+                points = clipped(&points, cell);
+                if points.len() < 3 {
+                    continue;
+                }
+            }
             area.draw(&Polygon::new(points.clone(), fill.filled()))
                 .map_err(err)?;
             let mut closed = points;
@@ -631,11 +646,140 @@ fn determinant(m: &[[f64; 3]; 3]) -> f64 {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
+/// The corners of a periodic cell (origin plus every sum of its edge vectors; z = 0 in 2D),
+/// `None` for other containers.
+fn cell_corners(container: &Container) -> Option<Vec<[f64; 3]>> {
+    if container.defect().is_some() {
+        return None;
+    }
+    let h = container.cell_matrix()?;
+    let n = h.len();
+    let o = container.center();
+    Some(
+        (0..1usize << n)
+            .map(|bits| {
+                std::array::from_fn(|r| {
+                    if r >= n {
+                        return 0.0;
+                    }
+                    o[r] + (0..n)
+                        .filter(|&c| bits & (1 << c) != 0)
+                        .map(|c| h[r][c])
+                        .sum::<f64>()
+                })
+            })
+            .collect(),
+    )
+}
+
+/// The items of a periodic cell with their images in the neighbouring cells (translations by
+/// −1, 0 or 1 edge vector along each axis), which the picture cuts by the cell; the forms
+/// unchanged for other containers.
+fn with_images(
+    container: &Container,
+    forms: Vec<(Vec<f64>, [[f64; 3]; 3])>,
+) -> Vec<(Vec<f64>, [[f64; 3]; 3])> {
+    let (Some(h), None) = (container.cell_matrix(), container.defect()) else {
+        return forms;
+    };
+    let n = h.len();
+    let mut out = Vec::with_capacity(forms.len() * 3usize.pow(n as u32));
+    for (c, m) in &forms {
+        for code in 0..3usize.pow(n as u32) {
+            let shift: Vec<f64> = (0..n)
+                .map(|k| (code / 3usize.pow(k as u32) % 3) as f64 - 1.0)
+                .collect();
+            let moved: Vec<f64> = (0..c.len())
+                .map(|r| c[r] + (0..n).map(|k| h[r][k] * shift[k]).sum::<f64>())
+                .collect();
+            out.push((moved, *m));
+        }
+    }
+    out
+}
+
+/// `polygon` cut by the convex polygon `window` (Sutherland–Hodgman; either orientation).
+fn clipped(polygon: &[(i32, i32)], window: &[(i32, i32)]) -> Vec<(i32, i32)> {
+    let area2: i64 = (0..window.len())
+        .map(|i| {
+            let (a, b) = (window[i], window[(i + 1) % window.len()]);
+            i64::from(a.0) * i64::from(b.1) - i64::from(b.0) * i64::from(a.1)
+        })
+        .sum();
+    let orientation = if area2 < 0 { -1.0 } else { 1.0 };
+    let mut out: Vec<(f64, f64)> = polygon
+        .iter()
+        .map(|&(x, y)| (f64::from(x), f64::from(y)))
+        .collect();
+    for i in 0..window.len() {
+        let (a, b) = (window[i], window[(i + 1) % window.len()]);
+        let (ax, ay, bx, by) = (
+            f64::from(a.0),
+            f64::from(a.1),
+            f64::from(b.0),
+            f64::from(b.1),
+        );
+        let side = |p: (f64, f64)| orientation * ((bx - ax) * (p.1 - ay) - (by - ay) * (p.0 - ax));
+        let input = std::mem::take(&mut out);
+        for k in 0..input.len() {
+            let (p, q) = (input[k], input[(k + 1) % input.len()]);
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                out.push(p);
+            }
+            if (sp >= 0.0) != (sq >= 0.0) {
+                let t = sp / (sp - sq);
+                out.push((p.0 + t * (q.0 - p.0), p.1 + t * (q.1 - p.1)));
+            }
+        }
+        if out.is_empty() {
+            break;
+        }
+    }
+    out.iter()
+        .map(|&(x, y)| (x.round() as i32, y.round() as i32))
+        .collect()
+}
+
+/// The convex hull of points (monotone chain), counter-clockwise in pixel coordinates.
+fn convex_hull(mut points: Vec<(i32, i32)>) -> Vec<(i32, i32)> {
+    points.sort_unstable();
+    points.dedup();
+    if points.len() < 3 {
+        return points;
+    }
+    let cross = |o: (i32, i32), a: (i32, i32), b: (i32, i32)| {
+        i64::from(a.0 - o.0) * i64::from(b.1 - o.1) - i64::from(a.1 - o.1) * i64::from(b.0 - o.0)
+    };
+    let mut hull: Vec<(i32, i32)> = Vec::with_capacity(2 * points.len());
+    for pass in [points.clone(), points.iter().rev().copied().collect()] {
+        let start = hull.len();
+        for p in pass {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
 /// The container's outline in a panel: a circle or axis-aligned ellipse (192 vertices: it is
-/// the largest thing on the page), or a rectangle.
+/// the largest thing on the page), a rectangle, or the projection of a periodic cell.
 fn container_outline(container: &Container, panel: &Panel, scale: f64) -> Option<Vec<(i32, i32)>> {
     if container.defect().is_some() {
         return None;
+    }
+    if let Some(corners) = cell_corners(container) {
+        return Some(convex_hull(
+            corners
+                .iter()
+                .map(|c| panel.to_pixel(scale, c[panel.u], c[panel.v]))
+                .collect(),
+        ));
     }
     let c = container.center();
     let half = container.half_extents();

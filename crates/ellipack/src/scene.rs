@@ -63,7 +63,7 @@
 //!     .unwrap_err();
 //! assert_eq!(err.to_string(),
 //!     "bad.toml: line 3, column 8: `container.kind`: a ball is a 3D container; \
-//!      with dimension = 2 use circle, ellipse or rectangle");
+//!      with dimension = 2 use circle, ellipse, rectangle or periodic");
 //! ```
 //!
 //! Unknown keys, values of the wrong type and impossible values (a semi-axis ≤ 0, a count of
@@ -347,6 +347,7 @@ impl<'de> Deserialize<'de> for RawSeed {
 #[serde(deny_unknown_fields)]
 struct RawContainer {
     kind: Spanned<ContainerKind>,
+    cell: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -496,6 +497,9 @@ impl Scene {
         }
         out.push_str("\n[container]\n");
         line(&mut out, "kind", toml_string(self.container.name()));
+        if self.container.is_periodic() {
+            line(&mut out, "cell", toml_string("variable"));
+        }
         for g in &self.shapes {
             out.push_str("\n[[shapes]]\n");
             line(&mut out, "count", g.count.to_string());
@@ -599,6 +603,32 @@ impl Validator<'_> {
         }
     }
 
+    /// `container.cell`: only for a periodic cell, and `"variable"` (the cell's lattice
+    /// vectors are variables, the default).
+    fn cell(&self, raw: &RawContainer, kind: ContainerKind) -> Result<(), SceneError> {
+        let Some(cell) = &raw.cell else {
+            return Ok(());
+        };
+        if !kind.is_periodic() {
+            return Err(self.error(
+                cell.span(),
+                "container.cell",
+                format!("only a periodic container has a cell, not a {kind}"),
+            ));
+        }
+        match cell.get_ref().as_str() {
+            "variable" => Ok(()),
+            other => Err(self.error(
+                cell.span(),
+                "container.cell",
+                format!(
+                    "must be \"variable\" (the densest periodic packing), not {}",
+                    crate::table::short_text(&format!("{other:?}"))
+                ),
+            )),
+        }
+    }
+
     fn scene(&self, raw: RawScene) -> Result<Scene, SceneError> {
         let dimension = match *raw.dimension.get_ref() {
             2 => Dimension::Two,
@@ -611,11 +641,16 @@ impl Validator<'_> {
                 ));
             }
         };
-        let kind = *raw.container.kind.get_ref();
+        let mut kind = *raw.container.kind.get_ref();
+        if kind.is_periodic() {
+            // `periodic` names the cell of the scene's dimension.
+            kind = ContainerKind::named(kind.name(), dimension.get()).unwrap_or(kind);
+        }
+        self.cell(&raw.container, kind)?;
         if kind.dimension() != dimension.get() {
             let choices = match dimension {
-                Dimension::Two => "circle, ellipse or rectangle",
-                Dimension::Three => "ball, ellipsoid or cuboid",
+                Dimension::Two => "circle, ellipse, rectangle or periodic",
+                Dimension::Three => "ball, ellipsoid, cuboid or periodic",
             };
             return Err(self.error(
                 raw.container.kind.span(),

@@ -1,0 +1,118 @@
+//! Periodic cells through the command line: `kind = "periodic"` packs 2D and 3D cells to the
+//! known densest lattice packings, `verify` re-checks every image, the files carry the cell
+//! (triclinic LAMMPS box, `pbc` in extended XYZ), and a cell shrunk by hand is refused with
+//! the item that overlaps its own image named.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::{ellipack, temp_dir, text};
+
+/// A periodic scene of `count` items with the given semi-axes, one thread, a few seconds.
+fn scene(dir: &Path, count: usize, axes: &str, extra: &str) -> PathBuf {
+    let dimension = axes.split(',').count();
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "dimension = {dimension}\nseed = 3\n[container]\nkind = \"periodic\"\n{extra}\
+             [[shapes]]\ncount = {count}\nsemi_axes = [{axes}]\n[solver]\ntime_limit = 3.0\n\
+             threads = 1\n[output]\npictures = false\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn pack_and_verify(count: usize, axes: &str, extra: &str) -> (f64, PathBuf, common::TempDir) {
+    let dir = temp_dir(&format!("periodic-{count}-{}", axes.len()));
+    let scene = scene(&dir, count, axes, extra);
+    let out = dir.join("out");
+    let o = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v = ellipack().arg("verify").arg(&out).output().unwrap();
+    assert!(v.status.success(), "{}", text(&v.stdout));
+    let s = summary(&out);
+    assert_eq!(s["container"]["kind"], "periodic");
+    (s["density"].as_f64().unwrap(), out, dir)
+}
+
+#[test]
+fn ellipses_reach_the_hexagonal_density_and_the_files_carry_the_cell() {
+    let hexagonal = std::f64::consts::PI / 12f64.sqrt();
+    let (density, out, _dir) = pack_and_verify(4, "2.0, 1.0", "cell = \"variable\"\n");
+    assert!(
+        density >= hexagonal * (1.0 - 1e-4) && density <= hexagonal * (1.0 + 1e-9),
+        "{density}"
+    );
+    let xyz = std::fs::read_to_string(out.join("packing.xyz")).unwrap();
+    assert!(xyz.contains("pbc=\"T T F\""), "{xyz}");
+    assert!(xyz.contains("container=periodic"), "{xyz}");
+    let data = std::fs::read_to_string(out.join("packing.data")).unwrap();
+    assert!(data.contains("xy xz yz"), "{data}");
+}
+
+#[test]
+fn spheres_reach_the_fcc_density() {
+    let fcc = std::f64::consts::PI / 18f64.sqrt();
+    let (density, out, _dir) = pack_and_verify(2, "1.0, 1.0, 1.0", "");
+    assert!(
+        density >= fcc * (1.0 - 1e-4) && density <= fcc * (1.0 + 1e-9),
+        "{density}"
+    );
+    let xyz = std::fs::read_to_string(out.join("packing.xyz")).unwrap();
+    assert!(xyz.contains("pbc=\"T T T\""), "{xyz}");
+}
+
+#[test]
+fn a_shrunk_cell_is_refused_naming_the_item_and_its_image() {
+    let (_, out, _dir) = pack_and_verify(1, "1.0, 1.0", "");
+    let path = out.join("summary.json");
+    let mut s = summary(&out);
+    let lengths = s["container"]["lengths"].as_array().unwrap().clone();
+    let shrunk: Vec<f64> = lengths.iter().map(|v| v.as_f64().unwrap() * 0.9).collect();
+    s["container"]["lengths"] = serde_json::json!(shrunk);
+    std::fs::write(&path, serde_json::to_string_pretty(&s).unwrap()).unwrap();
+    let v = ellipack().arg("verify").arg(&out).output().unwrap();
+    let said = text(&v.stdout) + &text(&v.stderr);
+    assert!(!v.status.success(), "{said}");
+    assert!(said.contains("overlapping"), "{said}");
+    assert!(
+        said.contains("0 and 0") || said.contains("(0, 0)"),
+        "{said}"
+    );
+}
+
+#[test]
+fn a_cell_key_outside_a_periodic_container_is_refused() {
+    let dir = temp_dir("periodic-bad-cell");
+    let path = dir.join("scene.toml");
+    for (kind, cell, expected) in [
+        ("circle", "variable", "only a periodic container has a cell"),
+        ("periodic", "elastic", "must be \"variable\""),
+    ] {
+        std::fs::write(
+            &path,
+            format!(
+                "dimension = 2\n[container]\nkind = \"{kind}\"\ncell = \"{cell}\"\n\
+                 [[shapes]]\ncount = 2\nsemi_axes = [1.0, 1.0]\n"
+            ),
+        )
+        .unwrap();
+        let o = ellipack().arg("pack").arg(&path).output().unwrap();
+        let said = text(&o.stderr);
+        assert!(!o.status.success());
+        assert!(said.contains("line 4"), "{said}");
+        assert!(said.contains(expected), "{said}");
+    }
+}
