@@ -290,6 +290,27 @@ impl<const D: usize> PairList<D> {
         Ok(())
     }
 
+    /// As [`for_each_close_pair`](Self::for_each_close_pair), for the pairs whose first item
+    /// `i` is in `rows` only (the list is still built over every point): e.g. the pairs of the
+    /// first items with any item, skipping those among the rest.
+    ///
+    /// # Errors
+    /// Those of [`refresh`](Self::refresh); `f` is not called then.
+    pub fn for_each_close_pair_from<F>(
+        &mut self,
+        points: &[[f64; D]],
+        rows: Range<usize>,
+        mut f: F,
+    ) -> Result<(), Error>
+    where
+        F: FnMut(usize, usize, [f64; D], f64),
+    {
+        self.refresh(points)?;
+        let rows = rows.start.min(points.len())..rows.end.min(points.len());
+        self.close_pairs_in(points, rows, &mut f);
+        Ok(())
+    }
+
     /// The close pairs of the rows `rows`, the list being valid at `points`.
     ///
     /// About a quarter of the listed pairs fail the test, at random: a branch per pair

@@ -371,11 +371,52 @@ fn unit_cell<const N: usize>(per_cell: usize) -> ([[f64; N]; N], Vec<[f64; N]>) 
     }
 }
 
+/// The numbers of unit cells `c_k` along each axis for `m` items, `per_cell` sites per unit
+/// cell of heights `h_k`: the fewest empty sites among the supercells whose heights `c_k h_k`
+/// differ by at most a factor 4, then the least spread of the heights.
+fn supercell<const N: usize>(m: usize, per_cell: usize, h: &[f64; N]) -> [usize; N] {
+    let cells = m.div_ceil(per_cell).max(1);
+    let cost = |c: &[usize; N]| {
+        let sites = per_cell * c.iter().product::<usize>();
+        let widths: Vec<f64> = (0..N).map(|k| c[k] as f64 * h[k]).collect();
+        let spread = widths.iter().fold(0.0f64, |a, &b| a.max(b))
+            / widths.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        (spread > 4.0, sites - m, spread)
+    };
+    let mut best = [1usize; N];
+    best[N - 1] = cells;
+    let mut best_cost = cost(&best);
+    // Every (c_1, …, c_{N−1}) up to `cells`, the last count the least that holds the items.
+    let mut c = [1usize; N];
+    loop {
+        let partial: usize = c[..N - 1].iter().product();
+        if partial <= cells {
+            c[N - 1] = cells.div_ceil(partial);
+            let value = cost(&c);
+            if value.partial_cmp(&best_cost) == Some(std::cmp::Ordering::Less) {
+                (best, best_cost) = (c, value);
+            }
+        }
+        let mut k = 0;
+        while k < N - 1 {
+            c[k] += 1;
+            if c[..N - 1].iter().product::<usize>() <= cells {
+                break;
+            }
+            c[k] = 1;
+            k += 1;
+        }
+        if k == N - 1 {
+            return best;
+        }
+    }
+}
+
 /// A periodic lattice start: the items unrotated on a densest lattice of unit balls mapped by
 /// `diag(l)` (so that items do not overlap, as in [`LatticeStart`]), in a periodic cell made of
-/// `c_1 × … × c_N` unit cells of `per_cell` sites (1, 2 or 4), the `c_k` grown one at a time
-/// along the narrowest side until the sites hold every item; the first `m` sites are taken
-/// and the rest left empty. `shift` moves every site (in units of the unit cell).
+/// `c_1 × … × c_N` unit cells of `per_cell` sites (1, 2 or 4), the `c_k` chosen for the fewest
+/// empty sites and then the most isotropic cell; the first `m` sites are taken and the rest
+/// left empty. `shift` moves every site (in units of the unit cell).
 pub fn periodic_lattice_start<const N: usize>(
     problem: &Model<N>,
     per_cell: usize,
@@ -385,15 +426,7 @@ pub fn periodic_lattice_start<const N: usize>(
     let l = lattice_semi_axes(problem);
     let (unit, sites) = unit_cell::<N>(per_cell);
     let unit: [[f64; N]; N] = std::array::from_fn(|r| unit[r].map(|v| v * l[r]));
-    let mut counts = [1usize; N];
-    while sites.len() * counts.iter().product::<usize>() < m {
-        let narrowest = (0..N)
-            .min_by(|&a, &b| {
-                (unit[a][a] * counts[a] as f64).total_cmp(&(unit[b][b] * counts[b] as f64))
-            })
-            .unwrap_or(0);
-        counts[narrowest] += 1;
-    }
+    let counts = supercell::<N>(m, sites.len(), &std::array::from_fn(|k| unit[k][k]));
     let stride = Model::<N>::vars_per_body();
     let mut x = vec![0.0; problem.var_count()];
     let mut item = 0;

@@ -66,3 +66,45 @@ fn spheres_reach_the_fcc_density() {
         );
     }
 }
+
+/// Every periodic lattice start is a packing at the lattice's density (π/√12 or π/√18 when
+/// the sites are all filled), whatever the number of items.
+#[test]
+fn periodic_lattice_starts_are_certified() {
+    fn check<const N: usize>(axes: [f64; N], m: usize, per_cell: usize, optimum: f64) {
+        let mut model = Model::<N>::new(vec![axes; m], ContainerShape::Periodic).unwrap();
+        let shift = [0.25 * (m % 2) as f64; N];
+        let x = periodic_lattice_start(&model, per_cell, &shift);
+        let cert = model.certify(&x).unwrap();
+        assert!(
+            cert.is_feasible(),
+            "{N}D, m = {m}, {per_cell} per cell: {cert:?}"
+        );
+        let unit = if N == 2 {
+            std::f64::consts::PI
+        } else {
+            4.0 / 3.0 * std::f64::consts::PI
+        };
+        let density = m as f64 * unit * axes.iter().product::<f64>()
+            / model.evaluate(&x, None).unwrap().objective;
+        assert!(density <= optimum * (1.0 + 1e-12), "{density}");
+        // One unit cell, or 10 × 10 × 10: every site filled.
+        if m == per_cell || m == 1000 {
+            assert!(
+                density >= optimum * (1.0 - 1e-8),
+                "{N}D, m = {m}: {density}"
+            );
+        }
+    }
+    let (hex, fcc) = (
+        std::f64::consts::PI / 12f64.sqrt(),
+        std::f64::consts::PI / 18f64.sqrt(),
+    );
+    for per_cell in [1, 2, 4] {
+        for m in [1, 2, 4, 7, 16, 64] {
+            check([2.0, 1.0], m, per_cell, hex);
+            check([1.0, 0.75, 0.5], m, per_cell, fcc);
+        }
+    }
+    check([1.0, 0.75, 0.5], 1000, 1, fcc);
+}

@@ -356,9 +356,10 @@ impl<const N: usize> Lattice<N> {
         mut f: impl FnMut(Points<'_, N>, usize, usize),
     ) -> Result<(), Error> {
         let (images, points, bodies) = (&self.images, &self.points, &self.extended);
+        // Only pairs whose first point is an item can be representatives.
         match &mut self.list {
             Some(list) => list
-                .for_each_close_pair(points, |a, b, _, _| {
+                .for_each_close_pair_from(points, 0..images.items, |a, b, _, _| {
                     if images.is_representative(a, b) {
                         f((bodies, &images.owner), a, b);
                     }
