@@ -41,6 +41,10 @@ enum Command {
         /// Parallel starts (0: every core).
         #[arg(long, default_value_t = 0)]
         threads: usize,
+        /// Continue from the committed packings: each instance starts from its packing in
+        /// validation/paper-packings/, and its row adds this budget to the earlier one.
+        #[arg(long)]
+        resume: bool,
     },
     /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
     /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
@@ -76,6 +80,7 @@ fn main() -> ExitCode {
             minutes,
             instances,
             threads,
+            resume,
         } => {
             let instances = if instances.is_empty() {
                 xtask::paper_tables::TARGETS
@@ -89,6 +94,7 @@ fn main() -> ExitCode {
                 minutes,
                 instances,
                 threads,
+                resume,
             };
             match xtask::paper_tables::run_all(&workspace_root(), &options) {
                 Ok(problems) if problems.is_empty() => ExitCode::SUCCESS,
