@@ -8,8 +8,10 @@
 //!                                     # 0 to 18446744073709551615 (a string "…" works too)
 //!
 //! [container]
-//! kind = "ellipse"                    # 2D: circle | ellipse | rectangle
-//!                                     # 3D: ball | ellipsoid | cuboid
+//! kind = "ellipse"                    # 2D: circle | ellipse | rectangle | periodic
+//!                                     # 3D: ball | ellipsoid | cuboid | periodic
+//! # cell = "variable"                 # periodic only: the cell's lattice vectors are
+//!                                     # variables (the densest periodic packing)
 //!
 //! [[shapes]]                          # one table per group of identical items
 //! count = 20
