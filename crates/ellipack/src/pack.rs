@@ -504,7 +504,14 @@ fn packing_of<const N: usize>(
     x: &[f64],
     kind: ContainerKind,
 ) -> Result<Packing, PackError> {
-    let shape = problem.container_at(x)?;
+    // A periodic cell is written with its tilts reduced: the same lattice in the cell LAMMPS
+    // accepts.
+    let shape = match problem.container_at(x)? {
+        SizedContainer::Periodic { cell } => SizedContainer::Periodic {
+            cell: implicit_packing::periodic::reduced(&cell),
+        },
+        other => other,
+    };
     let bodies = problem.bodies_at(x)?;
     let centre = |b: &implicit_packing::Body<N>| match shape {
         SizedContainer::Periodic { cell } => wrapped(&cell, b.centre()),

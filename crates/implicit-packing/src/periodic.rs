@@ -90,6 +90,28 @@ pub fn entry<const N: usize>(k: usize) -> (usize, usize) {
     if N == 2 { ENTRIES_2D[k] } else { ENTRIES_3D[k] }
 }
 
+/// The same lattice with its tilts reduced: `c − k b`, `c − k a`, `b − k a` with the nearest
+/// integers `k`, so that `|yz| ≤ l_y / 2`, `|xz| ≤ l_x / 2`, `|xy| ≤ l_x / 2` (the limits
+/// LAMMPS asks of a triclinic box). The cell stays upper triangular with the same diagonal,
+/// so the same volume; the items keep their Cartesian positions (the caller wraps them into
+/// the new cell).
+pub fn reduced<const N: usize>(cell: &[[f64; N]; N]) -> [[f64; N]; N] {
+    let mut h = *cell;
+    // Column j −= k · column i, for the pairs (i, j) = (1, 2), (0, 2), (0, 1) in 3D; (0, 1) in 2D.
+    let steps: &[(usize, usize)] = if N == 3 {
+        &[(1, 2), (0, 2), (0, 1)]
+    } else {
+        &[(0, 1)]
+    };
+    for &(i, j) in steps {
+        let k = (h[i][j] / h[i][i]).round();
+        for r in 0..N {
+            h[r][j] -= k * h[r][i];
+        }
+    }
+    h
+}
+
 /// `H⁻¹`, upper triangular, by back substitution.
 pub fn inverse<const N: usize>(cell: &[[f64; N]; N]) -> [[f64; N]; N] {
     let mut inv = [[0.0; N]; N];

@@ -249,3 +249,42 @@ fn bad_cells_and_far_items_are_named() {
     let message = err.unwrap_err().to_string();
     assert!(message.contains("too thin"), "{message}");
 }
+
+/// The reduced cell spans the same lattice: the same packing, value and certificate.
+#[test]
+fn reduced_cells_hold_the_same_packing() {
+    use implicit_packing::periodic::{reduced, to_cartesian, to_fractional};
+    let mut rng = Rng::new(5);
+    let (axes, mut x) = config::<3>(&mut rng, 20, 0.6, 2.0);
+    let n = x.len();
+    // Large tilts: several cells of shear.
+    x[n - 3] += 2.3 * x[n - 6];
+    x[n - 2] -= 1.7 * x[n - 6];
+    x[n - 1] += 3.2 * x[n - 5];
+    let mut model = Model::<3>::new(axes, ContainerShape::Periodic).unwrap();
+    let before = model.evaluate(&x, None).unwrap();
+    let cell: [[f64; 3]; 3] = [
+        [x[n - 6], x[n - 3], x[n - 2]],
+        [0.0, x[n - 5], x[n - 1]],
+        [0.0, 0.0, x[n - 4]],
+    ];
+    let h = reduced(&cell);
+    assert!(h[0][1].abs() <= 0.5 * h[0][0] && h[0][2].abs() <= 0.5 * h[0][0]);
+    assert!(h[1][2].abs() <= 0.5 * h[1][1]);
+    let mut y = x.clone();
+    for i in 0..20 {
+        let c = to_cartesian(&cell, &[x[6 * i], x[6 * i + 1], x[6 * i + 2]]);
+        y[6 * i..6 * i + 3].copy_from_slice(&to_fractional(&h, &c));
+    }
+    y[n - 3..].copy_from_slice(&[h[0][1], h[0][2], h[1][2]]);
+    let after = model.evaluate(&y, None).unwrap();
+    assert!(
+        relative(after.overlap, before.overlap) < 1e-10,
+        "{after:?} {before:?}"
+    );
+    assert!(relative(after.objective, before.objective) < 1e-15);
+    assert_eq!(
+        model.certify(&x).unwrap().overlapping.len(),
+        model.certify(&y).unwrap().overlapping.len()
+    );
+}
