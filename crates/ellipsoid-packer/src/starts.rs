@@ -183,6 +183,49 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
     x
 }
 
+/// A start that fills a fixed container: the [`LatticeStart`] (with the container's aspect
+/// when it has one semi-axis or half side per direction) dilated about the centre
+/// ([`Model::dilated`]) until its container has the fixed container's area or volume, and then
+/// given the fixed container's variables `container` (those of the model after the items').
+/// Items keep their size, so above the lattice's density they overlap and the solver
+/// separates them; a periodic cell keeps its fractional centres and takes the fixed cell.
+///
+/// # Errors
+/// [`Error::Model`] when `container` is not a valid container of the problem's kind (wrong
+/// length, a value that is not positive and finite).
+pub fn fill_start<const N: usize>(
+    problem: &mut Model<N>,
+    start: &LatticeStart<N>,
+    container: &[f64],
+) -> Result<Vec<f64>, Error> {
+    let body_variables = problem.len() * Model::<N>::vars_per_body();
+    if container.len() != problem.var_count() - body_variables {
+        return Err(implicit_packing::Error::LengthMismatch {
+            what: "container variables",
+            expected: problem.var_count() - body_variables,
+            found: container.len(),
+        }
+        .into());
+    }
+    let start = LatticeStart {
+        aspect: if container.len() == N {
+            std::array::from_fn(|k| container[k])
+        } else {
+            start.aspect
+        },
+        ..*start
+    };
+    let lattice = lattice_start_of(problem, &start);
+    let lattice_measure = problem.evaluate(&lattice, None)?.objective;
+    let mut fixed = lattice.clone();
+    fixed[body_variables..].copy_from_slice(container);
+    let fixed_measure = problem.evaluate(&fixed, None)?.objective;
+    let s = (fixed_measure / lattice_measure).powf(1.0 / N as f64);
+    let mut x = problem.dilated(&lattice, s);
+    x[body_variables..].copy_from_slice(container);
+    Ok(x)
+}
+
 /// The `m` points `diag(l) (shift·B + n·B)`, `n ∈ ℤᴺ`, of smallest gauge (ties broken by the
 /// lattice index, so the start is deterministic).
 fn deepest_points<const N: usize>(
