@@ -14,7 +14,7 @@ use crate::scene::Scene;
 use ellipsoid_packer::local::LocalSettings;
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
-use ellipsoid_packer::starts::lattice_start;
+use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::Body;
 use implicit_packing::containment::{
     Container as SizedContainer, ContainerShape as ModelContainer,
@@ -65,6 +65,33 @@ pub enum PackError {
         #[source]
         source: std::io::Error,
     },
+    /// A fixed container that the run could not fill without overlap: the least overlapping
+    /// configuration comes with the error, to be kept apart from packings.
+    #[error(
+        "packing fraction {:.4} not reached in {:.1} s: the least overlapping configuration \
+         ({} local minimisations) has {} overlapping pairs{} and {} items outside the container \
+         (model overlap {:.3e})",
+        .0.summary.density,
+        .0.summary.wall_seconds,
+        .0.summary.local_minimisations,
+        .0.summary.certificate.overlapping_pairs,
+        .0.summary.certificate.min_mu2.map_or(String::new(), |m| format!(" (smallest μ² {m:.6})")),
+        .0.summary.certificate.containment_violations,
+        .0.infeasibility
+    )]
+    NotReached(Box<Unfinished>),
+    /// A fixed container given both by the scene and by a packing to resume from, of
+    /// different sizes.
+    #[error(
+        "cannot resume: the packing's container ({found:?}) is not the scene's fixed container \
+         ({expected:?})"
+    )]
+    FixedSizeMismatch {
+        /// The size of the packing's container.
+        found: Vec<f64>,
+        /// The size the scene gives.
+        expected: Vec<f64>,
+    },
     /// A time limit that is not a positive number of seconds a clock can count to.
     #[error(
         "the time limit must be a positive number of seconds, at most {max:.3e} (about 585 \
@@ -76,6 +103,23 @@ pub enum PackError {
         seconds: f64,
     },
 }
+
+/// The least overlapping configuration of a fixed-container run that found no packing: written
+/// to `unfinished/` of the output folder, never as a packing.
+#[derive(Clone, Debug)]
+pub struct Unfinished {
+    /// The configuration (items may overlap or stick out).
+    pub packing: Packing,
+    /// Its summary: the certificate's counts, [`Summary::not_reached`] set.
+    pub summary: Summary,
+    /// The model's overlap plus containment violation there (0 only at a packing).
+    pub infeasibility: f64,
+    /// Whether the run was stopped by a signal rather than by its time limit.
+    pub interrupted: bool,
+}
+
+/// The folder inside the output folder that holds [`Unfinished`] configurations.
+pub const UNFINISHED_DIR: &str = "unfinished";
 
 /// What makes a packing to resume from uncertified: the items that overlap and those that
 /// stick out (ids are the rows' ids in `packing.csv`, counted from 0).
@@ -295,9 +339,24 @@ fn run_n<const N: usize>(
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     let kind = model_container(scene.container);
-    let problem = Model::<N>::new(axes.to_vec(), kind)?;
+    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
+    let fixed = scene.fixed_container().map(|c| model_dimensions(&c, kind));
     let x0 = match &options.resume_from {
         Some(packing) => {
+            if let Some(expected) = &fixed {
+                let found = model_dimensions(packing.container(), kind);
+                let same = found.len() == expected.len()
+                    && found
+                        .iter()
+                        .zip(expected)
+                        .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
+                if !same {
+                    return Err(PackError::FixedSizeMismatch {
+                        found,
+                        expected: expected.clone(),
+                    });
+                }
+            }
             if packing.container().kind() != scene.container {
                 return Err(PackError::Mismatch(format!(
                     "the packing's container is {}, the scene's {}",
@@ -307,10 +366,12 @@ fn run_n<const N: usize>(
             }
             variables_of::<N>(packing, axes, kind)?
         }
-        None => lattice_start(&problem),
+        None => match &fixed {
+            Some(dims) => fill_start(&mut problem, &LatticeStart::centred(), dims)?,
+            None => lattice_start(&problem),
+        },
     };
     // A resumed run keeps its start as the packing to beat, so the start must be certified.
-    let mut problem = problem;
     if options.resume_from.is_some() {
         let certificate = problem.certify(&x0)?;
         if !certificate.is_feasible() {
@@ -330,6 +391,7 @@ fn run_n<const N: usize>(
         crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
         crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
     };
+    local.fixed_container = fixed.is_some();
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
     settings.local = local;
@@ -348,7 +410,28 @@ fn run_n<const N: usize>(
     settings.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
     settings.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
     settings.shard = options.shard.unwrap_or(Shard::WHOLE);
-    let result = multistart(axes, kind, &x0, &settings, observer)?;
+    let result = match multistart(axes, kind, &x0, &settings, observer) {
+        Ok(result) => result,
+        Err(ellipsoid_packer::Error::NotReached(u)) => {
+            let packing = packing_of::<N>(&mut problem, &u.x, scene.container)?;
+            let objective = problem.evaluate(&u.x, None)?.objective;
+            let mut summary = Summary::new(
+                &packing,
+                objective,
+                u.wall_time.as_secs_f64(),
+                u.local_minimisations as u64,
+                certificate_of(&u.certificate),
+            );
+            summary.not_reached = true;
+            return Err(PackError::NotReached(Box::new(Unfinished {
+                packing,
+                summary,
+                infeasibility: u.infeasibility,
+                interrupted: u.interrupted,
+            })));
+        }
+        Err(e) => return Err(e.into()),
+    };
     let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
     let certificate = certificate_of(&result.best.certificate);
     let mut summary = Summary::new(
@@ -358,7 +441,8 @@ fn run_n<const N: usize>(
         result.local_minimisations as u64,
         certificate,
     );
-    summary.repair = Some(crate::packing::Repair {
+    // A fixed container is never repaired: its packings are certified as the solver left them.
+    summary.repair = fixed.is_none().then_some(crate::packing::Repair {
         dilation: result.best.repair_factor,
         density_before: result.best.density_before_repair,
     });
@@ -572,6 +656,16 @@ fn packing_of<const N: usize>(
     Ok(Packing::new(container, items)?)
 }
 
+/// The model's container variables of a container: the radius of a ball, else its semi-axes
+/// or half sides.
+fn model_dimensions(container: &Container, kind: ModelContainer) -> Vec<f64> {
+    let size = container.size();
+    match kind {
+        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
+        _ => size,
+    }
+}
+
 /// The model's variables of a packing (centres relative to the container's centre), checking
 /// that its items have the semi-axes `axes`, in order.
 fn variables_of<const N: usize>(
@@ -598,11 +692,7 @@ fn variables_of<const N: usize>(
             axes[i]
         ))
     };
-    let size = packing.container().size();
-    let dims: Vec<f64> = match kind {
-        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
-        _ => size,
-    };
+    let dims = model_dimensions(packing.container(), kind);
     // The bodies relative to the container's centre, with the scene's semi-axes (equal to the
     // packing's within 1e-12, checked here), so that the model takes them as its own.
     let axis = |i: usize, k: usize| axes[i].get(k).copied().unwrap_or(f64::NAN);

@@ -75,16 +75,18 @@ pub fn fill<const N: usize>(
         Ok(r) => r.density,
         Err(_) => crate::local::item_measure(&problem) / problem.evaluate(x0, None)?.objective,
     };
-    let result = |best: LocalResult, done: usize, failed: usize, kept: bool, interrupted: bool| MultiStartResult {
-        best,
-        local_minimisations: done,
-        failed_starts: failed,
-        restarts: 0,
-        time_to_best: start.elapsed(),
-        wall_time: start.elapsed(),
-        interrupted,
-        start_density: kept.then_some(density),
-        start_kept: kept,
+    let result = |best: LocalResult, done: usize, failed: usize, kept: bool, interrupted: bool| {
+        MultiStartResult {
+            best,
+            local_minimisations: done,
+            failed_starts: failed,
+            restarts: 0,
+            time_to_best: start.elapsed(),
+            wall_time: start.elapsed(),
+            interrupted,
+            start_density: kept.then_some(density),
+            start_kept: kept,
+        }
     };
     let mut least = match given {
         Ok(packing) => return Ok(result(packing, 0, 0, true, false)),
@@ -107,7 +109,13 @@ pub fn fill<const N: usize>(
                 if shard.index() == 0 {
                     x0.to_vec()
                 } else {
-                    perturb::<N>(x0, m, settings.perturbation, settings.seed, shard.index() as u64)
+                    perturb::<N>(
+                        x0,
+                        m,
+                        settings.perturbation,
+                        settings.seed,
+                        shard.index() as u64,
+                    )
                 }
             } else {
                 match start_kind(settings, index) {
