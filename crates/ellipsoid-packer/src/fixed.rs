@@ -120,7 +120,9 @@ pub fn fill<const N: usize>(
             } else {
                 match start_kind(settings, index) {
                     Start::Lattice(n) => {
-                        let global = n * shard.count() + shard.index();
+                        // Lattice start 0 of the sequence is the centred one, which callers
+                        // fill for the given start: begin after it.
+                        let global = n * shard.count() + shard.index() + 1;
                         fill_start(&mut problem, &LatticeStart::sequence(global), &container)?
                     }
                     Start::Perturbed(amplitude) => perturb::<N>(
@@ -245,7 +247,8 @@ mod tests {
         let volume = item_measure(&p);
         let radius = (volume / fraction / (4.0 / 3.0 * std::f64::consts::PI)).cbrt();
         let x0 = fill_start(&mut p, &LatticeStart::centred(), &[radius]).unwrap();
-        let settings = settings.with_local(LocalSettings::default().with_fixed_container(true));
+        let local = settings.local.clone().with_fixed_container(true);
+        let settings = settings.with_local(local);
         let r = multistart(&axes, ContainerShape::Ball, &x0, &settings, &mut ());
         (radius, x0, r)
     }
@@ -271,9 +274,11 @@ mod tests {
 
     #[test]
     fn an_impossible_fraction_ends_not_reached_with_the_least_infeasible_point() {
+        // Few outer iterations: each start fails anyway, and the test stays short.
         let settings = MultiStartSettings::paper(3, 1)
             .with_lattice_starts(1)
-            .with_max_local_minimisations(3);
+            .with_max_local_minimisations(3)
+            .with_local(LocalSettings::default().with_max_outer_iterations(5));
         let (radius, _, r) = ball_run(0.95, settings);
         let Err(Error::NotReached(u)) = r else {
             panic!("a ball at packing fraction 0.95 was filled: {r:?}");
