@@ -123,11 +123,83 @@ fn a_certified_packing_in_the_folder_is_never_replaced_by_an_unfinished_run() {
     let summary_before = std::fs::read(out.join("summary.json")).unwrap();
     let o = pack(&dir, SQUARE, &out);
     assert_eq!(o.status.code(), Some(4), "{}", text(&o.stderr));
-    assert_eq!(std::fs::read(out.join("packing.csv")).unwrap(), before);
-    assert_eq!(
-        std::fs::read(out.join("summary.json")).unwrap(),
-        summary_before
+    assert!(
+        std::fs::read(out.join("packing.csv")).unwrap() == before,
+        "the certified packing was replaced"
+    );
+    assert!(
+        std::fs::read(out.join("summary.json")).unwrap() == summary_before,
+        "the certified packing's summary was replaced"
     );
     assert!(out.join("unfinished").join("summary.json").is_file());
     assert!(verify(&out).status.success());
+}
+
+#[test]
+fn resuming_a_fixed_run_keeps_its_packing_and_refuses_another_size() {
+    let dir = temp_dir("fixed-resume");
+    let out = dir.join("out");
+    assert_eq!(pack(&dir, BALL, &out).status.code(), Some(0));
+    let before = std::fs::read(out.join("packing.csv")).unwrap();
+    let scene = dir.join("scene.toml");
+    let resumed = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    let said = text(&resumed.stdout);
+    assert_eq!(
+        resumed.status.code(),
+        Some(0),
+        "{said}{}",
+        text(&resumed.stderr)
+    );
+    assert!(
+        said.contains("already a packing in the fixed container"),
+        "{said}"
+    );
+    // The start is written again as read back (its angles converted to quaternions anew),
+    // so the numbers agree to rounding, not to the last digit.
+    let again = std::fs::read_to_string(out.join("packing.csv")).unwrap();
+    let numbers = |t: &str| -> Vec<f64> {
+        t.lines()
+            .skip(1)
+            .flat_map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()))
+            .collect()
+    };
+    let (a, b) = (
+        numbers(&again),
+        numbers(&String::from_utf8(before.clone()).unwrap()),
+    );
+    assert_eq!(a.len(), b.len());
+    assert!(
+        a.iter()
+            .zip(&b)
+            .all(|(x, y)| (x - y).abs() <= 1e-12 * (1.0 + y.abs())),
+        "the resumed run wrote another packing"
+    );
+    let before = std::fs::read(out.join("packing.csv")).unwrap();
+    // The same items at another fraction: the folder's ball is not the scene's.
+    std::fs::write(&scene, BALL.replace("0.45", "0.4")).unwrap();
+    let refused = ellipack()
+        .arg("pack")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        text(&refused.stderr).contains("is not the scene's fixed container"),
+        "{}",
+        text(&refused.stderr)
+    );
+    assert!(
+        std::fs::read(out.join("packing.csv")).unwrap() == before,
+        "a refused run changed the packing"
+    );
 }
