@@ -317,9 +317,14 @@ pub struct RunOutcome {
 
 /// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
 /// multi-start until the time limit or the cap on local minimisations, then the certificate.
+/// A scene that gives its container's size ([`Scene::fixed_container`]) is filled instead,
+/// from a lattice start dilated into that container, until the first certified packing.
 ///
 /// # Errors
-/// [`PackError`] when the model refuses the items or the resume packing does not match.
+/// [`PackError`] when the model refuses the items or the resume packing does not match;
+/// [`PackError::NotReached`], with the least overlapping configuration, when a fixed container
+/// was not filled; [`PackError::FixedSizeMismatch`] when the packing to resume from is not in
+/// the scene's fixed container.
 pub fn run(
     scene: &Scene,
     options: &RunOptions,
