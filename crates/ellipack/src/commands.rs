@@ -3,8 +3,8 @@
 use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
-    History, MultiStartProgress, Observer, RunOptions, probe_output_folder, resume_start, run,
-    time_limit_of, verify_detailed as check,
+    History, MultiStartProgress, Observer, PackError, RunOptions, UNFINISHED_DIR, Unfinished,
+    probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
     CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
@@ -113,9 +113,16 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         history: History::new(),
         interrupted: Arc::clone(&interrupted),
     };
-    let outcome = run(&scene, &options, &mut terminal)?;
+    let outcome = run(&scene, &options, &mut terminal);
     let history = terminal.history.into_text();
     bar.finish_and_clear();
+    let outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(PackError::NotReached(unfinished)) => {
+            return not_reached(&scene, &out, &unfinished, &history);
+        }
+        Err(e) => return Err(e.into()),
+    };
 
     // The whole set is written into a staging folder and swapped in, so that the folder never
     // holds a mix of this run's files and the previous run's; an error (or a kill) before the
@@ -174,17 +181,27 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             ""
         }
     );
-    println!(
-        "certificate: {} overlapping pairs, {} containment violations, min μ² = {}; repair \
-         dilation {:.2e} (density {:.5} before)",
-        s.certificate.overlapping_pairs,
-        s.certificate.containment_violations,
-        s.certificate
-            .min_mu2
-            .map_or("—".into(), |m| format!("{m:.9}")),
-        outcome.repair_factor - 1.0,
-        outcome.density_before_repair
-    );
+    let min_mu2 = s
+        .certificate
+        .min_mu2
+        .map_or("—".into(), |m| format!("{m:.9}"));
+    if scene.container_size.is_some() {
+        // A fixed container is filled, never dilated: there is no repair to report.
+        println!(
+            "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
+             the container is the scene's",
+            s.certificate.overlapping_pairs, s.certificate.containment_violations,
+        );
+    } else {
+        println!(
+            "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
+             repair dilation {:.2e} (density {:.5} before)",
+            s.certificate.overlapping_pairs,
+            s.certificate.containment_violations,
+            outcome.repair_factor - 1.0,
+            outcome.density_before_repair
+        );
+    }
     if outcome.restarts > 0 {
         println!(
             "{} new chains from fresh lattice starts (after {} starts without improvement)",
@@ -202,7 +219,9 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             outcome.seconds_to_best
         );
     }
-    if outcome.start_kept {
+    if outcome.start_kept && scene.container_size.is_some() {
+        println!("the start is already a packing in the fixed container: wrote the start");
+    } else if outcome.start_kept {
         println!(
             "no local minimisation found a denser certified packing than the start{}: wrote \
              the start",
@@ -226,6 +245,44 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// Exit status of `pack` when a fixed container could not be filled without overlap.
+const NOT_REACHED: u8 = 4;
+
+/// A fixed container that was not filled: the message, and the least overlapping
+/// configuration written to `out/unfinished/` (as a set, like a packing folder), never over
+/// the packing in `out`.
+fn not_reached(
+    scene: &Scene,
+    out: &Path,
+    unfinished: &Unfinished,
+    history: &str,
+) -> Result<ExitCode, Box<dyn Error>> {
+    let dir = out.join(UNFINISHED_DIR);
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let staging = Staging::begin(&dir)?;
+    let staged = staging.path();
+    write_files(staged, &unfinished.packing, &unfinished.summary, false)?;
+    ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
+    staging.commit()?;
+    println!("{}", scene.title());
+    eprintln!(
+        "error: {}{}",
+        PackError::NotReached(Box::new(unfinished.clone())),
+        if unfinished.interrupted {
+            " (stopped by a signal)"
+        } else {
+            ""
+        }
+    );
+    eprintln!(
+        "wrote the least overlapping configuration, which is not a packing, to {}; {} was not \
+         written (a longer time limit or a lower packing fraction may reach one)",
+        dir.display(),
+        out.join(CSV_FILE).display()
+    );
+    Ok(ExitCode::from(NOT_REACHED))
 }
 
 /// `ellipack merge`: the best certified packing of `folders` into `out`.
@@ -429,9 +486,15 @@ impl Observer for Terminal {
     fn finished(&mut self, p: &MultiStartProgress) {
         self.history.record(p);
         self.best.store(p.best_density.to_bits(), Ordering::Relaxed);
+        // A fixed container's runs report no best density until their first packing.
+        let best = if p.best_density > 0.0 {
+            format!("best certified density {:.5}", p.best_density)
+        } else {
+            "no packing yet".to_string()
+        };
         self.bar.set_message(format!(
-            "{} local minimisations, last density {:.5}, best certified density {:.5}",
-            p.local_minimisations, p.last_density, p.best_density
+            "{} local minimisations, last density {:.5}, {best}",
+            p.local_minimisations, p.last_density
         ));
     }
 

@@ -169,6 +169,7 @@ impl Instance {
             name: Some(self.description()),
             dimension,
             container: self.container,
+            container_size: None,
             shapes: self.shapes.groups(),
             solver: SolverSettings::defaults(dimension),
             seed: 0,

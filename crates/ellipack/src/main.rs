@@ -36,8 +36,15 @@ enum Command {
     /// run starts from the (certified) packing already in the folder and never writes a worse
     /// one.
     ///
+    /// A scene whose [container] gives a size (radius, semi_axes, half_sides or
+    /// packing_fraction) fills that container instead: the run ends at the first certified
+    /// packing. When none is found in the time limit, the least overlapping configuration is
+    /// written to OUT/unfinished/ (packing.csv, summary.json marked not_reached), never as
+    /// OUT's packing.
+    ///
     /// Exit status: 0 a certified packing was written (the run finished, reached its time
-    /// limit or was stopped by a signal); 1 an error, nothing written; 2 bad arguments.
+    /// limit or was stopped by a signal); 1 an error, nothing written; 2 bad arguments; 4 a
+    /// fixed container was not filled without overlap (see OUT/unfinished/).
     Pack(commands::PackArgs),
     /// Keep the best certified packing of several runs of one scene (the shards of a
     /// multi-start, or repeated runs): every input is verified again, packings of different

@@ -14,7 +14,7 @@ use crate::scene::Scene;
 use ellipsoid_packer::local::LocalSettings;
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
-use ellipsoid_packer::starts::lattice_start;
+use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::Body;
 use implicit_packing::containment::{
     Container as SizedContainer, ContainerShape as ModelContainer,
@@ -65,6 +65,33 @@ pub enum PackError {
         #[source]
         source: std::io::Error,
     },
+    /// A fixed container that the run could not fill without overlap: the least overlapping
+    /// configuration comes with the error, to be kept apart from packings.
+    #[error(
+        "packing fraction {:.4} not reached in {:.1} s: the least overlapping configuration \
+         ({} local minimisations) has {} overlapping pairs{} and {} items outside the container \
+         (model overlap {:.3e})",
+        .0.summary.density,
+        .0.summary.wall_seconds,
+        .0.summary.local_minimisations,
+        .0.summary.certificate.overlapping_pairs,
+        .0.summary.certificate.min_mu2.map_or(String::new(), |m| format!(" (smallest μ² {m:.6})")),
+        .0.summary.certificate.containment_violations,
+        .0.infeasibility
+    )]
+    NotReached(Box<Unfinished>),
+    /// A fixed container given both by the scene and by a packing to resume from, of
+    /// different sizes.
+    #[error(
+        "cannot resume: the packing's container ({found:?}) is not the scene's fixed container \
+         ({expected:?})"
+    )]
+    FixedSizeMismatch {
+        /// The size of the packing's container.
+        found: Vec<f64>,
+        /// The size the scene gives.
+        expected: Vec<f64>,
+    },
     /// A time limit that is not a positive number of seconds a clock can count to.
     #[error(
         "the time limit must be a positive number of seconds, at most {max:.3e} (about 585 \
@@ -76,6 +103,23 @@ pub enum PackError {
         seconds: f64,
     },
 }
+
+/// The least overlapping configuration of a fixed-container run that found no packing: written
+/// to `unfinished/` of the output folder, never as a packing.
+#[derive(Clone, Debug)]
+pub struct Unfinished {
+    /// The configuration (items may overlap or stick out).
+    pub packing: Packing,
+    /// Its summary: the certificate's counts, [`Summary::not_reached`] set.
+    pub summary: Summary,
+    /// The model's overlap plus containment violation there (0 only at a packing).
+    pub infeasibility: f64,
+    /// Whether the run was stopped by a signal rather than by its time limit.
+    pub interrupted: bool,
+}
+
+/// The folder inside the output folder that holds [`Unfinished`] configurations.
+pub const UNFINISHED_DIR: &str = "unfinished";
 
 /// What makes a packing to resume from uncertified: the items that overlap and those that
 /// stick out (ids are the rows' ids in `packing.csv`, counted from 0).
@@ -273,9 +317,14 @@ pub struct RunOutcome {
 
 /// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
 /// multi-start until the time limit or the cap on local minimisations, then the certificate.
+/// A scene that gives its container's size ([`Scene::fixed_container`]) is filled instead,
+/// from a lattice start dilated into that container, until the first certified packing.
 ///
 /// # Errors
-/// [`PackError`] when the model refuses the items or the resume packing does not match.
+/// [`PackError`] when the model refuses the items or the resume packing does not match;
+/// [`PackError::NotReached`], with the least overlapping configuration, when a fixed container
+/// was not filled; [`PackError::FixedSizeMismatch`] when the packing to resume from is not in
+/// the scene's fixed container.
 pub fn run(
     scene: &Scene,
     options: &RunOptions,
@@ -295,9 +344,24 @@ fn run_n<const N: usize>(
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     let kind = model_container(scene.container);
-    let problem = Model::<N>::new(axes.to_vec(), kind)?;
+    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
+    let fixed = scene.fixed_container().map(|c| model_dimensions(&c, kind));
     let x0 = match &options.resume_from {
         Some(packing) => {
+            if let Some(expected) = &fixed {
+                let found = model_dimensions(packing.container(), kind);
+                let same = found.len() == expected.len()
+                    && found
+                        .iter()
+                        .zip(expected)
+                        .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
+                if !same {
+                    return Err(PackError::FixedSizeMismatch {
+                        found,
+                        expected: expected.clone(),
+                    });
+                }
+            }
             if packing.container().kind() != scene.container {
                 return Err(PackError::Mismatch(format!(
                     "the packing's container is {}, the scene's {}",
@@ -307,10 +371,12 @@ fn run_n<const N: usize>(
             }
             variables_of::<N>(packing, axes, kind)?
         }
-        None => lattice_start(&problem),
+        None => match &fixed {
+            Some(dims) => fill_start(&mut problem, &LatticeStart::centred(), dims)?,
+            None => lattice_start(&problem),
+        },
     };
     // A resumed run keeps its start as the packing to beat, so the start must be certified.
-    let mut problem = problem;
     if options.resume_from.is_some() {
         let certificate = problem.certify(&x0)?;
         if !certificate.is_feasible() {
@@ -330,6 +396,7 @@ fn run_n<const N: usize>(
         crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
         crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
     };
+    local.fixed_container = fixed.is_some();
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
     settings.local = local;
@@ -348,18 +415,46 @@ fn run_n<const N: usize>(
     settings.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
     settings.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
     settings.shard = options.shard.unwrap_or(Shard::WHOLE);
-    let result = multistart(axes, kind, &x0, &settings, observer)?;
-    let packing = packing_of::<N>(&mut problem, &result.best.x, scene.container)?;
-    let certificate = certificate_of(&result.best.certificate);
+    let result = match multistart(axes, kind, &x0, &settings, observer) {
+        Ok(result) => result,
+        Err(ellipsoid_packer::Error::NotReached(u)) => {
+            let packing = packing_of::<N>(&mut problem, &u.x, scene.container)?;
+            let objective = problem.evaluate(&u.x, None)?.objective;
+            let mut summary = Summary::new(
+                &packing,
+                objective,
+                u.wall_time.as_secs_f64(),
+                u.local_minimisations as u64,
+                certificate_of(&u.certificate),
+            );
+            summary.not_reached = true;
+            return Err(PackError::NotReached(Box::new(Unfinished {
+                packing,
+                summary,
+                infeasibility: u.infeasibility,
+                interrupted: u.interrupted,
+            })));
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let written = written_packing::<N>(
+        &mut problem,
+        &result.best.x,
+        scene.container,
+        fixed.is_none(),
+    )?;
+    let packing = written.packing;
     let mut summary = Summary::new(
         &packing,
-        result.best.objective,
+        written.objective,
         result.wall_time.as_secs_f64(),
         result.local_minimisations as u64,
-        certificate,
+        written.certificate,
     );
-    summary.repair = Some(crate::packing::Repair {
-        dilation: result.best.repair_factor,
+    // A fixed container is never repaired: its packings are certified as the solver left them.
+    let repair_factor = result.best.repair_factor * written.dilation;
+    summary.repair = fixed.is_none().then_some(crate::packing::Repair {
+        dilation: repair_factor,
         density_before: result.best.density_before_repair,
     });
     summary.start_kept = result.start_kept;
@@ -372,7 +467,7 @@ fn run_n<const N: usize>(
         packing,
         summary,
         density_before_repair: result.best.density_before_repair,
-        repair_factor: result.best.repair_factor,
+        repair_factor,
         seconds_to_best: result.time_to_best.as_secs_f64(),
         interrupted: result.interrupted,
         failed_starts: result.failed_starts,
@@ -380,6 +475,45 @@ fn run_n<const N: usize>(
         start_density: result.start_density,
         start_kept: result.start_kept,
     })
+}
+
+/// A packing as the files hold it, with its own certificate.
+struct Written {
+    packing: Packing,
+    objective: f64,
+    certificate: CertificateCounts,
+    /// The dilation applied to make the written form certified (1: none).
+    dilation: f64,
+}
+
+/// The packing of the certified variables `x` as the files hold it (quaternions, a reduced
+/// periodic cell, items wrapped into it, 17 significant digits), certified again in that form:
+/// the conversion moves values by a few ulps, which can put a pair at exact tangency (an item
+/// touching its own image in a periodic cell, say) an ulp inside. When `may_dilate`, such a
+/// packing is dilated by the least of 1 + 1e-12, 1e-11, … that certifies its written form.
+fn written_packing<const N: usize>(
+    problem: &mut Model<N>,
+    x: &[f64],
+    kind: ContainerKind,
+    may_dilate: bool,
+) -> Result<Written, PackError> {
+    let mut dilation = 1.0;
+    let mut step = 0;
+    loop {
+        let y = problem.dilated(x, dilation);
+        let packing = packing_of::<N>(problem, &y, kind)?;
+        let certificate = verify(&packing)?;
+        if certificate.is_certified() || !may_dilate || step == 6 {
+            return Ok(Written {
+                objective: problem.evaluate(&y, None)?.objective,
+                packing,
+                certificate,
+                dilation,
+            });
+        }
+        dilation = 1.0 + 1e-12 * 10f64.powi(step);
+        step += 1;
+    }
 }
 
 /// The overlapping pairs (with μ²) and the items outside (with the container growth that
@@ -593,6 +727,16 @@ fn packing_of<const N: usize>(
     Ok(Packing::new(container, items)?)
 }
 
+/// The model's container variables of a container: the radius of a ball, else its semi-axes
+/// or half sides.
+fn model_dimensions(container: &Container, kind: ModelContainer) -> Vec<f64> {
+    let size = container.size();
+    match kind {
+        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
+        _ => size,
+    }
+}
+
 /// The model's variables of a packing (centres relative to the container's centre), checking
 /// that its items have the semi-axes `axes`, in order.
 fn variables_of<const N: usize>(
@@ -619,11 +763,7 @@ fn variables_of<const N: usize>(
             axes[i]
         ))
     };
-    let size = packing.container().size();
-    let dims: Vec<f64> = match kind {
-        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
-        _ => size,
-    };
+    let dims = model_dimensions(packing.container(), kind);
     // The bodies relative to the container's centre, with the scene's semi-axes (equal to the
     // packing's within 1e-12, checked here), so that the model takes them as its own.
     let axis = |i: usize, k: usize| axes[i].get(k).copied().unwrap_or(f64::NAN);

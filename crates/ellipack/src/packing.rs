@@ -820,6 +820,10 @@ pub struct Summary {
     /// The shard of a multi-start spread over several runs that found this packing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<ShardOrigin>,
+    /// True for the least overlapping configuration of a run that did not reach a packing in
+    /// its fixed container (written to `unfinished/`): not a packing, and not certified.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub not_reached: bool,
 }
 
 /// Which shard of which multi-start a packing came from (`ellipack pack --shard K/N`).
@@ -865,6 +869,7 @@ impl Summary {
             repair: None,
             start_kept: false,
             shard: None,
+            not_reached: false,
         }
     }
 }

@@ -11,7 +11,17 @@
 //! kind = "ellipse"                    # 2D: circle | ellipse | rectangle | periodic
 //!                                     # 3D: ball | ellipsoid | cuboid | periodic
 //! # cell = "variable"                 # periodic only: the cell's lattice vectors are
-//!                                     # variables (the densest periodic packing)
+//!                                     # variables (the densest periodic packing), or
+//!                                     # "fixed": a given cell, with lengths or
+//!                                     # packing_fraction
+//! # A container of given size is filled, not minimised (at most one of these keys):
+//! # radius = 12.0                     # circle, ball
+//! # semi_axes = [9.0, 7.0]            # ellipse, ellipsoid
+//! # half_sides = [10.0, 8.0]          # rectangle, cuboid
+//! # lengths = [20.0, 20.0]            # periodic, cell = "fixed": an orthogonal box
+//! # packing_fraction = 0.6            # any kind: a circle or ball, a square or cube, a disc-
+//! #                                   # or sphere-shaped ellipse or ellipsoid, sized so that
+//! #                                   # the items fill this fraction of it
 //!
 //! [[shapes]]                          # one table per group of identical items
 //! count = 20
@@ -69,10 +79,11 @@
 //! ```
 //!
 //! Unknown keys, values of the wrong type and impossible values (a semi-axis ≤ 0, a count of
-//! 0, no shapes, a container of the other dimension) are errors whose message names the file,
+//! 0, no shapes, a container of the other dimension, a container size that does not fit the
+//! kind or is not positive, a packing fraction outside (0, 1), two sizes) are errors whose message names the file,
 //! the line, the column and the key, as `shapes[1].count` (groups counted from 0).
 
-use crate::packing::ContainerKind;
+use crate::packing::{Container, ContainerKind};
 use crate::table::short;
 use serde::Deserialize;
 use std::fmt;
@@ -277,6 +288,36 @@ impl Default for OutputOptions {
     }
 }
 
+/// The size of a fixed container as a scene gives it (`[container]` keys): the run fills this
+/// container instead of minimising one.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ContainerSize {
+    /// `radius` of a circle or ball.
+    Radius(f64),
+    /// `semi_axes` of an ellipse or ellipsoid (one per dimension).
+    SemiAxes(Vec<f64>),
+    /// `half_sides` of a rectangle or cuboid (one per dimension).
+    HalfSides(Vec<f64>),
+    /// `lengths` of a fixed periodic cell, an orthogonal box (one per dimension).
+    Lengths(Vec<f64>),
+    /// `packing_fraction`, in (0, 1): the circle or ball, the square or cube, or the disc- or
+    /// sphere-shaped ellipse or ellipsoid that the items fill to this fraction.
+    PackingFraction(f64),
+}
+
+impl ContainerSize {
+    /// The scene key.
+    pub fn key(&self) -> &'static str {
+        match self {
+            ContainerSize::Radius(_) => "radius",
+            ContainerSize::SemiAxes(_) => "semi_axes",
+            ContainerSize::HalfSides(_) => "half_sides",
+            ContainerSize::Lengths(_) => "lengths",
+            ContainerSize::PackingFraction(_) => "packing_fraction",
+        }
+    }
+}
+
 /// A validated scene: everything a packing run needs to start.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -284,8 +325,12 @@ pub struct Scene {
     pub name: Option<String>,
     /// 2D or 3D.
     pub dimension: Dimension,
-    /// The container's shape (of the scene's dimension); its size is what the run minimises.
+    /// The container's shape (of the scene's dimension); its size is what the run minimises,
+    /// unless `container_size` gives it.
     pub container: ContainerKind,
+    /// The size of a fixed container, which the run fills without minimising; `None`: the
+    /// run minimises the container.
+    pub container_size: Option<ContainerSize>,
     /// The items, by group (at least one group).
     pub shapes: Vec<ShapeGroup>,
     /// Solver settings.
@@ -350,6 +395,11 @@ impl<'de> Deserialize<'de> for RawSeed {
 struct RawContainer {
     kind: Spanned<ContainerKind>,
     cell: Option<Spanned<String>>,
+    radius: Option<Spanned<f64>>,
+    semi_axes: Option<Spanned<Vec<f64>>>,
+    half_sides: Option<Spanned<Vec<f64>>>,
+    lengths: Option<Spanned<Vec<f64>>>,
+    packing_fraction: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -470,11 +520,101 @@ impl Scene {
         } else {
             format!(" of {} shapes", self.shapes.len())
         };
-        format!(
-            "{n} {noun}{axes} in a minimum-{} {}",
-            self.container.measure_name(),
-            self.container
-        )
+        let list = |v: &[f64]| {
+            let v: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+            v.join(", ")
+        };
+        let kind = self.container;
+        match &self.container_size {
+            None => format!(
+                "{n} {noun}{axes} in a minimum-{} {kind}",
+                kind.measure_name()
+            ),
+            Some(ContainerSize::Radius(r)) => format!("{n} {noun}{axes} in a {kind} of radius {r}"),
+            Some(ContainerSize::SemiAxes(v)) => {
+                format!("{n} {noun}{axes} in a {kind} of semi-axes ({})", list(v))
+            }
+            Some(ContainerSize::HalfSides(v)) => {
+                format!("{n} {noun}{axes} in a {kind} of half sides ({})", list(v))
+            }
+            Some(ContainerSize::Lengths(v)) => {
+                format!("{n} {noun}{axes} in a {kind} of lengths ({})", list(v))
+            }
+            Some(ContainerSize::PackingFraction(f)) => {
+                format!("{n} {noun}{axes} in a {kind} at packing fraction {f}")
+            }
+        }
+    }
+
+    /// The total area (2D) or volume (3D) of the items.
+    pub fn item_measure(&self) -> f64 {
+        let unit = match self.dimension {
+            Dimension::Two => std::f64::consts::PI,
+            Dimension::Three => 4.0 * std::f64::consts::PI / 3.0,
+        };
+        self.shapes
+            .iter()
+            .map(|g| g.count as f64 * unit * g.semi_axes.iter().product::<f64>())
+            .sum()
+    }
+
+    /// The fixed container, centred at the origin, when the scene gives its size: with
+    /// `packing_fraction` f, the container of the scene's kind whose area or volume is the
+    /// items' over f — a circle or ball, a square or cube (rectangle, cuboid), a disc or
+    /// sphere (ellipse, ellipsoid). `None` when the run minimises the container.
+    pub fn fixed_container(&self) -> Option<Container> {
+        let size = self.container_size.as_ref()?;
+        let n = self.dimension.get();
+        let dims: Vec<f64> = match size {
+            ContainerSize::Radius(r) => vec![*r; n],
+            ContainerSize::SemiAxes(v)
+            | ContainerSize::HalfSides(v)
+            | ContainerSize::Lengths(v) => v.clone(),
+            ContainerSize::PackingFraction(f) => {
+                let measure = self.item_measure() / f;
+                let unit = match (self.container, self.dimension) {
+                    // (2h)ᴺ for a square or a cube of half side h.
+                    (ContainerKind::Rectangle | ContainerKind::Cuboid, _) => 2f64.powi(n as i32),
+                    // Lᴺ for a square or cubic cell of side L.
+                    (ContainerKind::Parallelogram | ContainerKind::Parallelepiped, _) => 1.0,
+                    (_, Dimension::Two) => std::f64::consts::PI,
+                    (_, Dimension::Three) => 4.0 * std::f64::consts::PI / 3.0,
+                };
+                vec![(measure / unit).powf(1.0 / n as f64); n]
+            }
+        };
+        let d = |k: usize| dims.get(k).copied().unwrap_or(f64::NAN);
+        Some(match self.container {
+            ContainerKind::Circle => Container::Circle {
+                center: [0.0; 2],
+                radius: d(0),
+            },
+            ContainerKind::Ellipse => Container::Ellipse {
+                center: [0.0; 2],
+                semi_axes: [d(0), d(1)],
+            },
+            ContainerKind::Rectangle => Container::Rectangle {
+                center: [0.0; 2],
+                half_sides: [d(0), d(1)],
+            },
+            ContainerKind::Ball => Container::Ball {
+                center: [0.0; 3],
+                radius: d(0),
+            },
+            ContainerKind::Ellipsoid => Container::Ellipsoid {
+                center: [0.0; 3],
+                semi_axes: [d(0), d(1), d(2)],
+            },
+            ContainerKind::Cuboid => Container::Cuboid {
+                center: [0.0; 3],
+                half_sides: [d(0), d(1), d(2)],
+            },
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
+                origin: vec![0.0; n],
+                lengths: dims,
+                tilts: vec![0.0; n * (n - 1) / 2],
+            },
+        })
     }
 
     /// The scene as TOML that [`Scene::from_toml_str`] reads back to an equal scene (every
@@ -500,7 +640,27 @@ impl Scene {
         out.push_str("\n[container]\n");
         line(&mut out, "kind", toml_string(self.container.name()));
         if self.container.is_periodic() {
-            line(&mut out, "cell", toml_string("variable"));
+            let cell = if self.container_size.is_some() {
+                "fixed"
+            } else {
+                "variable"
+            };
+            line(&mut out, "cell", toml_string(cell));
+        }
+        match &self.container_size {
+            None => {}
+            Some(ContainerSize::Radius(r)) => line(&mut out, "radius", toml_float(*r)),
+            Some(
+                size @ (ContainerSize::SemiAxes(v)
+                | ContainerSize::HalfSides(v)
+                | ContainerSize::Lengths(v)),
+            ) => {
+                let v: Vec<String> = v.iter().map(|x| toml_float(*x)).collect();
+                line(&mut out, size.key(), format!("[{}]", v.join(", ")));
+            }
+            Some(ContainerSize::PackingFraction(f)) => {
+                line(&mut out, "packing_fraction", toml_float(*f));
+            }
         }
         for g in &self.shapes {
             out.push_str("\n[[shapes]]\n");
@@ -605,9 +765,15 @@ impl Validator<'_> {
         }
     }
 
-    /// `container.cell`: only for a periodic cell, and `"variable"` (the cell's lattice
-    /// vectors are variables, the default).
-    fn cell(&self, raw: &RawContainer, kind: ContainerKind) -> Result<(), SceneError> {
+    /// `container.cell`: only for a periodic cell; `"variable"` (the cell's lattice vectors
+    /// are variables; the default without a size) or `"fixed"` (a given cell: `lengths` or
+    /// `packing_fraction`, the default with one).
+    fn cell(
+        &self,
+        raw: &RawContainer,
+        kind: ContainerKind,
+        size: Option<&ContainerSize>,
+    ) -> Result<(), SceneError> {
         let Some(cell) = &raw.cell else {
             return Ok(());
         };
@@ -618,13 +784,29 @@ impl Validator<'_> {
                 format!("only a periodic container has a cell, not a {kind}"),
             ));
         }
-        match cell.get_ref().as_str() {
-            "variable" => Ok(()),
-            other => Err(self.error(
+        match (cell.get_ref().as_str(), size) {
+            ("variable", None) | ("fixed", Some(_)) => Ok(()),
+            ("variable", Some(size)) => Err(self.error(
                 cell.span(),
                 "container.cell",
                 format!(
-                    "must be \"variable\" (the densest periodic packing), not {}",
+                    "a variable cell has no {}: write cell = \"fixed\" to fill a given cell",
+                    size.key()
+                ),
+            )),
+            ("fixed", None) => Err(self.error(
+                cell.span(),
+                "container.cell",
+                "a fixed cell needs its size: lengths = [..] (an orthogonal box) or \
+                 packing_fraction = .."
+                    .to_string(),
+            )),
+            (other, _) => Err(self.error(
+                cell.span(),
+                "container.cell",
+                format!(
+                    "must be \"variable\" (the densest periodic packing) or \"fixed\" (a \
+                     given cell), not {}",
                     crate::table::short_text(&format!("{other:?}"))
                 ),
             )),
@@ -648,7 +830,6 @@ impl Validator<'_> {
             // `periodic` names the cell of the scene's dimension.
             kind = ContainerKind::named(kind.name(), dimension.get()).unwrap_or(kind);
         }
-        self.cell(&raw.container, kind)?;
         if kind.dimension() != dimension.get() {
             let choices = match dimension {
                 Dimension::Two => "circle, ellipse, rectangle or periodic",
@@ -664,6 +845,8 @@ impl Validator<'_> {
                 ),
             ));
         }
+        let container_size = self.container_size(&raw.container, kind, dimension)?;
+        self.cell(&raw.container, kind, container_size.as_ref())?;
         let seed = match &raw.seed {
             None => 0,
             Some(s) => {
@@ -692,11 +875,161 @@ impl Validator<'_> {
             name: raw.name,
             dimension,
             container: kind,
+            container_size,
             shapes,
             solver,
             seed,
             output,
         })
+    }
+
+    /// The size of a fixed container from the `[container]` keys, checked against the kind.
+    fn container_size(
+        &self,
+        raw: &RawContainer,
+        kind: ContainerKind,
+        dimension: Dimension,
+    ) -> Result<Option<ContainerSize>, SceneError> {
+        let given: Vec<(&str, std::ops::Range<usize>)> = [
+            ("radius", raw.radius.as_ref().map(Spanned::span)),
+            ("semi_axes", raw.semi_axes.as_ref().map(Spanned::span)),
+            ("half_sides", raw.half_sides.as_ref().map(Spanned::span)),
+            ("lengths", raw.lengths.as_ref().map(Spanned::span)),
+            (
+                "packing_fraction",
+                raw.packing_fraction.as_ref().map(Spanned::span),
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(key, span)| Some((key, span?)))
+        .collect();
+        if given.len() > 1 {
+            // The key written later in the file is the one reported.
+            let mut by_position = given.clone();
+            by_position.sort_by_key(|(_, span)| span.start);
+            let (first, first_span) = &by_position[0];
+            let (second, second_span) = &by_position[1];
+            let (line, _) = line_column(self.text, first_span.start);
+            return Err(self.error(
+                second_span.clone(),
+                &format!("container.{second}"),
+                format!(
+                    "a container has one size: give one of radius, semi_axes, half_sides, lengths or \
+                     packing_fraction, not both {first} (line {line}) and {second}"
+                ),
+            ));
+        }
+        let size_of = |key: &str| match kind {
+            ContainerKind::Circle | ContainerKind::Ball => key == "radius",
+            ContainerKind::Ellipse | ContainerKind::Ellipsoid => key == "semi_axes",
+            ContainerKind::Rectangle | ContainerKind::Cuboid => key == "half_sides",
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => key == "lengths",
+        };
+        let own_key = ["radius", "semi_axes", "half_sides", "lengths"]
+            .into_iter()
+            .find(|k| size_of(k))
+            .unwrap_or("radius");
+        let Some((key, span)) = given.into_iter().next() else {
+            return Ok(None);
+        };
+        let full_key = format!("container.{key}");
+        if key != "packing_fraction" && !size_of(key) {
+            return Err(self.error(
+                span,
+                &full_key,
+                format!(
+                    "{} {kind} has no {}; give its {} = {} or packing_fraction",
+                    if kind.name().starts_with(['a', 'e', 'i', 'o', 'u']) {
+                        "an"
+                    } else {
+                        "a"
+                    },
+                    key.replace('_', " "),
+                    own_key,
+                    if own_key == "radius" {
+                        "12.0".to_string()
+                    } else {
+                        format!("[{}]", vec!["…"; dimension.get()].join(", "))
+                    }
+                ),
+            ));
+        }
+        let length = |v: f64, what: String| {
+            if (SEMI_AXIS_RANGE.0..=SEMI_AXIS_RANGE.1).contains(&v) {
+                Ok(v)
+            } else {
+                Err(self.error(
+                    span.clone(),
+                    &full_key,
+                    format!(
+                        "{what} is {}; it must be positive, in [{}, {}]",
+                        short(v),
+                        short(SEMI_AXIS_RANGE.0),
+                        short(SEMI_AXIS_RANGE.1)
+                    ),
+                ))
+            }
+        };
+        let lengths = |v: &Vec<f64>| {
+            if v.len() != dimension.get() {
+                return Err(self.error(
+                    span.clone(),
+                    &full_key,
+                    format!(
+                        "{} values for dimension = {}: give {}",
+                        v.len(),
+                        dimension.get(),
+                        dimension.get()
+                    ),
+                ));
+            }
+            v.iter()
+                .enumerate()
+                .map(|(k, &x)| length(x, format!("value {}", k + 1)))
+                .collect::<Result<Vec<f64>, _>>()
+        };
+        Ok(Some(match key {
+            "radius" => ContainerSize::Radius(length(
+                raw.radius.as_ref().map_or(0.0, |r| *r.get_ref()),
+                "the radius".into(),
+            )?),
+            "semi_axes" => ContainerSize::SemiAxes(lengths(
+                raw.semi_axes
+                    .as_ref()
+                    .map(Spanned::get_ref)
+                    .unwrap_or(&Vec::new()),
+            )?),
+            "half_sides" => ContainerSize::HalfSides(lengths(
+                raw.half_sides
+                    .as_ref()
+                    .map(Spanned::get_ref)
+                    .unwrap_or(&Vec::new()),
+            )?),
+            "lengths" => ContainerSize::Lengths(lengths(
+                raw.lengths
+                    .as_ref()
+                    .map(Spanned::get_ref)
+                    .unwrap_or(&Vec::new()),
+            )?),
+            _ => {
+                let f = raw
+                    .packing_fraction
+                    .as_ref()
+                    .map_or(f64::NAN, |f| *f.get_ref());
+                if !(f > 0.0 && f < 1.0) {
+                    return Err(self.error(
+                        span,
+                        &full_key,
+                        format!(
+                            "must be in (0, 1): the fraction of the container the items fill, \
+                             not {}",
+                            short(f)
+                        ),
+                    ));
+                }
+                ContainerSize::PackingFraction(f)
+            }
+        }))
     }
 
     fn shapes(

@@ -97,14 +97,26 @@ fn a_shrunk_cell_is_refused_naming_the_item_and_its_image() {
 fn a_cell_key_outside_a_periodic_container_is_refused() {
     let dir = temp_dir("periodic-bad-cell");
     let path = dir.join("scene.toml");
-    for (kind, cell, expected) in [
-        ("circle", "variable", "only a periodic container has a cell"),
-        ("periodic", "elastic", "must be \"variable\""),
+    for (kind, cell, size, expected) in [
+        (
+            "circle",
+            "variable",
+            "",
+            "only a periodic container has a cell",
+        ),
+        ("periodic", "elastic", "", "must be \"variable\""),
+        ("periodic", "fixed", "", "a fixed cell needs its size"),
+        (
+            "periodic",
+            "variable",
+            "lengths = [4.0, 4.0]\n",
+            "a variable cell has no lengths",
+        ),
     ] {
         std::fs::write(
             &path,
             format!(
-                "dimension = 2\n[container]\nkind = \"{kind}\"\ncell = \"{cell}\"\n\
+                "dimension = 2\n[container]\nkind = \"{kind}\"\ncell = \"{cell}\"\n{size}\
                  [[shapes]]\ncount = 2\nsemi_axes = [1.0, 1.0]\n"
             ),
         )
@@ -114,5 +126,39 @@ fn a_cell_key_outside_a_periodic_container_is_refused() {
         assert!(!o.status.success());
         assert!(said.contains("line 4"), "{said}");
         assert!(said.contains(expected), "{said}");
+    }
+}
+
+/// A fixed periodic cell, given by its lengths or by a packing fraction, is filled and kept:
+/// the packing's cell is the scene's, the density the fraction asked for.
+#[test]
+fn fixed_cells_are_filled_and_kept() {
+    for (size, n, lengths) in [
+        ("lengths = [12.0, 10.0]\n", 2, Some(vec![12.0, 10.0])),
+        ("packing_fraction = 0.55\n", 3, None),
+    ] {
+        let axes = if n == 2 { "2.0, 1.0" } else { "1.0, 0.75, 0.5" };
+        let extra = format!("cell = \"fixed\"\n{size}");
+        let (density, out, _dir) = pack_and_verify(12, axes, &extra);
+        let s = summary(&out);
+        let got: Vec<f64> = s["container"]["lengths"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let tilts = s["container"]["tilts"].as_array().unwrap();
+        assert!(tilts.iter().all(|t| t.as_f64() == Some(0.0)), "{tilts:?}");
+        match lengths {
+            Some(l) => {
+                assert_eq!(got, l);
+                let area = 12.0 * std::f64::consts::PI * 2.0;
+                assert!((density - area / 120.0).abs() < 1e-12, "{density}");
+            }
+            None => {
+                assert!((density - 0.55).abs() < 1e-12, "{density}");
+                assert!(got.iter().all(|&v| v == got[0]), "a cube: {got:?}");
+            }
+        }
     }
 }

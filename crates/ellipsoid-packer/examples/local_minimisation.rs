@@ -1,7 +1,8 @@
 //! One local minimisation from the paper's lattice start (or, with a fourth argument `dense`,
 //! the face-centred cubic / hexagonal start of `ellipsoid_packer::starts`), certified and
 //! repaired: `cargo run --release -p ellipsoid-packer --example local_minimisation -- 3 ball 100`.
-//! A fifth argument chooses the inner solver: `lbfgs` (default), `spg` or `newton`.
+//! A fifth argument chooses the inner solver: `lbfgs` (default), `spg` or `newton`; a sixth the
+//! cap on inner iterations per outer iteration (default 2000).
 
 use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
@@ -28,7 +29,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "newton" => auglag::InnerSolver::TruncatedNewton,
         other => return Err(format!("unknown inner solver `{other}` (lbfgs, spg, newton)").into()),
     };
-    let settings = LocalSettings::default().with_inner_solver(solver);
+    let mut settings = LocalSettings::default().with_inner_solver(solver);
+    if let Some(cap) = args.get(6) {
+        settings = settings.with_max_inner_iterations(cap.parse()?);
+    }
     let start = Instant::now();
     // Outer iterations on stderr: a large m takes minutes.
     let mut observe = |p: &auglag::Progress<'_>| {

@@ -38,6 +38,21 @@ pub enum Error {
         /// The number of shards.
         count: usize,
     },
+    /// A fixed-container run ([`crate::fixed`]) ended without a certified packing; the least
+    /// infeasible point it reached comes with the error.
+    #[error(
+        "no packing found at packing fraction {:.6} in {:.1} s ({} local minimisations): the \
+         least overlapping configuration has {} overlapping pairs and {} items outside the \
+         container (model overlap {:.3e}{})",
+        .0.density,
+        .0.wall_time.as_secs_f64(),
+        .0.local_minimisations,
+        .0.certificate.overlapping.len(),
+        .0.certificate.outside.len(),
+        .0.infeasibility,
+        .0.certificate.min_mu2.map_or(String::new(), |m| format!(", smallest μ² {m:.6}"))
+    )]
+    NotReached(Box<crate::fixed::Unfinished>),
     /// A thread of the run panicked (a bug: please report it with the scene).
     #[error("a start of the multi-start panicked")]
     StartPanicked,

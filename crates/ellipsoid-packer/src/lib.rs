@@ -10,6 +10,8 @@
 //! - [`local`] — one local minimisation with its polish, certificate and repair.
 //! - [`multistart`] — the multi-start with chains, parallel rounds, a time limit, progress
 //!   and cancellation.
+//! - [`fixed`] — the multi-start in a container of given size: no minimisation, only
+//!   placement, ending at the first certified packing.
 //!
 //! ```
 //! use ellipsoid_packer::{local::{LocalSettings, local_minimisation}, starts::lattice_start};
@@ -40,6 +42,7 @@ macro_rules! with_setters {
 pub(crate) use with_setters;
 
 mod error;
+pub mod fixed;
 pub mod local;
 pub mod multistart;
 pub mod starts;

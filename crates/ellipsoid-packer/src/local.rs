@@ -49,7 +49,20 @@ pub struct LocalSettings {
     /// of the semi-axes, whose repair costs several per cent of density; a polish at 1e-10
     /// costs a fraction of the first solve and leaves the repair almost nothing to do.
     pub polish_tolerance: Option<f64>,
+    /// Feasibility mode: the container variables keep their values in the start (lower =
+    /// upper bound), the objective is 0, and nothing is repaired, since a dilation would change
+    /// the container: the result is certified or it is not ([`LocalResult::certificate`]).
+    /// The solver works on items grown by [`FIXED_MARGIN`], so that a point it leaves barely
+    /// infeasible for them is clear of overlap for the true items.
+    pub fixed_container: bool,
 }
+
+/// The relative growth of every semi-axis while a fixed container is filled
+/// ([`LocalSettings::fixed_container`]). The penalty of the augmented Lagrangian approaches
+/// the feasible set from outside and stops within its tolerance, at penetrations of about
+/// 1e-5 of the semi-axes; the grown items absorb them, at the price of raising the packing
+/// fraction the solver sees by a factor (1 + margin)ᴺ (0.3 % in 3D).
+pub const FIXED_MARGIN: f64 = 1e-3;
 
 crate::with_setters!(LocalSettings:
     /// Sets [`LocalSettings::feasibility_tolerance`].
@@ -64,6 +77,8 @@ crate::with_setters!(LocalSettings:
     with_inner_solver => inner_solver: InnerSolver,
     /// Sets [`LocalSettings::polish_tolerance`].
     with_polish_tolerance => polish_tolerance: Option<f64>,
+    /// Sets [`LocalSettings::fixed_container`].
+    with_fixed_container => fixed_container: bool,
 );
 
 impl Default for LocalSettings {
@@ -75,11 +90,13 @@ impl Default for LocalSettings {
             max_inner_iterations: 2_000,
             inner_solver: InnerSolver::ProjectedLbfgs,
             polish_tolerance: Some(1e-10),
+            fixed_container: false,
         }
     }
 }
 
-/// The outcome of one local minimisation: a certified packing.
+/// The outcome of one local minimisation: a certified packing (in feasibility mode,
+/// [`LocalSettings::fixed_container`], the point reached, which its certificate may reject).
 #[derive(Clone, Debug)]
 pub struct LocalResult {
     /// The variables of the certified (repaired) packing.
@@ -128,6 +145,9 @@ pub fn local_minimisation<const N: usize>(
 ) -> Result<LocalResult, Error> {
     check_start(problem, x0)?;
     problem.evaluate(x0, None)?;
+    if settings.fixed_container {
+        return placement(problem, x0, settings, observe);
+    }
     let mut interrupted = false;
     let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
         let options = Options::default()
@@ -138,7 +158,7 @@ pub fn local_minimisation<const N: usize>(
             .with_max_inner_iterations(settings.max_inner_iterations)
             .with_inner_solver(settings.inner_solver)
             .with_scaling(true);
-        let adapter = Adapter::new(problem, centre_bound::<N>(x0));
+        let adapter = Adapter::new(problem, centre_bound::<N>(x0), None);
         auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
             if interrupted || observe(progress) {
                 interrupted = true;
@@ -163,6 +183,93 @@ pub fn local_minimisation<const N: usize>(
         }
     }
     Ok(best.result)
+}
+
+/// [`local_minimisation`] in feasibility mode: the container stays as the start gives it, the
+/// solver drives overlap and containment to zero for items grown by [`FIXED_MARGIN`], and the
+/// true items are certified. A point the first solve leaves uncertified is solved again from
+/// where it stopped at the polish tolerance; the less infeasible of the two is returned.
+fn placement<const N: usize>(
+    problem: &mut Model<N>,
+    x0: &[f64],
+    settings: &LocalSettings,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+) -> Result<LocalResult, Error> {
+    let grown: Vec<[f64; N]> = problem
+        .semi_axes()
+        .iter()
+        .map(|l| l.map(|v| v * (1.0 + FIXED_MARGIN)))
+        .collect();
+    let mut solver_model = Model::<N>::new(grown, problem.container_kind())?;
+    let container = x0[problem.len() * Model::<N>::vars_per_body()..].to_vec();
+    let mut interrupted = false;
+    let mut solve = |x: &[f64], feasibility: f64| {
+        let options = Options::default()
+            .with_feasibility_tolerance(feasibility)
+            .with_optimality_tolerance(settings.optimality_tolerance)
+            .with_complementarity_tolerance(feasibility)
+            .with_max_outer_iterations(settings.max_outer_iterations)
+            .with_max_inner_iterations(settings.max_inner_iterations)
+            .with_inner_solver(settings.inner_solver)
+            .with_scaling(true);
+        let adapter = Adapter::new(
+            &mut solver_model,
+            centre_bound::<N>(x0),
+            Some(container.clone()),
+        );
+        auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
+            if interrupted || observe(progress) {
+                interrupted = true;
+                Control::Stop
+            } else {
+                Control::Continue
+            }
+        })
+        .map_err(Error::Solver)
+    };
+    let items = item_measure(problem);
+    let judge = |problem: &mut Model<N>, solution: auglag::Solution| {
+        let certificate = problem.certify(&solution.x)?;
+        let objective = problem.evaluate(&solution.x, None)?.objective;
+        Ok::<_, Error>(LocalResult {
+            density: items / objective,
+            density_before_repair: items / objective,
+            repair_factor: 1.0,
+            objective,
+            certificate,
+            report: solution.report,
+            x: solution.x,
+        })
+    };
+    let first = solve(x0, settings.feasibility_tolerance)?;
+    let first = judge(problem, first)?;
+    if first.certificate.is_feasible()
+        || first.report.stop_reason == auglag::StopReason::Interrupted
+    {
+        return Ok(first);
+    }
+    let Some(tolerance) = settings.polish_tolerance else {
+        return Ok(first);
+    };
+    let second = solve(&first.x, tolerance)?;
+    let second = judge(problem, second)?;
+    if second.certificate.is_feasible()
+        || infeasibility(problem, &second.x)? <= infeasibility(problem, &first.x)?
+    {
+        Ok(second)
+    } else {
+        Ok(first)
+    }
+}
+
+/// How far `x` is from a packing: the model's overlap plus its containment violation (both 0
+/// exactly at a packing). Fixed-container runs rank the points they could not certify by it.
+///
+/// # Errors
+/// Errors of the model (a wrong length, non-finite variables).
+pub fn infeasibility<const N: usize>(problem: &mut Model<N>, x: &[f64]) -> Result<f64, Error> {
+    let e = problem.evaluate(x, None)?;
+    Ok(e.overlap + e.containment)
 }
 
 /// `LengthMismatch` unless the start `x` has one entry per variable of `problem`.
@@ -346,6 +453,8 @@ struct Adapter<'a, const N: usize> {
     product: RefCell<ModelGradient>,
     lower: f64,
     centre_bound: f64,
+    /// Feasibility mode: the container variables' fixed values; the objective is then 0.
+    fixed: Option<Vec<f64>>,
 }
 
 /// A point with the overlap and containment values and the three gradients there.
@@ -358,7 +467,7 @@ struct HessianPoint {
 }
 
 impl<'a, const N: usize> Adapter<'a, N> {
-    fn new(model: &'a mut Model<N>, centre_bound: f64) -> Self {
+    fn new(model: &'a mut Model<N>, centre_bound: f64, fixed: Option<Vec<f64>>) -> Self {
         // Every item contains a ball of its smallest semi-axis, so no container dimension can
         // be smaller than the largest of those: a safe lower bound that keeps the container
         // from collapsing through zero during early iterations.
@@ -374,6 +483,17 @@ impl<'a, const N: usize> Adapter<'a, N> {
             product: RefCell::new(ModelGradient::default()),
             lower,
             centre_bound,
+            fixed,
+        }
+    }
+
+    /// The factor of the objective in the Lagrangian: 0 in feasibility mode, where the
+    /// container measure is a constant that must not pull on anything.
+    fn objective_weight(&self, phr: &Phr<'_>) -> f64 {
+        if self.fixed.is_some() {
+            0.0
+        } else {
+            phr.objective_scale()
         }
     }
 
@@ -396,6 +516,10 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
             lower[start + N..].fill(-self.centre_bound);
             upper[start + N..].fill(self.centre_bound);
         }
+        if let Some(fixed) = &self.fixed {
+            lower[start..].copy_from_slice(fixed);
+            upper[start..].copy_from_slice(fixed);
+        }
         // Centres stay within a box far larger than any packing the start leads to: without
         // it a quasi-Newton step from a badly overlapping start could throw an item out to
         // 1e30, where the model refuses the point and the start is lost.
@@ -411,6 +535,12 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        if self.fixed.is_some() {
+            if let Some(g) = grad {
+                g.fill(0.0);
+            }
+            return 0.0;
+        }
         let mut model = self.model.borrow_mut();
         match grad {
             None => model.evaluate(x, None).map_or(f64::NAN, |e| e.objective),
@@ -477,7 +607,7 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         }
         let g = &at.gradient;
         let along = |gradient: &[f64]| gradient.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
-        let sf = phr.objective_scale();
+        let sf = self.objective_weight(phr);
         let (d0, d1) = (
             phr.derivative(0, at.overlap),
             phr.derivative(1, at.containment),
@@ -495,8 +625,8 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
+        let sf = self.objective_weight(phr);
         let mut model = self.model.borrow_mut();
-        let sf = phr.objective_scale();
         Some(match grad {
             None => match model.evaluate(x, None) {
                 Ok(e) => sf * e.objective + phr.term(0, e.overlap) + phr.term(1, e.containment),
@@ -545,7 +675,7 @@ mod tests {
                 *v *= if k >= n - N { 0.85 } else { 1.0 };
                 *v += 0.01 * ((k * 7919 % 13) as f64 - 6.0);
             }
-            let adapter = Adapter::new(&mut model, 1e3);
+            let adapter = Adapter::new(&mut model, 1e3, None);
             let (scales, multipliers) = ([0.5, 2.0], [0.3, -0.2]);
             let phr = Phr::new(10.0, 2, 0.7, &scales, &multipliers);
             let v: Vec<f64> = (0..n).map(|k| ((k * 31 % 17) as f64 - 8.0) / 8.0).collect();

@@ -281,9 +281,12 @@ where
 /// `observe` sees the solver's progress inside every local minimisation, from whichever thread
 /// runs it; `interrupt` is polled often and stops the run, keeping the best packing found.
 ///
+/// With `settings.local.fixed_container` the run fills the container of `x0` instead
+/// ([`crate::fixed::fill`]): it ends at the first certified packing.
+///
 /// # Errors
 /// Errors of the model or of the first local minimisation (a wrong-length `x0`, non-finite
-/// values).
+/// values); [`Error::NotReached`] for a fixed container without a certified packing.
 pub fn multistart<const N: usize>(
     semi_axes: &[[f64; N]],
     kind: ContainerShape,
@@ -291,6 +294,9 @@ pub fn multistart<const N: usize>(
     settings: &MultiStartSettings,
     observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
+    if settings.local.fixed_container {
+        return crate::fixed::fill(semi_axes, kind, x0, settings, observer);
+    }
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
@@ -532,14 +538,14 @@ impl Chain {
 }
 
 /// Where start `index` (≥ 1) of a run comes from.
-enum Start {
+pub(crate) enum Start {
     /// Dense lattice start number n of [`LatticeStart::sequence`].
     Lattice(usize),
     /// A perturbation of the current solution with this largest relative amplitude.
     Perturbed(f64),
 }
 
-fn start_kind(settings: &MultiStartSettings, index: usize) -> Start {
+pub(crate) fn start_kind(settings: &MultiStartSettings, index: usize) -> Start {
     let lattice = settings.lattice_starts;
     if index <= lattice {
         return Start::Lattice(index - 1);

@@ -183,6 +183,53 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
     x
 }
 
+/// A start that fills a fixed container: the [`LatticeStart`] (with the container's aspect
+/// when it has one semi-axis or half side per direction) dilated about the centre
+/// ([`Model::dilated`]) until its container has the fixed container's area or volume, and then
+/// given the fixed container's variables `container` (those of the model after the items').
+/// Items keep their size, so above the lattice's density they overlap and the solver
+/// separates them. A periodic cell is filled by a lattice fitted to its shape instead
+/// (`periodic_fill_start`).
+///
+/// # Errors
+/// [`Error::Model`] when `container` is not a valid container of the problem's kind (wrong
+/// length, a value that is not positive and finite).
+pub fn fill_start<const N: usize>(
+    problem: &mut Model<N>,
+    start: &LatticeStart<N>,
+    container: &[f64],
+) -> Result<Vec<f64>, Error> {
+    let body_variables = problem.len() * Model::<N>::vars_per_body();
+    if container.len() != problem.var_count() - body_variables {
+        return Err(implicit_packing::Error::LengthMismatch {
+            what: "container variables",
+            expected: problem.var_count() - body_variables,
+            found: container.len(),
+        }
+        .into());
+    }
+    if problem.container_kind() == ContainerShape::Periodic {
+        return Ok(periodic_fill_start(problem, start, container));
+    }
+    let start = LatticeStart {
+        aspect: if container.len() == N {
+            std::array::from_fn(|k| container[k])
+        } else {
+            start.aspect
+        },
+        ..*start
+    };
+    let lattice = lattice_start_of(problem, &start);
+    let lattice_measure = problem.evaluate(&lattice, None)?.objective;
+    let mut fixed = lattice.clone();
+    fixed[body_variables..].copy_from_slice(container);
+    let fixed_measure = problem.evaluate(&fixed, None)?.objective;
+    let s = (fixed_measure / lattice_measure).powf(1.0 / N as f64);
+    let mut x = problem.dilated(&lattice, s);
+    x[body_variables..].copy_from_slice(container);
+    Ok(x)
+}
+
 /// The `m` points `diag(l) (shift·B + n·B)`, `n ∈ ℤᴺ`, of smallest gauge (ties broken by the
 /// lattice index, so the start is deterministic).
 fn deepest_points<const N: usize>(
@@ -427,14 +474,33 @@ pub fn periodic_lattice_start<const N: usize>(
     let (unit, sites) = unit_cell::<N>(per_cell);
     let unit: [[f64; N]; N] = std::array::from_fn(|r| unit[r].map(|v| v * l[r]));
     let counts = supercell::<N>(m, sites.len(), &std::array::from_fn(|k| unit[k][k]));
-    let stride = Model::<N>::vars_per_body();
     let mut x = vec![0.0; problem.var_count()];
+    place_on_sites(&mut x, m, &sites, &counts, shift);
+    let stride = Model::<N>::vars_per_body();
+    // The supercell H diag(c), with the same relative gap as the lattice.
+    for k in 0..N * (N + 1) / 2 {
+        let (r, c) = implicit_packing::periodic::entry::<N>(k);
+        x[m * stride + k] = unit[r][c] * counts[c] as f64 * (1.0 + 1e-9);
+    }
+    x
+}
+
+/// Writes the fractional centres of the first `m` sites of a supercell of `counts` unit cells
+/// (each with `sites`, moved by `shift`) into the variables `x`; the angles stay as they are.
+fn place_on_sites<const N: usize>(
+    x: &mut [f64],
+    m: usize,
+    sites: &[[f64; N]],
+    counts: &[usize; N],
+    shift: &[f64; N],
+) {
+    let stride = Model::<N>::vars_per_body();
     let mut item = 0;
     let mut n = [0usize; N];
-    'cells: loop {
-        for site in &sites {
+    loop {
+        for site in sites {
             if item == m {
-                break 'cells;
+                return;
             }
             for k in 0..N {
                 x[item * stride + k] = (n[k] as f64 + site[k] + shift[k]) / counts[k] as f64;
@@ -451,14 +517,65 @@ pub fn periodic_lattice_start<const N: usize>(
             k += 1;
         }
         if k == N {
+            return;
+        }
+    }
+}
+
+/// A start that fills a fixed periodic cell with diagonal `heights` (`l_x, l_y, l_z`): items
+/// unrotated on a densest lattice with an orthogonal unit cell (2D: 2 or 4 items per cell by
+/// [`LatticeStart::orientation`]; 3D: the cubic FCC cell), mapped by `diag(l)`, its unit cells
+/// counted along each axis so that the lattice is compressed least along any axis (the
+/// largest ratio of its natural height to the cell's); the centres are fractional, so the
+/// lattice takes the cell's shape. Below the lattice's density the items do not overlap.
+fn periodic_fill_start<const N: usize>(
+    problem: &Model<N>,
+    start: &LatticeStart<N>,
+    container: &[f64],
+) -> Vec<f64> {
+    let m = problem.len();
+    let per_cell = if N == 2 {
+        [2, 4][start.orientation % 2]
+    } else {
+        4
+    };
+    let l = lattice_semi_axes(problem);
+    let (unit, sites) = unit_cell::<N>(per_cell);
+    let natural: [f64; N] = std::array::from_fn(|k| unit[k][k] * l[k]);
+    let heights: [f64; N] = std::array::from_fn(|k| container[k]);
+    let cells = m.div_ceil(per_cell).max(1);
+    let compression = |c: &[usize; N]| {
+        (0..N)
+            .map(|k| c[k] as f64 * natural[k] / heights[k])
+            .fold(0.0, f64::max)
+    };
+    let mut best = [1usize; N];
+    best[N - 1] = cells;
+    let mut best_cost = (compression(&best), cells);
+    let mut c = [1usize; N];
+    loop {
+        let partial: usize = c[..N - 1].iter().product();
+        c[N - 1] = cells.div_ceil(partial);
+        let cost = (compression(&c), c.iter().product::<usize>());
+        if cost.0 < best_cost.0 || (cost.0 == best_cost.0 && cost.1 < best_cost.1) {
+            (best, best_cost) = (c, cost);
+        }
+        let mut k = 0;
+        while k < N - 1 {
+            c[k] += 1;
+            if c[..N - 1].iter().product::<usize>() <= cells {
+                break;
+            }
+            c[k] = 1;
+            k += 1;
+        }
+        if k == N - 1 {
             break;
         }
     }
-    // The supercell H diag(c), with the same relative gap as the lattice.
-    for k in 0..N * (N + 1) / 2 {
-        let (r, c) = implicit_packing::periodic::entry::<N>(k);
-        x[m * stride + k] = unit[r][c] * counts[c] as f64 * (1.0 + 1e-9);
-    }
+    let mut x = vec![0.0; problem.var_count()];
+    place_on_sites(&mut x, m, &sites, &best, &start.shift);
+    x[m * Model::<N>::vars_per_body()..].copy_from_slice(container);
     x
 }
 
