@@ -46,6 +46,23 @@ enum Command {
         #[arg(long)]
         resume: bool,
     },
+    /// Measure the periodic cell through the `ellipack pack` pipeline: variable cells with 1, 2
+    /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
+    /// above; write validation/periodic_cells.csv and the table in docs/periodic.md.
+    PeriodicCells {
+        /// Seconds per variable-cell run.
+        #[arg(long, default_value_t = 20.0)]
+        seconds: f64,
+        /// Items in the fixed cube.
+        #[arg(long, default_value_t = 10_000)]
+        items: usize,
+        /// Minutes for the sweep of packing fractions of the fixed cube.
+        #[arg(long, default_value_t = 10.0)]
+        sweep_minutes: f64,
+        /// Threads of the fixed-cube runs.
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+    },
     /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
     /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
     /// than the normal test run, in release mode. Exits non-zero if any input panics.
@@ -76,6 +93,26 @@ enum PartArg {
 fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Fuzz { cases, dev } => fuzz(cases, dev),
+        Command::PeriodicCells {
+            seconds,
+            items,
+            sweep_minutes,
+            threads,
+        } => {
+            let options = xtask::periodic_cells::Options {
+                seconds,
+                items,
+                sweep_minutes,
+                threads,
+            };
+            match xtask::periodic_cells::run_all(&workspace_root(), &options) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::PaperTables {
             minutes,
             instances,

@@ -234,7 +234,7 @@ fn paper_to_best(name: &str) -> Option<(&'static str, u32)> {
 }
 
 /// The processor model and thread count, as far as the system tells.
-fn machine(threads: usize) -> String {
+pub(crate) fn machine(threads: usize) -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|t| {
