@@ -150,6 +150,24 @@ def test_pack_3d_gives_a_certified_packing():
     assert ellipack.verify(packing)["certified"]
 
 
+def test_periodic_cells_reach_the_densest_lattice_packing():
+    """A variable periodic cell of two ellipses (2, 1) packs at the hexagonal density
+    π/√12; the container is the cell (lengths and tilts), verified on every image."""
+    scene = {
+        "dimension": 2,
+        "seed": 2,
+        "container": {"kind": "periodic", "cell": "variable"},
+        "shapes": [{"count": 2, "semi_axes": [2.0, 1.0]}],
+        "solver": {"time_limit": 2.0, "threads": 1},
+    }
+    packing = ellipack.pack(scene, progress=False)
+    assert packing.container["kind"] == "periodic"
+    assert len(packing.container["lengths"]) == 2 and len(packing.container["tilts"]) == 1
+    hexagonal = np.pi / np.sqrt(12.0)
+    assert hexagonal * (1 - 1e-4) <= packing.density <= hexagonal * (1 + 1e-9)
+    assert ellipack.verify(packing)["certified"]
+
+
 def test_dict_toml_text_and_file_are_the_same_scene(tmp_path, packed_2d):
     packing, _ = packed_2d
     text = ellipack._ellipack._scene_toml(SCENE_2D)
