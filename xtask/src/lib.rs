@@ -18,6 +18,7 @@ pub mod model_time;
 pub mod output;
 pub mod packing;
 pub mod paper_tables;
+pub mod periodic_peer;
 pub mod plot;
 pub mod reference;
 pub mod report;
