@@ -68,6 +68,12 @@ enum Command {
         /// Seed of the peer's simulation and of the random pairs.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// The peer's largest trial translation.
+        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().translate)]
+        peer_translate: f64,
+        /// The peer's largest trial rotation (radians).
+        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().rotate)]
+        peer_rotate: f64,
     },
     /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
     /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
@@ -116,7 +122,20 @@ fn main() -> ExitCode {
             overlap_pairs,
             scene,
             seed,
-        } => periodic_peer(seconds, ns, who, overlap_pairs, scene, seed),
+            peer_translate,
+            peer_rotate,
+        } => periodic_peer(
+            seconds,
+            ns,
+            who,
+            overlap_pairs,
+            scene,
+            seed,
+            xtask::periodic_peer::PeerMoves {
+                translate: peer_translate,
+                rotate: peer_rotate,
+            },
+        ),
         Command::PaperTables {
             minutes,
             instances,
@@ -182,6 +201,7 @@ fn periodic_peer(
     overlap_pairs: usize,
     scene: Option<std::path::PathBuf>,
     seed: u64,
+    peer_moves: xtask::periodic_peer::PeerMoves,
 ) -> ExitCode {
     use xtask::periodic_peer::{Options, PEER_DISABLED, PERIODIC_SCENE, Who};
     let who = match who {
@@ -210,6 +230,7 @@ fn periodic_peer(
         overlap_pairs,
         scene_template,
         seed,
+        peer_moves,
     };
     match xtask::periodic_peer::run(&workspace_root(), &options) {
         Ok(problems) if problems.is_empty() => ExitCode::SUCCESS,

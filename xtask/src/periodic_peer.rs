@@ -78,6 +78,27 @@ impl Who {
     }
 }
 
+/// The largest trial moves of the peer's Monte Carlo sweeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeerMoves {
+    /// Largest translation.
+    pub translate: f64,
+    /// Largest rotation angle (radians).
+    pub rotate: f64,
+}
+
+impl Default for PeerMoves {
+    /// The values of hoomd-rs's three-dimensional hard-shape tutorial (hard tetrahedra): 0.04
+    /// for both. Of 0.04, 0.08 and 0.15 tried on 100 ellipsoids for 60 s, these compressed
+    /// furthest.
+    fn default() -> Self {
+        PeerMoves {
+            translate: 0.04,
+            rotate: 0.04,
+        }
+    }
+}
+
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -93,6 +114,8 @@ pub struct Options {
     pub scene_template: String,
     /// Seed of the peer's simulation and of the random pairs.
     pub seed: u64,
+    /// The peer's trial-move sizes.
+    pub peer_moves: PeerMoves,
 }
 
 impl Options {
@@ -141,6 +164,8 @@ pub struct RunRow {
     pub machine: String,
     /// Commit of the code that ran.
     pub commit: String,
+    /// How the run was made (the peer's move sizes, our scene's name).
+    pub protocol: String,
 }
 
 /// The overlap-test comparison.
@@ -152,6 +177,14 @@ pub struct OverlapRow {
     pub peer_ns: f64,
     /// `pw85::overlap`, nanoseconds per pair.
     pub pw85_ns: f64,
+    /// hoomd-rs on the half of the pairs spread over |δ| ≤ 0.3.
+    pub peer_ns_spread: f64,
+    /// `pw85::overlap` on that half.
+    pub pw85_ns_spread: f64,
+    /// hoomd-rs on the near-tangent half.
+    pub peer_ns_near: f64,
+    /// `pw85::overlap` on that half.
+    pub pw85_ns_near: f64,
     /// Pairs of opposite verdicts.
     pub disagreements: usize,
     /// The largest |μ² − 1| among them (0 if none).
@@ -523,6 +556,10 @@ pub fn run_ours(scene_text: &str, seconds: f64) -> Result<(Vec<Point>, RunRow), 
         min_mu2: c.min_mu2,
         machine: machine(),
         commit: commit(),
+        protocol: format!(
+            "ellipack::pack::run, one thread, scene \"{}\"",
+            scene.title()
+        ),
     };
     Ok((points, row))
 }
@@ -623,7 +660,7 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
         let seconds = options.budget(n);
         if options.who.runs_peer() {
             eprintln!("peer: hoomd-rs, {n} ellipsoids, {seconds} s");
-            let (p, row) = run_peer(n, seconds, options.seed)?;
+            let (p, row) = run_peer(n, seconds, options.seed, options.peer_moves)?;
             points.extend(p);
             runs.push(row);
         }
@@ -648,13 +685,27 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
 fn overlap_study(count: usize, seed: u64) -> Result<OverlapRow, Error> {
     eprintln!("overlap tests on {count} random pairs");
     let pairs = random_pairs(count, seed)?;
-    let (peer_ns, peer_verdicts) = hoomd::time_overlaps(&pairs, 5)?;
-    let (pw85_ns, ours) = time_pw85(&pairs, 5)?;
-    let (disagreeing, worst) = disagreements(&pairs, &peer_verdicts, &ours)?;
+    // The two halves of `random_pairs` (even: spread, odd: near tangency), timed apart.
+    let spread: Vec<RandomPair> = pairs.iter().step_by(2).copied().collect();
+    let near: Vec<RandomPair> = pairs.iter().skip(1).step_by(2).copied().collect();
+    let (peer_ns_spread, peer_spread) = hoomd::time_overlaps(&spread, 5)?;
+    let (peer_ns_near, peer_near) = hoomd::time_overlaps(&near, 5)?;
+    let (pw85_ns_spread, ours_spread) = time_pw85(&spread, 5)?;
+    let (pw85_ns_near, ours_near) = time_pw85(&near, 5)?;
+    let (a, b) = (spread.len() as f64, near.len() as f64);
+    let mean = |x: f64, y: f64| (a * x + b * y) / (a + b).max(1.0);
+    let (d_spread, worst_spread) = disagreements(&spread, &peer_spread, &ours_spread)?;
+    let (d_near, worst_near) = disagreements(&near, &peer_near, &ours_near)?;
+    let (disagreeing, worst) = (d_spread + d_near, worst_spread.max(worst_near));
+    let ours: Vec<bool> = ours_spread.into_iter().chain(ours_near).collect();
     let row = OverlapRow {
         pairs: pairs.len(),
-        peer_ns,
-        pw85_ns,
+        peer_ns: mean(peer_ns_spread, peer_ns_near),
+        pw85_ns: mean(pw85_ns_spread, pw85_ns_near),
+        peer_ns_spread,
+        pw85_ns_spread,
+        peer_ns_near,
+        pw85_ns_near,
         disagreements: disagreeing,
         max_disagreement_mu2_minus_one: worst,
         overlapping: ours.iter().filter(|v| **v).count(),
@@ -675,12 +726,22 @@ fn overlap_study(_count: usize, _seed: u64) -> Result<OverlapRow, Error> {
 
 /// hoomd-rs on `n` ellipsoids for `seconds`.
 #[cfg(feature = "peer")]
-fn run_peer(n: usize, seconds: f64, seed: u64) -> Result<(Vec<Point>, RunRow), Error> {
-    hoomd::run_peer(n, seconds, seed)
+fn run_peer(
+    n: usize,
+    seconds: f64,
+    seed: u64,
+    moves: PeerMoves,
+) -> Result<(Vec<Point>, RunRow), Error> {
+    hoomd::run_peer(n, seconds, seed, moves)
 }
 
 #[cfg(not(feature = "peer"))]
-fn run_peer(_n: usize, _seconds: f64, _seed: u64) -> Result<(Vec<Point>, RunRow), Error> {
+fn run_peer(
+    _n: usize,
+    _seconds: f64,
+    _seed: u64,
+    _moves: PeerMoves,
+) -> Result<(Vec<Point>, RunRow), Error> {
     Err(peer_disabled())
 }
 
@@ -797,12 +858,13 @@ fn points_csv(points: &[Point]) -> String {
 
 fn runs_csv(runs: &[RunRow]) -> String {
     let mut s = String::from(
-        "who,n,budget_seconds,final_seconds,final_fraction,checks,rejected,min_mu2,machine,commit\n",
+        "who,n,budget_seconds,final_seconds,final_fraction,checks,rejected,min_mu2,machine,commit,\
+         protocol\n",
     );
     for r in runs {
         let _ = writeln!(
             s,
-            "{},{},{:.0},{:.3},{:.6},{},{},{},\"{}\",{}",
+            "{},{},{:.0},{:.3},{:.6},{},{},{},\"{}\",{},\"{}\"",
             r.who,
             r.n,
             r.budget_seconds,
@@ -812,7 +874,8 @@ fn runs_csv(runs: &[RunRow]) -> String {
             r.rejected,
             r.min_mu2.map_or(String::new(), |m| format!("{m:.9}")),
             r.machine.replace('"', "'"),
-            r.commit
+            r.commit,
+            r.protocol.replace('"', "'"),
         );
     }
     s
@@ -820,11 +883,16 @@ fn runs_csv(runs: &[RunRow]) -> String {
 
 fn overlap_csv(o: &OverlapRow) -> String {
     format!(
-        "pairs,peer_ns_per_pair,pw85_ns_per_pair,disagreements,max_disagreement_mu2_minus_one,\
-         overlapping,machine,commit\n{},{:.1},{:.1},{},{:.3e},{},\"{}\",{}\n",
+        "pairs,peer_ns_per_pair,pw85_ns_per_pair,peer_ns_spread,pw85_ns_spread,peer_ns_near,\
+         pw85_ns_near,disagreements,max_disagreement_mu2_minus_one,overlapping,machine,commit\n\
+         {},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{},{:.3e},{},\"{}\",{}\n",
         o.pairs,
         o.peer_ns,
         o.pw85_ns,
+        o.peer_ns_spread,
+        o.pw85_ns_spread,
+        o.peer_ns_near,
+        o.pw85_ns_near,
         o.disagreements,
         o.max_disagreement_mu2_minus_one,
         o.overlapping,
@@ -927,6 +995,7 @@ fn read_runs(path: &Path) -> Result<Vec<RunRow>, Error> {
                 },
                 machine: field(path, line, row, "machine")?,
                 commit: field(path, line, row, "commit")?,
+                protocol: field(path, line, row, "protocol")?,
             })
         })
         .collect()
@@ -941,6 +1010,10 @@ fn read_overlap(path: &Path) -> Result<Option<OverlapRow>, Error> {
         pairs: field(path, 2, row, "pairs")?,
         peer_ns: field(path, 2, row, "peer_ns_per_pair")?,
         pw85_ns: field(path, 2, row, "pw85_ns_per_pair")?,
+        peer_ns_spread: field(path, 2, row, "peer_ns_spread")?,
+        pw85_ns_spread: field(path, 2, row, "pw85_ns_spread")?,
+        peer_ns_near: field(path, 2, row, "peer_ns_near")?,
+        pw85_ns_near: field(path, 2, row, "pw85_ns_near")?,
         disagreements: field(path, 2, row, "disagreements")?,
         max_disagreement_mu2_minus_one: field(path, 2, row, "max_disagreement_mu2_minus_one")?,
         overlapping: field(path, 2, row, "overlapping")?,
@@ -1022,8 +1095,8 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
          follows its hard-shape tutorial: `QuickInsert` of the ellipsoids \
          (`Convex<Ellipsoid>`) at packing fraction 0.3 into a periodic cube, then \
          `QuickCompress` towards 0.74 with the `OverlapPenalty` Hamiltonian \
-         (`ApproximateShapeOverlap`, resolution 0.01) and sweeps of translations (at most \
-         0.08) and rotations (at most 0.08) at temperature 1. Each time its box has shrunk and \
+         (`ApproximateShapeOverlap`, resolution 0.01) and sweeps of translations and \
+         rotations at temperature 1 (the largest moves are in the protocol column). Each time its box has shrunk and \
          its hard-shape Hamiltonian reports no overlap, the configuration is checked with \
          PW85 on every pair under the minimum-image convention, and only a certified \
          configuration is recorded; the checks are not counted in its wall time. **ellipack** \
@@ -1035,11 +1108,14 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
     for m in MARKS {
         let _ = write!(s, " at {m:.0} s |");
     }
-    s.push_str(" final | reached at (s) | certified checks | rejected | min μ² | machine | commit |\n|---|---:|---:|");
+    s.push_str(
+        " final | reached at (s) | certified checks | rejected | min μ² | protocol | machine | \
+         commit |\n|---|---:|---:|",
+    );
     for _ in MARKS {
         s.push_str("---:|");
     }
-    s.push_str("---:|---:|---:|---:|---:|---|---|\n");
+    s.push_str("---:|---:|---:|---:|---:|---|---|---|\n");
     for r in runs {
         let _ = write!(
             s,
@@ -1058,12 +1134,13 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
         }
         let _ = writeln!(
             s,
-            " {:.4} | {:.1} | {} | {} | {} | {} | {} |",
+            " {:.4} | {:.1} | {} | {} | {} | {} | {} | {} |",
             r.final_fraction,
             r.final_seconds,
             r.checks,
             r.rejected,
             r.min_mu2.map_or("—".into(), |m| format!("{m:.6}")),
+            r.protocol,
             r.machine,
             r.commit
         );
@@ -1109,15 +1186,19 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
              distance, δ uniform in [−0.3, 0.3] for half the pairs and ±10^u, u uniform in \
              [−14, −2], for the other half; {} overlap), the fastest of five passes, release \
              build with default flags, one thread:\n\n\
-             | test | ns per pair |\n|---|---:|\n\
+             | test | ns per pair, all | spread half | near-tangent half |\n|---|---:|---:|---:|\n\
              | hoomd-rs `Convex<Ellipsoid>::intersects_at_global` (XenoCollide, as its \
-             `HardShape` calls it) | {:.1} |\n\
-             | `pw85::overlap` (quadratic forms precomputed) | {:.1} |\n\n\
+             `HardShape` calls it) | {:.1} | {:.1} | {:.1} |\n\
+             | `pw85::overlap` (quadratic forms precomputed) | {:.1} | {:.1} | {:.1} |\n\n\
              {} pairs get opposite verdicts{}. Machine: {}; commit {}.\n\n",
             o.pairs,
             o.overlapping,
             o.peer_ns,
+            o.peer_ns_spread,
+            o.peer_ns_near,
             o.pw85_ns,
+            o.pw85_ns_spread,
+            o.pw85_ns_near,
             o.disagreements,
             if o.disagreements > 0 {
                 format!(
@@ -1134,7 +1215,8 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
     }
     s.push_str(
         "Reproduce: `cargo run --release -p xtask --features peer -- periodic-peer` (options \
-         `--seconds`, `--n 100 1000`, `--who peer|ours|both`, `--overlap-pairs`, `--scene`); \
+         `--seconds`, `--n 100 1000`, `--who peer|ours|both`, `--overlap-pairs`, `--scene`, \
+         `--peer-translate`, `--peer-rotate`); \
          without the `peer` feature only `--who ours` runs.\n",
     );
     s

@@ -4,7 +4,8 @@
 //! rotation sweeps at temperature 1).
 
 use super::{
-    Cell, Point, RandomPair, RunRow, SEMI_AXES, certify_periodic, commit, item_volume, machine,
+    Cell, PeerMoves, Point, RandomPair, RunRow, SEMI_AXES, certify_periodic, commit, item_volume,
+    machine,
 };
 use crate::error::{self, Error};
 use hoomd_geometry::{
@@ -32,10 +33,6 @@ type State = Microstate<Site, Site, VecCell<SiteKey, 3>, Periodic<Cuboid>>;
 const INITIAL_FRACTION: f64 = 0.3;
 /// The compression's target.
 const TARGET_FRACTION: f64 = 0.74;
-/// Largest translation of a trial move.
-const MAXIMUM_DISTANCE: f64 = 0.08;
-/// Largest rotation angle of a trial move.
-const MAXIMUM_ROTATION: f64 = 0.08;
 /// Resolution of the approximate overlap depth of the penalty Hamiltonian (the tutorial's).
 const OVERLAP_RESOLUTION: f64 = 0.01;
 
@@ -102,7 +99,12 @@ fn snapshot(state: &State) -> Result<Snapshot, Error> {
 ///
 /// # Errors
 /// [`Error::Study`] when hoomd-rs refuses the set-up, [`Error::Pw85`] for a form pw85 refuses.
-pub fn run_peer(n: usize, seconds: f64, seed: u64) -> Result<(Vec<Point>, RunRow), Error> {
+pub fn run_peer(
+    n: usize,
+    seconds: f64,
+    seed: u64,
+    moves: PeerMoves,
+) -> Result<(Vec<Point>, RunRow), Error> {
     let ellipsoid = shape()?;
     let hamiltonian = PairwiseCutoff(HardShape(ellipsoid.clone()));
     let range = hamiltonian.maximum_interaction_range();
@@ -122,11 +124,11 @@ pub fn run_peer(n: usize, seconds: f64, seed: u64) -> Result<(Vec<Point>, RunRow
         .try_build()
         .map_err(|e| study_error("microstate", e))?;
     let mut translate = Sweep(Translate::with_maximum_distance(positive(
-        MAXIMUM_DISTANCE,
+        moves.translate,
         "translation",
     )?));
     let mut rotate = Sweep(Rotate::with_maximum_rotation(positive(
-        MAXIMUM_ROTATION,
+        moves.rotate,
         "rotation",
     )?));
     let distribution = UniformIn {
@@ -242,6 +244,11 @@ pub fn run_peer(n: usize, seconds: f64, seed: u64) -> Result<(Vec<Point>, RunRow
         min_mu2: final_check.min_mu2,
         machine: machine(),
         commit: commit(),
+        protocol: format!(
+            "QuickInsert at {INITIAL_FRACTION}, QuickCompress to {TARGET_FRACTION}, moves ≤ {} \
+             and {} rad, seed {seed}",
+            moves.translate, moves.rotate
+        ),
     };
     Ok((points, row))
 }
