@@ -61,7 +61,7 @@ enum Command {
         /// Random pairs of the overlap-test comparison (0: skip it; needs the peer).
         #[arg(long, default_value_t = 200_000)]
         overlap_pairs: usize,
-        /// Scene file of our run, `{n}` standing for the count (default: a variable periodic
+        /// Scene file of our run, `{count}` standing for the count (default: a variable periodic
         /// cell).
         #[arg(long)]
         scene: Option<std::path::PathBuf>,

@@ -37,9 +37,9 @@ pub fn item_volume() -> f64 {
     4.0 / 3.0 * std::f64::consts::PI * SEMI_AXES[0] * SEMI_AXES[1] * SEMI_AXES[2]
 }
 
-/// The scene of our run: `{n}` stands for the number of ellipsoids. A periodic cell whose
+/// The scene of our run: `{count}` stands for the number of ellipsoids. A periodic cell whose
 /// lattice vectors are variables, the densest periodic packing ellipack can find.
-pub const PERIODIC_SCENE: &str = r#"name = "{n} ellipsoids (1, 0.75, 0.5) in a variable periodic cell"
+pub const PERIODIC_SCENE: &str = r#"name = "{count} ellipsoids (1, 0.75, 0.5) in a variable periodic cell"
 dimension = 3
 seed = 1
 
@@ -48,7 +48,7 @@ kind = "periodic"
 cell = "variable"
 
 [[shapes]]
-count = {n}
+count = {count}
 semi_axes = [1.0, 0.75, 0.5]
 
 [solver]
@@ -110,7 +110,7 @@ pub struct Options {
     pub who: Who,
     /// Random pairs of the overlap-test comparison (0: skip it).
     pub overlap_pairs: usize,
-    /// The scene of our run, `{n}` standing for the count ([`PERIODIC_SCENE`] by default).
+    /// The scene of our run, `{count}` standing for the count ([`PERIODIC_SCENE`] by default).
     pub scene_template: String,
     /// Seed of the peer's simulation and of the random pairs.
     pub seed: u64,
@@ -640,9 +640,9 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
     {
         return Err(bad(format!("--seconds must be positive, got {s}")));
     }
-    if !options.scene_template.contains("{n}") {
+    if !options.scene_template.contains("{count}") {
         return Err(bad(
-            "the scene template must contain `{n}` where the count goes".into(),
+            "the scene template must contain `{count}` where the count goes".into(),
         ));
     }
     if options.who.runs_peer() && !cfg!(feature = "peer") {
@@ -666,7 +666,7 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
         }
         if options.who.runs_ours() {
             eprintln!("ours: ellipack, {n} ellipsoids, {seconds} s");
-            let scene = options.scene_template.replace("{n}", &n.to_string());
+            let scene = options.scene_template.replace("{count}", &n.to_string());
             match run_ours(&scene, seconds) {
                 Ok((p, row)) => {
                     points.extend(p);
@@ -676,7 +676,10 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
             }
         }
     }
-    write_all(root, points, runs, overlap)?;
+    // Nothing measured (our scene refused, say): the files keep what they hold.
+    if !(runs.is_empty() && overlap.is_none()) {
+        write_all(root, points, runs, overlap)?;
+    }
     Ok(problems)
 }
 
@@ -1374,12 +1377,12 @@ seed = 1
 [container]
 kind = "ball"
 [[shapes]]
-count = {n}
+count = {count}
 semi_axes = [1.0, 0.75, 0.5]
 [solver]
 threads = 1
 "#
-        .replace("{n}", "3");
+        .replace("{count}", "3");
         let (points, row) = run_ours(&scene, 1.0).unwrap();
         assert!(!points.is_empty());
         assert!(
