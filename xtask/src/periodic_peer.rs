@@ -1187,7 +1187,7 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
             "### Overlap test\n\nOn the same {} random pairs of these ellipsoids (orientations \
              uniform, the second centre along a uniform direction at (1 + δ) times the contact \
              distance, δ uniform in [−0.3, 0.3] for half the pairs and ±10^u, u uniform in \
-             [−14, −2], for the other half; {} overlap), the fastest of five passes, release \
+             [−14, −2], for the other half; {} overlap), the fastest of five passes, {} \
              build with default flags, one thread:\n\n\
              | test | ns per pair, all | spread half | near-tangent half |\n|---|---:|---:|---:|\n\
              | hoomd-rs `Convex<Ellipsoid>::intersects_at_global` (XenoCollide, as its \
@@ -1196,6 +1196,11 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
              {} pairs get opposite verdicts{}. Machine: {}; commit {}.\n\n",
             o.pairs,
             o.overlapping,
+            if cfg!(debug_assertions) {
+                "debug"
+            } else {
+                "release"
+            },
             o.peer_ns,
             o.peer_ns_spread,
             o.peer_ns_near,
