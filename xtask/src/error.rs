@@ -78,6 +78,13 @@ pub enum Error {
         /// The crate's message.
         message: String,
     },
+    /// A study refused its options or input, or a peer program failed.
+    Study {
+        /// The study or the step.
+        context: String,
+        /// What is wrong.
+        message: String,
+    },
     /// Drawing a figure failed.
     Plot {
         /// The figure file.
@@ -120,6 +127,7 @@ impl fmt::Display for Error {
             }
             Error::Grid { message } => write!(f, "cell-grid: {message}"),
             Error::Pack { context, message } => write!(f, "{context}: {message}"),
+            Error::Study { context, message } => write!(f, "{context}: {message}"),
             Error::Plot { path, message } => {
                 write!(f, "{}: drawing failed: {message}", path.display())
             }

@@ -19,6 +19,7 @@ pub mod output;
 pub mod packing;
 pub mod paper_tables;
 pub mod periodic_cells;
+pub mod periodic_peer;
 pub mod plot;
 pub mod reference;
 pub mod report;

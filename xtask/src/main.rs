@@ -63,6 +63,39 @@ enum Command {
         #[arg(long, default_value_t = 2)]
         threads: usize,
     },
+    /// Ellipsoids (1, 0.75, 0.5) in a periodic box, one thread: ellipack beside hoomd-rs
+    /// (hard-particle Monte Carlo with `QuickCompress`), density against wall time, and the
+    /// cost of both overlap tests. Writes validation/periodic_peer*.csv, the figure
+    /// docs/figures/periodic-density-time.{svg,png} and a section of docs/periodic.md. The
+    /// peer needs xtask's `peer` feature:
+    /// `cargo run --release -p xtask --features peer -- periodic-peer`.
+    PeriodicPeer {
+        /// Wall seconds per run (default: 300 for N ≥ 1000, 120 below).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Numbers of ellipsoids.
+        #[arg(long = "n", num_args = 1.., default_values_t = [100, 1000])]
+        ns: Vec<usize>,
+        /// Who packs.
+        #[arg(long, value_enum, default_value_t = WhoArg::Both)]
+        who: WhoArg,
+        /// Random pairs of the overlap-test comparison (0: skip it; needs the peer).
+        #[arg(long, default_value_t = 200_000)]
+        overlap_pairs: usize,
+        /// Scene file of our run, `{count}` standing for the count (default: a variable periodic
+        /// cell).
+        #[arg(long)]
+        scene: Option<std::path::PathBuf>,
+        /// Seed of the peer's simulation and of the random pairs.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// The peer's largest trial translation.
+        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().translate)]
+        peer_translate: f64,
+        /// The peer's largest trial rotation (radians).
+        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().rotate)]
+        peer_rotate: f64,
+    },
     /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
     /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
     /// than the normal test run, in release mode. Exits non-zero if any input panics.
@@ -74,6 +107,16 @@ enum Command {
         #[arg(long)]
         dev: bool,
     },
+}
+
+#[derive(clap::ValueEnum, Clone, Copy)]
+enum WhoArg {
+    /// hoomd-rs only.
+    Peer,
+    /// ellipack only.
+    Ours,
+    /// Both.
+    Both,
 }
 
 #[derive(Subcommand, Clone, Copy)]
@@ -113,6 +156,27 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::PeriodicPeer {
+            seconds,
+            ns,
+            who,
+            overlap_pairs,
+            scene,
+            seed,
+            peer_translate,
+            peer_rotate,
+        } => periodic_peer(
+            seconds,
+            ns,
+            who,
+            overlap_pairs,
+            scene,
+            seed,
+            xtask::periodic_peer::PeerMoves {
+                translate: peer_translate,
+                rotate: peer_rotate,
+            },
+        ),
         Command::PaperTables {
             minutes,
             instances,
@@ -169,6 +233,59 @@ fn main() -> ExitCode {
                 return ExitCode::FAILURE;
             }
             summarise(&run)
+        }
+    }
+}
+
+fn periodic_peer(
+    seconds: Option<f64>,
+    ns: Vec<usize>,
+    who: WhoArg,
+    overlap_pairs: usize,
+    scene: Option<std::path::PathBuf>,
+    seed: u64,
+    peer_moves: xtask::periodic_peer::PeerMoves,
+) -> ExitCode {
+    use xtask::periodic_peer::{Options, PEER_DISABLED, PERIODIC_SCENE, Who};
+    let who = match who {
+        WhoArg::Peer => Who::Peer,
+        WhoArg::Ours => Who::Ours,
+        WhoArg::Both => Who::Both,
+    };
+    if who != Who::Ours && !cfg!(feature = "peer") {
+        eprintln!("error: {PEER_DISABLED}");
+        return ExitCode::FAILURE;
+    }
+    let scene_template = match scene {
+        None => PERIODIC_SCENE.to_string(),
+        Some(path) => match std::fs::read_to_string(&path) {
+            Ok(text) => text,
+            Err(e) => {
+                eprintln!("error: {}: {e}", path.display());
+                return ExitCode::FAILURE;
+            }
+        },
+    };
+    let options = Options {
+        seconds,
+        ns,
+        who,
+        overlap_pairs,
+        scene_template,
+        seed,
+        peer_moves,
+    };
+    match xtask::periodic_peer::run(&workspace_root(), &options) {
+        Ok(problems) if problems.is_empty() => ExitCode::SUCCESS,
+        Ok(problems) => {
+            for p in problems {
+                eprintln!("NOT RUN  {p}");
+            }
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
         }
     }
 }
