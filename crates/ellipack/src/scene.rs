@@ -988,29 +988,17 @@ impl Validator<'_> {
                 .map(|(k, &x)| length(x, format!("value {}", k + 1)))
                 .collect::<Result<Vec<f64>, _>>()
         };
+        let given = |v: &Option<Spanned<Vec<f64>>>| {
+            lengths(v.as_ref().map(Spanned::get_ref).unwrap_or(&Vec::new()))
+        };
         Ok(Some(match key {
             "radius" => ContainerSize::Radius(length(
                 raw.radius.as_ref().map_or(0.0, |r| *r.get_ref()),
                 "the radius".into(),
             )?),
-            "semi_axes" => ContainerSize::SemiAxes(lengths(
-                raw.semi_axes
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
-            "half_sides" => ContainerSize::HalfSides(lengths(
-                raw.half_sides
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
-            "lengths" => ContainerSize::Lengths(lengths(
-                raw.lengths
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
+            "semi_axes" => ContainerSize::SemiAxes(given(&raw.semi_axes)?),
+            "half_sides" => ContainerSize::HalfSides(given(&raw.half_sides)?),
+            "lengths" => ContainerSize::Lengths(given(&raw.lengths)?),
             _ => {
                 let f = raw
                     .packing_fraction
