@@ -583,38 +583,7 @@ impl Scene {
                 vec![(measure / unit).powf(1.0 / n as f64); n]
             }
         };
-        let d = |k: usize| dims.get(k).copied().unwrap_or(f64::NAN);
-        Some(match self.container {
-            ContainerKind::Circle => Container::Circle {
-                center: [0.0; 2],
-                radius: d(0),
-            },
-            ContainerKind::Ellipse => Container::Ellipse {
-                center: [0.0; 2],
-                semi_axes: [d(0), d(1)],
-            },
-            ContainerKind::Rectangle => Container::Rectangle {
-                center: [0.0; 2],
-                half_sides: [d(0), d(1)],
-            },
-            ContainerKind::Ball => Container::Ball {
-                center: [0.0; 3],
-                radius: d(0),
-            },
-            ContainerKind::Ellipsoid => Container::Ellipsoid {
-                center: [0.0; 3],
-                semi_axes: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Cuboid => Container::Cuboid {
-                center: [0.0; 3],
-                half_sides: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
-                origin: vec![0.0; n],
-                lengths: dims,
-                tilts: vec![0.0; n * (n - 1) / 2],
-            },
-        })
+        Some(Container::unchecked(self.container, &vec![0.0; n], &dims))
     }
 
     /// The scene as TOML that [`Scene::from_toml_str`] reads back to an equal scene (every
