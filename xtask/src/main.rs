@@ -49,20 +49,7 @@ enum Command {
     /// Measure the periodic cell through the `ellipack pack` pipeline: variable cells with 1, 2
     /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
     /// above; write validation/periodic_cells.csv and the table in docs/periodic.md.
-    PeriodicCells {
-        /// Seconds per variable-cell run.
-        #[arg(long, default_value_t = 20.0)]
-        seconds: f64,
-        /// Items in the fixed cube.
-        #[arg(long, default_value_t = 10_000)]
-        items: usize,
-        /// Minutes for the sweep of packing fractions of the fixed cube.
-        #[arg(long, default_value_t = 10.0)]
-        sweep_minutes: f64,
-        /// Threads of the fixed-cube runs.
-        #[arg(long, default_value_t = 2)]
-        threads: usize,
-    },
+    PeriodicCells(xtask::periodic_cells::Options),
     /// Ellipsoids (1, 0.75, 0.5) in a periodic box, one thread: ellipack beside hoomd-rs
     /// (hard-particle Monte Carlo with `QuickCompress`), density against wall time, and the
     /// cost of both overlap tests. Writes validation/periodic_peer*.csv, the figure
@@ -136,24 +123,10 @@ enum PartArg {
 fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Fuzz { cases, dev } => fuzz(cases, dev),
-        Command::PeriodicCells {
-            seconds,
-            items,
-            sweep_minutes,
-            threads,
-        } => {
-            let options = xtask::periodic_cells::Options {
-                seconds,
-                items,
-                sweep_minutes,
-                threads,
-            };
+        Command::PeriodicCells(options) => {
             match xtask::periodic_cells::run_all(&workspace_root(), &options) {
                 Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
+                Err(e) => failed(e),
             }
         }
         Command::PeriodicPeer {
@@ -205,10 +178,7 @@ fn main() -> ExitCode {
                     }
                     ExitCode::FAILURE
                 }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
+                Err(e) => failed(e),
             }
         }
         Command::Validate { quick, check, part } => {
@@ -222,15 +192,13 @@ fn main() -> ExitCode {
             };
             let mut run = Run::new(workspace_root(), quick, check);
             if let Err(e) = run.run(&parts) {
-                eprintln!("error: {e}");
-                return ExitCode::FAILURE;
+                return failed(e);
             }
             // The report is the whole story: it is written only when every part ran.
             if part.is_none()
                 && let Err(e) = xtask::report::write(&mut run)
             {
-                eprintln!("error: {e}");
-                return ExitCode::FAILURE;
+                return failed(e);
             }
             summarise(&run)
         }
@@ -292,6 +260,12 @@ fn periodic_peer(
 
 /// The fuzz suite is an ordinary test target, so that the normal run and this long run share
 /// every strategy; only the case count (`PROPTEST_CASES`) and the profile differ.
+/// Reports an error that ended a command and the exit code it gets.
+fn failed(e: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::FAILURE
+}
+
 fn fuzz(cases: u32, dev: bool) -> ExitCode {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut command = std::process::Command::new(cargo);

@@ -20,15 +20,19 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// What the study runs.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, clap::Args)]
 pub struct Options {
     /// Seconds per variable-cell run.
+    #[arg(long, default_value_t = 20.0)]
     pub seconds: f64,
-    /// Items of the fixed-cube runs.
+    /// Items in the fixed cube.
+    #[arg(long, default_value_t = 10_000)]
     pub items: usize,
-    /// Minutes for the whole fraction sweep of the fixed cube.
+    /// Minutes for the sweep of packing fractions of the fixed cube.
+    #[arg(long, default_value_t = 10.0)]
     pub sweep_minutes: f64,
-    /// Threads of the fixed-cube runs (the variable cells use one).
+    /// Threads of the fixed-cube runs.
+    #[arg(long, default_value_t = 2)]
     pub threads: usize,
 }
 
@@ -239,7 +243,10 @@ mod tests {
     fn the_table_replaces_only_what_lies_between_the_markers() {
         let text = format!("# Title\n\n{BEGIN}\nold table\n{END}\nafter\n");
         let new = between_markers(&text, "new table\n").unwrap();
-        assert_eq!(new, format!("# Title\n\n{BEGIN}\nnew table\n{END}\nafter\n"));
+        assert_eq!(
+            new,
+            format!("# Title\n\n{BEGIN}\nnew table\n{END}\nafter\n")
+        );
         assert!(between_markers("no markers", "x").is_none());
     }
 }

@@ -692,38 +692,7 @@ fn packing_of<const N: usize>(
         SizedContainer::Box { half_sides } => half_sides.to_vec(),
         SizedContainer::Periodic { .. } => shape.dimensions(),
     };
-    let d = |k: usize| dims.get(k).copied().unwrap_or(0.0);
-    let container = match kind {
-        ContainerKind::Circle => Container::Circle {
-            center: [0.0; 2],
-            radius: d(0),
-        },
-        ContainerKind::Ellipse => Container::Ellipse {
-            center: [0.0; 2],
-            semi_axes: [d(0), d(1)],
-        },
-        ContainerKind::Rectangle => Container::Rectangle {
-            center: [0.0; 2],
-            half_sides: [d(0), d(1)],
-        },
-        ContainerKind::Ball => Container::Ball {
-            center: [0.0; 3],
-            radius: d(0),
-        },
-        ContainerKind::Ellipsoid => Container::Ellipsoid {
-            center: [0.0; 3],
-            semi_axes: [d(0), d(1), d(2)],
-        },
-        ContainerKind::Cuboid => Container::Cuboid {
-            center: [0.0; 3],
-            half_sides: [d(0), d(1), d(2)],
-        },
-        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
-            origin: vec![0.0; N],
-            lengths: dims[..N].to_vec(),
-            tilts: dims[N..].to_vec(),
-        },
-    };
+    let container = Container::unchecked(kind, &[0.0; N], &dims);
     Ok(Packing::new(container, items)?)
 }
 

@@ -325,45 +325,55 @@ impl Container {
         if size.len() != size_len {
             return Err(wrong("size", size_len, size.len()));
         }
-        let c2 = || [center[0], center[1]];
-        let c3 = || [center[0], center[1], center[2]];
-        let container = match kind {
-            ContainerKind::Circle => Container::Circle {
-                center: c2(),
-                radius: size[0],
-            },
-            ContainerKind::Ellipse => Container::Ellipse {
-                center: c2(),
-                semi_axes: [size[0], size[1]],
-            },
-            ContainerKind::Rectangle => Container::Rectangle {
-                center: c2(),
-                half_sides: [size[0], size[1]],
-            },
-            ContainerKind::Ball => Container::Ball {
-                center: c3(),
-                radius: size[0],
-            },
-            ContainerKind::Ellipsoid => Container::Ellipsoid {
-                center: c3(),
-                semi_axes: [size[0], size[1], size[2]],
-            },
-            ContainerKind::Cuboid => Container::Cuboid {
-                center: c3(),
-                half_sides: [size[0], size[1], size[2]],
-            },
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
-                origin: center.to_vec(),
-                lengths: size[..n].to_vec(),
-                tilts: size[n..].to_vec(),
-            },
-        };
+        let container = Container::unchecked(kind, center, size);
         match container.defect() {
             None => Ok(container),
             Some((_, message)) => Err(PackingError::Inconsistent {
                 source_name: "container".to_string(),
                 message,
             }),
+        }
+    }
+
+    /// The container of a kind from its centre and its size, as [`Container::from_parts`]
+    /// reads them, without checks: a missing value is NaN (which [`Container::defect`] names)
+    /// and missing tilts of a periodic cell are zero (a rectangular cell).
+    pub(crate) fn unchecked(kind: ContainerKind, center: &[f64], size: &[f64]) -> Container {
+        let n = kind.dimension();
+        let c = |k: usize| center.get(k).copied().unwrap_or(f64::NAN);
+        let d = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
+        match kind {
+            ContainerKind::Circle => Container::Circle {
+                center: [c(0), c(1)],
+                radius: d(0),
+            },
+            ContainerKind::Ellipse => Container::Ellipse {
+                center: [c(0), c(1)],
+                semi_axes: [d(0), d(1)],
+            },
+            ContainerKind::Rectangle => Container::Rectangle {
+                center: [c(0), c(1)],
+                half_sides: [d(0), d(1)],
+            },
+            ContainerKind::Ball => Container::Ball {
+                center: [c(0), c(1), c(2)],
+                radius: d(0),
+            },
+            ContainerKind::Ellipsoid => Container::Ellipsoid {
+                center: [c(0), c(1), c(2)],
+                semi_axes: [d(0), d(1), d(2)],
+            },
+            ContainerKind::Cuboid => Container::Cuboid {
+                center: [c(0), c(1), c(2)],
+                half_sides: [d(0), d(1), d(2)],
+            },
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
+                origin: (0..n).map(c).collect(),
+                lengths: (0..n).map(d).collect(),
+                tilts: (n..n * (n + 1) / 2)
+                    .map(|k| size.get(k).copied().unwrap_or(0.0))
+                    .collect(),
+            },
         }
     }
 

@@ -583,38 +583,7 @@ impl Scene {
                 vec![(measure / unit).powf(1.0 / n as f64); n]
             }
         };
-        let d = |k: usize| dims.get(k).copied().unwrap_or(f64::NAN);
-        Some(match self.container {
-            ContainerKind::Circle => Container::Circle {
-                center: [0.0; 2],
-                radius: d(0),
-            },
-            ContainerKind::Ellipse => Container::Ellipse {
-                center: [0.0; 2],
-                semi_axes: [d(0), d(1)],
-            },
-            ContainerKind::Rectangle => Container::Rectangle {
-                center: [0.0; 2],
-                half_sides: [d(0), d(1)],
-            },
-            ContainerKind::Ball => Container::Ball {
-                center: [0.0; 3],
-                radius: d(0),
-            },
-            ContainerKind::Ellipsoid => Container::Ellipsoid {
-                center: [0.0; 3],
-                semi_axes: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Cuboid => Container::Cuboid {
-                center: [0.0; 3],
-                half_sides: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
-                origin: vec![0.0; n],
-                lengths: dims,
-                tilts: vec![0.0; n * (n - 1) / 2],
-            },
-        })
+        Some(Container::unchecked(self.container, &vec![0.0; n], &dims))
     }
 
     /// The scene as TOML that [`Scene::from_toml_str`] reads back to an equal scene (every
@@ -988,29 +957,17 @@ impl Validator<'_> {
                 .map(|(k, &x)| length(x, format!("value {}", k + 1)))
                 .collect::<Result<Vec<f64>, _>>()
         };
+        let given = |v: &Option<Spanned<Vec<f64>>>| {
+            lengths(v.as_ref().map(Spanned::get_ref).unwrap_or(&Vec::new()))
+        };
         Ok(Some(match key {
             "radius" => ContainerSize::Radius(length(
                 raw.radius.as_ref().map_or(0.0, |r| *r.get_ref()),
                 "the radius".into(),
             )?),
-            "semi_axes" => ContainerSize::SemiAxes(lengths(
-                raw.semi_axes
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
-            "half_sides" => ContainerSize::HalfSides(lengths(
-                raw.half_sides
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
-            "lengths" => ContainerSize::Lengths(lengths(
-                raw.lengths
-                    .as_ref()
-                    .map(Spanned::get_ref)
-                    .unwrap_or(&Vec::new()),
-            )?),
+            "semi_axes" => ContainerSize::SemiAxes(given(&raw.semi_axes)?),
+            "half_sides" => ContainerSize::HalfSides(given(&raw.half_sides)?),
+            "lengths" => ContainerSize::Lengths(given(&raw.lengths)?),
             _ => {
                 let f = raw
                     .packing_fraction

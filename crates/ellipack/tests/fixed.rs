@@ -4,7 +4,7 @@
 //! overlapping configuration in OUT/unfinished/, never as OUT's packing.
 
 mod common;
-use common::{ellipack, temp_dir, text};
+use common::{ellipack, pack_into, pack_into_with, succeeded, summary_json, temp_dir, text};
 use ellipack::packing::Container;
 use ellipack::scene::Scene;
 use std::path::Path;
@@ -25,18 +25,7 @@ const SQUARE: &str = "dimension = 2\nseed = 1\n[container]\nkind = \"rectangle\"
 fn pack(dir: &Path, scene: &str, out: &Path) -> Output {
     let path = dir.join("scene.toml");
     std::fs::write(&path, scene).unwrap();
-    ellipack()
-        .arg("pack")
-        .arg(&path)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap()
-}
-
-fn summary(folder: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(folder.join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
+    pack_into(&path, out)
 }
 
 fn verify(folder: &Path) -> Output {
@@ -56,7 +45,7 @@ fn a_ball_at_fraction_045_ends_certified_with_the_given_radius() {
     else {
         panic!("no fixed ball");
     };
-    let s = summary(&out);
+    let s = summary_json(&out);
     assert_eq!(s["container"]["kind"], "ball");
     assert_eq!(s["container"]["radius"].as_f64(), Some(radius), "{s}");
     let density = s["density"].as_f64().unwrap();
@@ -96,7 +85,7 @@ fn an_impossible_fraction_ends_not_reached_with_the_unfinished_folder_only() {
     assert!(!out.join("summary.json").exists());
     let unfinished = out.join("unfinished");
     assert!(unfinished.join("packing.csv").is_file());
-    let s = summary(&unfinished);
+    let s = summary_json(&unfinished);
     assert_eq!(s["not_reached"], true, "{s}");
     let overlaps = s["certificate"]["overlapping_pairs"].as_u64().unwrap();
     let outside = s["certificate"]["containment_violations"].as_u64().unwrap();
@@ -142,21 +131,7 @@ fn resuming_a_fixed_run_keeps_its_packing_and_refuses_another_size() {
     assert_eq!(pack(&dir, BALL, &out).status.code(), Some(0));
     let before = std::fs::read(out.join("packing.csv")).unwrap();
     let scene = dir.join("scene.toml");
-    let resumed = ellipack()
-        .arg("pack")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .unwrap();
-    let said = text(&resumed.stdout);
-    assert_eq!(
-        resumed.status.code(),
-        Some(0),
-        "{said}{}",
-        text(&resumed.stderr)
-    );
+    let said = succeeded(&pack_into_with(&scene, &out, &["--resume"]), "");
     assert!(
         said.contains("already a packing in the fixed container"),
         "{said}"
@@ -184,14 +159,7 @@ fn resuming_a_fixed_run_keeps_its_packing_and_refuses_another_size() {
     let before = std::fs::read(out.join("packing.csv")).unwrap();
     // The same items at another fraction: the folder's ball is not the scene's.
     std::fs::write(&scene, BALL.replace("0.45", "0.4")).unwrap();
-    let refused = ellipack()
-        .arg("pack")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .unwrap();
+    let refused = pack_into_with(&scene, &out, &["--resume"]);
     assert_eq!(refused.status.code(), Some(1));
     assert!(
         text(&refused.stderr).contains("is not the scene's fixed container"),

@@ -1,7 +1,7 @@
 //! Fixed containers in scene files: each size key parses to its container, round-trips
 //! through the writer, and each kind of bad size is refused with its key and line.
 
-use ellipack::packing::{Container, ContainerKind};
+use ellipack::packing::ContainerKind;
 use ellipack::scene::{ContainerSize, Scene, SceneError};
 use std::f64::consts::PI;
 
@@ -23,14 +23,28 @@ fn parse(text: &str) -> Result<Scene, SceneError> {
     Scene::from_toml_str(text, "scene.toml")
 }
 
+/// 2 or 3: the dimension of a container kind's name.
+fn dimension_of(kind: &str) -> usize {
+    ContainerKind::from_name(kind).unwrap().dimension()
+}
+
+/// Asserts that the scene of a `[container]` of `kind` with the lines `size` is refused at
+/// the key of the last of those lines, naming its line, with a message that contains `says`.
 #[track_caller]
-fn assert_error(text: &str, key: &str, line: usize, says: &str) {
-    let e = match parse(text) {
+fn refuses(kind: &str, size: &str, says: &str) {
+    let text = scene_text(dimension_of(kind), kind, size);
+    let key = format!(
+        "container.{}",
+        size.lines().last().unwrap().split(' ').next().unwrap()
+    );
+    // The size lines start on line 4.
+    let line = 3 + size.lines().count();
+    let e = match parse(&text) {
         Ok(scene) => panic!("accepted a bad scene as {scene:?}:\n{text}"),
         Err(e) => e,
     };
     let message = e.to_string();
-    assert_eq!((e.key.as_str(), e.line), (key, line), "{message}");
+    assert_eq!((e.key.as_str(), e.line), (key.as_str(), line), "{message}");
     assert!(
         message.starts_with(&format!("scene.toml: line {line}, column ")),
         "{message}"
@@ -48,72 +62,48 @@ fn round_trips(scene: &Scene) {
 
 #[test]
 fn each_size_key_gives_its_container_and_round_trips() {
-    let cases: [(usize, &str, &str, ContainerSize, Container); 6] = [
+    let cases = [
         (
-            2,
             "circle",
             "radius = 12.0",
             ContainerSize::Radius(12.0),
-            Container::Circle {
-                center: [0.0; 2],
-                radius: 12.0,
-            },
+            vec![12.0],
         ),
         (
-            3,
-            "ball",
-            "radius = 7",
-            ContainerSize::Radius(7.0),
-            Container::Ball {
-                center: [0.0; 3],
-                radius: 7.0,
-            },
-        ),
-        (
-            2,
             "ellipse",
             "semi_axes = [9.0, 7.5]",
             ContainerSize::SemiAxes(vec![9.0, 7.5]),
-            Container::Ellipse {
-                center: [0.0; 2],
-                semi_axes: [9.0, 7.5],
-            },
+            vec![9.0, 7.5],
         ),
+        ("ball", "radius = 7", ContainerSize::Radius(7.0), vec![7.0]),
         (
-            3,
             "ellipsoid",
             "semi_axes = [4.0, 3.0, 2.5]",
             ContainerSize::SemiAxes(vec![4.0, 3.0, 2.5]),
-            Container::Ellipsoid {
-                center: [0.0; 3],
-                semi_axes: [4.0, 3.0, 2.5],
-            },
+            vec![4.0, 3.0, 2.5],
         ),
         (
-            2,
             "rectangle",
             "half_sides = [10.0, 8.0]",
             ContainerSize::HalfSides(vec![10.0, 8.0]),
-            Container::Rectangle {
-                center: [0.0; 2],
-                half_sides: [10.0, 8.0],
-            },
+            vec![10.0, 8.0],
         ),
         (
-            3,
             "cuboid",
             "half_sides = [10.0, 8.0, 6.0]",
             ContainerSize::HalfSides(vec![10.0, 8.0, 6.0]),
-            Container::Cuboid {
-                center: [0.0; 3],
-                half_sides: [10.0, 8.0, 6.0],
-            },
+            vec![10.0, 8.0, 6.0],
         ),
     ];
-    for (dimension, kind, line, size, container) in cases {
-        let scene = parse(&scene_text(dimension, kind, line)).unwrap();
+    for (kind, line, size, values) in cases {
+        let scene = parse(&scene_text(dimension_of(kind), kind, line)).unwrap();
         assert_eq!(scene.container_size, Some(size), "{kind}");
-        assert_eq!(scene.fixed_container(), Some(container), "{kind}");
+        // The container of the kind centred at the origin: its variant, centre and the size
+        // values in the fields of that variant.
+        let container = scene.fixed_container().unwrap();
+        assert_eq!(container.kind(), ContainerKind::from_name(kind).unwrap());
+        assert_eq!(container.center(), vec![0.0; dimension_of(kind)], "{kind}");
+        assert_eq!(container.size(), values, "{kind}");
         assert!(!scene.title().contains("minimum"), "{}", scene.title());
         round_trips(&scene);
     }
@@ -166,94 +156,54 @@ fn without_a_size_the_container_is_minimised_as_before() {
 
 #[test]
 fn a_size_key_of_another_kind_is_refused() {
-    assert_error(
-        &scene_text(2, "ellipse", "radius = 3.0"),
-        "container.radius",
-        4,
-        "an ellipse has no radius",
-    );
-    assert_error(
-        &scene_text(3, "ball", "half_sides = [1.0, 2.0, 3.0]"),
-        "container.half_sides",
-        4,
-        "a ball has no half sides; give its radius",
-    );
-    assert_error(
-        &scene_text(2, "rectangle", "semi_axes = [1.0, 2.0]"),
-        "container.semi_axes",
-        4,
-        "give its half_sides",
-    );
+    refuses("ellipse", "radius = 3.0", "an ellipse has no radius");
+    let says = "a ball has no half sides; give its radius";
+    refuses("ball", "half_sides = [1.0, 2.0, 3.0]", says);
+    refuses("rectangle", "semi_axes = [1.0, 2.0]", "give its half_sides");
 }
 
 #[test]
 fn two_sizes_are_refused_at_the_second() {
-    assert_error(
-        &scene_text(2, "circle", "radius = 3.0\npacking_fraction = 0.5"),
-        "container.packing_fraction",
-        5,
+    let size = "radius = 3.0\npacking_fraction = 0.5";
+    refuses(
+        "circle",
+        size,
         "not both radius (line 4) and packing_fraction",
     );
 }
 
 #[test]
 fn wrong_counts_signs_and_nan_are_refused() {
-    assert_error(
-        &scene_text(3, "cuboid", "half_sides = [1.0, 2.0]"),
-        "container.half_sides",
-        4,
-        "2 values for dimension = 3",
-    );
-    assert_error(
-        &scene_text(2, "ellipse", "semi_axes = [1.0, 2.0, 3.0]"),
-        "container.semi_axes",
-        4,
-        "3 values for dimension = 2",
-    );
-    assert_error(
-        &scene_text(2, "ellipse", "semi_axes = [1.0, -2.0]"),
-        "container.semi_axes",
-        4,
-        "value 2 is -2",
-    );
-    assert_error(
-        &scene_text(2, "circle", "radius = 0.0"),
-        "container.radius",
-        4,
-        "the radius is 0",
-    );
-    assert_error(
-        &scene_text(3, "ball", "radius = nan"),
-        "container.radius",
-        4,
-        "the radius is NaN",
-    );
-    assert_error(
-        &scene_text(2, "rectangle", "half_sides = [inf, 1.0]"),
-        "container.half_sides",
-        4,
-        "value 1 is",
-    );
+    let cases = [
+        (
+            "cuboid",
+            "half_sides = [1.0, 2.0]",
+            "2 values for dimension = 3",
+        ),
+        (
+            "ellipse",
+            "semi_axes = [1.0, 2.0, 3.0]",
+            "3 values for dimension = 2",
+        ),
+        ("ellipse", "semi_axes = [1.0, -2.0]", "value 2 is -2"),
+        ("circle", "radius = 0.0", "the radius is 0"),
+        ("ball", "radius = nan", "the radius is NaN"),
+        ("rectangle", "half_sides = [inf, 1.0]", "value 1 is"),
+    ];
+    for (kind, size, says) in cases {
+        refuses(kind, size, says);
+    }
 }
 
 #[test]
 fn a_packing_fraction_outside_zero_to_one_is_refused() {
     for value in ["0.0", "1.0", "1.5", "-0.2", "nan"] {
-        assert_error(
-            &scene_text(2, "circle", &format!("packing_fraction = {value}")),
-            "container.packing_fraction",
-            4,
-            "must be in (0, 1)",
-        );
+        let size = format!("packing_fraction = {value}");
+        refuses("circle", &size, "must be in (0, 1)");
     }
 }
 
 #[test]
 fn an_unknown_container_key_is_still_refused() {
-    assert_error(
-        &scene_text(2, "circle", "radious = 3.0"),
-        "container.radious",
-        4,
-        "unknown field",
-    );
+    refuses("circle", "radious = 3.0", "unknown field");
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{ellipack, temp_dir, text};
+use common::{ellipack, pack_into, summary_json, temp_dir, text};
 
 /// A periodic scene of `count` items with the given semi-axes, one thread, a few seconds.
 fn scene(dir: &Path, count: usize, axes: &str, extra: &str) -> PathBuf {
@@ -24,39 +24,44 @@ fn scene(dir: &Path, count: usize, axes: &str, extra: &str) -> PathBuf {
     path
 }
 
-fn summary(out: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
-}
-
 fn pack_and_verify(count: usize, axes: &str, extra: &str) -> (f64, PathBuf, common::TempDir) {
     let dir = temp_dir(&format!("periodic-{count}-{}", axes.len()));
     let scene = scene(&dir, count, axes, extra);
     let out = dir.join("out");
-    let o = ellipack()
-        .arg("pack")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = pack_into(&scene, &out);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v = ellipack().arg("verify").arg(&out).output().unwrap();
     assert!(v.status.success(), "{}", text(&v.stdout));
-    let s = summary(&out);
+    let s = summary_json(&out);
     assert_eq!(s["container"]["kind"], "periodic");
     (s["density"].as_f64().unwrap(), out, dir)
+}
+
+/// Packs and verifies as [`pack_and_verify`], asserts that the density is `optimum` (to
+/// 1e-4, never above it) and that packing.xyz is periodic along the axes `pbc` says; returns
+/// the output folder, the test folder and packing.xyz.
+fn reaches(
+    optimum: f64,
+    pbc: &str,
+    count: usize,
+    axes: &str,
+    extra: &str,
+) -> (PathBuf, common::TempDir, String) {
+    let (density, out, dir) = pack_and_verify(count, axes, extra);
+    assert!(
+        density >= optimum * (1.0 - 1e-4) && density <= optimum * (1.0 + 1e-9),
+        "{density}"
+    );
+    let xyz = std::fs::read_to_string(out.join("packing.xyz")).unwrap();
+    assert!(xyz.contains(&format!("pbc=\"{pbc}\"")), "{xyz}");
+    (out, dir, xyz)
 }
 
 #[test]
 fn ellipses_reach_the_hexagonal_density_and_the_files_carry_the_cell() {
     let hexagonal = std::f64::consts::PI / 12f64.sqrt();
-    let (density, out, _dir) = pack_and_verify(4, "2.0, 1.0", "cell = \"variable\"\n");
-    assert!(
-        density >= hexagonal * (1.0 - 1e-4) && density <= hexagonal * (1.0 + 1e-9),
-        "{density}"
-    );
-    let xyz = std::fs::read_to_string(out.join("packing.xyz")).unwrap();
-    assert!(xyz.contains("pbc=\"T T F\""), "{xyz}");
+    let cell = "cell = \"variable\"\n";
+    let (out, _dir, xyz) = reaches(hexagonal, "T T F", 4, "2.0, 1.0", cell);
     assert!(xyz.contains("container=periodic"), "{xyz}");
     let data = std::fs::read_to_string(out.join("packing.data")).unwrap();
     assert!(data.contains("xy xz yz"), "{data}");
@@ -65,20 +70,14 @@ fn ellipses_reach_the_hexagonal_density_and_the_files_carry_the_cell() {
 #[test]
 fn spheres_reach_the_fcc_density() {
     let fcc = std::f64::consts::PI / 18f64.sqrt();
-    let (density, out, _dir) = pack_and_verify(2, "1.0, 1.0, 1.0", "");
-    assert!(
-        density >= fcc * (1.0 - 1e-4) && density <= fcc * (1.0 + 1e-9),
-        "{density}"
-    );
-    let xyz = std::fs::read_to_string(out.join("packing.xyz")).unwrap();
-    assert!(xyz.contains("pbc=\"T T T\""), "{xyz}");
+    reaches(fcc, "T T T", 2, "1.0, 1.0, 1.0", "");
 }
 
 #[test]
 fn a_shrunk_cell_is_refused_naming_the_item_and_its_image() {
     let (_, out, _dir) = pack_and_verify(1, "1.0, 1.0", "");
     let path = out.join("summary.json");
-    let mut s = summary(&out);
+    let mut s = summary_json(&out);
     let lengths = s["container"]["lengths"].as_array().unwrap().clone();
     let shrunk: Vec<f64> = lengths.iter().map(|v| v.as_f64().unwrap() * 0.9).collect();
     s["container"]["lengths"] = serde_json::json!(shrunk);
@@ -140,7 +139,7 @@ fn fixed_cells_are_filled_and_kept() {
         let axes = if n == 2 { "2.0, 1.0" } else { "1.0, 0.75, 0.5" };
         let extra = format!("cell = \"fixed\"\n{size}");
         let (density, out, _dir) = pack_and_verify(12, axes, &extra);
-        let s = summary(&out);
+        let s = summary_json(&out);
         let got: Vec<f64> = s["container"]["lengths"]
             .as_array()
             .unwrap()

@@ -6,7 +6,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{ellipack, refused, temp_dir, text};
+use common::{ellipack, refused, succeeded, summary_json, temp_dir, text};
 
 /// A 2D scene of `count` ellipses (2, 1) in a circle, one thread, no pictures.
 fn scene(dir: &Path, count: usize, time_limit: f64, extra: &str) -> PathBuf {
@@ -30,9 +30,7 @@ fn verify(out: &Path) -> (bool, String) {
 }
 
 fn density(out: &Path) -> f64 {
-    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    let value: serde_json::Value = serde_json::from_str(&summary).unwrap();
-    value["density"].as_f64().unwrap()
+    summary_json(out)["density"].as_f64().unwrap()
 }
 
 fn pack(args: &[&str]) -> Output {
@@ -74,14 +72,7 @@ fn stops_on(signal: &str) {
         .status()
         .unwrap();
     assert!(kill.success());
-    let output = child.wait_with_output().unwrap();
-    let stdout = text(&output.stdout);
-    assert_eq!(
-        output.status.code(),
-        Some(0),
-        "{signal}: {stdout}{}",
-        text(&output.stderr)
-    );
+    let stdout = succeeded(&child.wait_with_output().unwrap(), &format!("{signal}: "));
     assert!(
         sent.elapsed() < Duration::from_secs(15),
         "{signal}: the run did not stop"

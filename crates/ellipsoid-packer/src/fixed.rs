@@ -18,12 +18,12 @@
 //! certified start of the round is returned, so which packing that is may depend on timing.
 
 use crate::Error;
-use crate::local::{LocalResult, certified_start, infeasibility, local_minimisation};
+use crate::local::{LocalResult, certified_start, infeasibility};
 use crate::multistart::{
-    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, Start, start_kind,
+    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, Start, in_parallel,
+    minimise_start, start_kind,
 };
 use crate::starts::{LatticeStart, fill_start, perturb};
-use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Certificate, Model};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -48,23 +48,23 @@ pub struct Unfinished {
     pub interrupted: bool,
 }
 
-/// The multi-start in feasibility mode (see the module documentation); `x0` fixes the
-/// container. Called by [`multistart`](crate::multistart::multistart) when
+/// The multi-start in feasibility mode (see the module documentation) of the items of
+/// `problem`; `x0` fixes the container. Called by [`multistart`](crate::multistart::multistart) when
 /// `settings.local.fixed_container` is set.
 ///
 /// # Errors
 /// [`Error::NotReached`] when no certified packing was found; errors of the model (a start of
 /// the wrong length, an invalid container).
 pub fn fill<const N: usize>(
-    semi_axes: &[[f64; N]],
-    kind: ContainerShape,
+    mut problem: Model<N>,
     x0: &[f64],
     settings: &MultiStartSettings,
     observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
-    let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
+    // The round's threads minimise on models of their own.
+    let (semi_axes, kind) = (problem.semi_axes().to_vec(), problem.container_kind());
     let m = semi_axes.len();
     let container = x0
         .get(m * Model::<N>::vars_per_body()..)
@@ -143,28 +143,14 @@ pub fn fill<const N: usize>(
         let found = AtomicBool::new(false);
         let shared: &dyn Observer = &*observer;
         let (found, out_of_time) = (&found, &out_of_time);
-        let results: Vec<Result<LocalResult, Error>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = starts
-                .iter()
-                .map(|x| {
-                    let local = &settings.local;
-                    scope.spawn(move || {
-                        let mut p = Model::<N>::new(semi_axes.to_vec(), kind)?;
-                        let r = local_minimisation(&mut p, x, local, &mut |progress| {
-                            shared.iteration(progress);
-                            found.load(Ordering::Relaxed) || shared.should_stop() || out_of_time()
-                        });
-                        if r.as_ref().is_ok_and(|r| r.certificate.is_feasible()) {
-                            found.store(true, Ordering::Relaxed);
-                        }
-                        r
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().unwrap_or(Err(Error::StartPanicked)))
-                .collect()
+        let results = in_parallel(&starts, |x| {
+            let r = minimise_start(&semi_axes, kind, x, &settings.local, shared, || {
+                found.load(Ordering::Relaxed) || shared.should_stop() || out_of_time()
+            });
+            if r.as_ref().is_ok_and(|r| r.certificate.is_feasible()) {
+                found.store(true, Ordering::Relaxed);
+            }
+            r
         });
         let mut round_least: Option<Least> = None;
         for r in results {
@@ -235,6 +221,7 @@ struct Least {
 mod tests {
     use super::*;
     use crate::local::{LocalSettings, item_measure};
+    use implicit_packing::containment::ContainerShape;
 
     /// 20 ellipsoids (1, 0.75, 0.5) in a ball of the radius that makes their packing fraction
     /// `fraction`, filled from the centred fill start.

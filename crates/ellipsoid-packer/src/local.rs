@@ -148,26 +148,10 @@ pub fn local_minimisation<const N: usize>(
     if settings.fixed_container {
         return placement(problem, x0, settings, observe);
     }
-    let mut interrupted = false;
+    let mut run = solver(settings, observe);
     let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
-        let options = Options::default()
-            .with_feasibility_tolerance(feasibility)
-            .with_optimality_tolerance(settings.optimality_tolerance)
-            .with_complementarity_tolerance(feasibility)
-            .with_max_outer_iterations(settings.max_outer_iterations)
-            .with_max_inner_iterations(settings.max_inner_iterations)
-            .with_inner_solver(settings.inner_solver)
-            .with_scaling(true);
         let adapter = Adapter::new(problem, centre_bound::<N>(x0), None);
-        auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
-            if interrupted || observe(progress) {
-                interrupted = true;
-                Control::Stop
-            } else {
-                Control::Continue
-            }
-        })
-        .map_err(Error::Solver)
+        run(&adapter, x, feasibility)
     };
     let first = solve(problem, x0, settings.feasibility_tolerance)?;
     let mut best = certified(problem, first)?;
@@ -202,30 +186,14 @@ fn placement<const N: usize>(
         .collect();
     let mut solver_model = Model::<N>::new(grown, problem.container_kind())?;
     let container = x0[problem.len() * Model::<N>::vars_per_body()..].to_vec();
-    let mut interrupted = false;
+    let mut run = solver(settings, observe);
     let mut solve = |x: &[f64], feasibility: f64| {
-        let options = Options::default()
-            .with_feasibility_tolerance(feasibility)
-            .with_optimality_tolerance(settings.optimality_tolerance)
-            .with_complementarity_tolerance(feasibility)
-            .with_max_outer_iterations(settings.max_outer_iterations)
-            .with_max_inner_iterations(settings.max_inner_iterations)
-            .with_inner_solver(settings.inner_solver)
-            .with_scaling(true);
         let adapter = Adapter::new(
             &mut solver_model,
             centre_bound::<N>(x0),
             Some(container.clone()),
         );
-        auglag::minimize_with_callback(&adapter, x, &options, |progress: &Progress<'_>| {
-            if interrupted || observe(progress) {
-                interrupted = true;
-                Control::Stop
-            } else {
-                Control::Continue
-            }
-        })
-        .map_err(Error::Solver)
+        run(&adapter, x, feasibility)
     };
     let items = item_measure(problem);
     let judge = |problem: &mut Model<N>, solution: auglag::Solution| {
@@ -270,6 +238,35 @@ fn placement<const N: usize>(
 pub fn infeasibility<const N: usize>(problem: &mut Model<N>, x: &[f64]) -> Result<f64, Error> {
     let e = problem.evaluate(x, None)?;
     Ok(e.overlap + e.containment)
+}
+
+/// Solves of an adapter from a point at a feasibility (and complementarity) tolerance, the
+/// other limits from `settings`. `observe` may stop a solve; every later solve then stops at
+/// its first report, so that an interrupt ends the whole local minimisation.
+fn solver<'a, const N: usize>(
+    settings: &'a LocalSettings,
+    observe: &'a mut dyn FnMut(&Progress<'_>) -> bool,
+) -> impl FnMut(&Adapter<'_, N>, &[f64], f64) -> Result<auglag::Solution, Error> + 'a {
+    let mut interrupted = false;
+    move |adapter, x, feasibility| {
+        let options = Options::default()
+            .with_feasibility_tolerance(feasibility)
+            .with_optimality_tolerance(settings.optimality_tolerance)
+            .with_complementarity_tolerance(feasibility)
+            .with_max_outer_iterations(settings.max_outer_iterations)
+            .with_max_inner_iterations(settings.max_inner_iterations)
+            .with_inner_solver(settings.inner_solver)
+            .with_scaling(true);
+        auglag::minimize_with_callback(adapter, x, &options, |progress: &Progress<'_>| {
+            if interrupted || observe(progress) {
+                interrupted = true;
+                Control::Stop
+            } else {
+                Control::Continue
+            }
+        })
+        .map_err(Error::Solver)
+    }
 }
 
 /// `LengthMismatch` unless the start `x` has one entry per variable of `problem`.

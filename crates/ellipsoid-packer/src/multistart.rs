@@ -295,7 +295,8 @@ pub fn multistart<const N: usize>(
     observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
     if settings.local.fixed_container {
-        return crate::fixed::fill(semi_axes, kind, x0, settings, observer);
+        let problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
+        return crate::fixed::fill(problem, x0, settings, observer);
     }
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
@@ -392,45 +393,36 @@ pub fn multistart<const N: usize>(
         // Shared with the round's threads; the calling thread hears of each result after it.
         let shared: &dyn Observer = &*observer;
         let out_of_time = &out_of_time;
-        let results: Vec<Result<LocalResult, Error>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..round)
-                .map(|k| {
-                    let index = started + k;
-                    let origin = if restart {
-                        Start::Lattice(RESTART_LATTICES + chain.restarts * threads + k)
-                    } else {
-                        start_kind(settings, index)
-                    };
-                    let x = match origin {
-                        Start::Lattice(n) => {
-                            lattice_start_of(&problem, &LatticeStart::sequence(shard.global(n)))
-                        }
-                        Start::Perturbed(amplitude) => perturb::<N>(
-                            if settings.from_best {
-                                &chain.best.x
-                            } else {
-                                &current
-                            },
-                            semi_axes.len(),
-                            amplitude,
-                            settings.seed,
-                            shard.global(index) as u64,
-                        ),
-                    };
-                    let local = &settings.local;
-                    scope.spawn(move || {
-                        let mut p = Model::<N>::new(semi_axes.to_vec(), kind)?;
-                        local_minimisation(&mut p, &x, local, &mut |progress| {
-                            shared.iteration(progress);
-                            shared.should_stop() || out_of_time()
-                        })
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().unwrap_or(Err(Error::StartPanicked)))
-                .collect()
+        let starts: Vec<Vec<f64>> = (0..round)
+            .map(|k| {
+                let index = started + k;
+                let origin = if restart {
+                    Start::Lattice(RESTART_LATTICES + chain.restarts * threads + k)
+                } else {
+                    start_kind(settings, index)
+                };
+                match origin {
+                    Start::Lattice(n) => {
+                        lattice_start_of(&problem, &LatticeStart::sequence(shard.global(n)))
+                    }
+                    Start::Perturbed(amplitude) => perturb::<N>(
+                        if settings.from_best {
+                            &chain.best.x
+                        } else {
+                            &current
+                        },
+                        semi_axes.len(),
+                        amplitude,
+                        settings.seed,
+                        shard.global(index) as u64,
+                    ),
+                }
+            })
+            .collect();
+        let results = in_parallel(&starts, |x| {
+            minimise_start(semi_axes, kind, x, &settings.local, shared, || {
+                shared.should_stop() || out_of_time()
+            })
         });
         let mut round_best: Option<LocalResult> = None;
         if restart {
@@ -535,6 +527,38 @@ impl Chain {
         self.best = best.clone();
         self.stale = 0;
     }
+}
+
+/// `minimise` on every start, one thread each, in the order of the starts; a thread that
+/// panicked gives [`Error::StartPanicked`].
+pub(crate) fn in_parallel<T: Sync>(
+    starts: &[T],
+    minimise: impl Fn(&T) -> Result<LocalResult, Error> + Sync,
+) -> Vec<Result<LocalResult, Error>> {
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = starts.iter().map(|x| scope.spawn(|| minimise(x))).collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or(Err(Error::StartPanicked)))
+            .collect()
+    })
+}
+
+/// The local minimisation of start `x` on a model of its own: each iteration goes to
+/// `observer`, and it stops as soon as `stop` says so.
+pub(crate) fn minimise_start<const N: usize>(
+    semi_axes: &[[f64; N]],
+    kind: ContainerShape,
+    x: &[f64],
+    local: &LocalSettings,
+    observer: &dyn Observer,
+    stop: impl Fn() -> bool,
+) -> Result<LocalResult, Error> {
+    let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
+    local_minimisation(&mut problem, x, local, &mut |progress| {
+        observer.iteration(progress);
+        stop()
+    })
 }
 
 /// Where start `index` (≥ 1) of a run comes from.

@@ -430,19 +430,27 @@ fn supercell<const N: usize>(m: usize, per_cell: usize, h: &[f64; N]) -> [usize;
             / widths.iter().fold(f64::INFINITY, |a, &b| a.min(b));
         (spread > 4.0, sites - m, spread)
     };
+    least_cost_counts(cells, cost)
+}
+
+/// The numbers of unit cells `c_k` along each axis that hold `cells` unit cells at the least
+/// `cost` (the first found among equal costs): every `(c_1, …, c_{N−1})` whose product is at
+/// most `cells`, with the least `c_N` that makes up `cells`.
+fn least_cost_counts<const N: usize, C: PartialOrd>(
+    cells: usize,
+    cost: impl Fn(&[usize; N]) -> C,
+) -> [usize; N] {
     let mut best = [1usize; N];
     best[N - 1] = cells;
     let mut best_cost = cost(&best);
-    // Every (c_1, …, c_{N−1}) up to `cells`, the last count the least that holds the items.
     let mut c = [1usize; N];
     loop {
+        // The increments below keep this product at most `cells`.
         let partial: usize = c[..N - 1].iter().product();
-        if partial <= cells {
-            c[N - 1] = cells.div_ceil(partial);
-            let value = cost(&c);
-            if value.partial_cmp(&best_cost) == Some(std::cmp::Ordering::Less) {
-                (best, best_cost) = (c, value);
-            }
+        c[N - 1] = cells.div_ceil(partial);
+        let value = cost(&c);
+        if value.partial_cmp(&best_cost) == Some(std::cmp::Ordering::Less) {
+            (best, best_cost) = (c, value);
         }
         let mut k = 0;
         while k < N - 1 {
@@ -549,30 +557,7 @@ fn periodic_fill_start<const N: usize>(
             .map(|k| c[k] as f64 * natural[k] / heights[k])
             .fold(0.0, f64::max)
     };
-    let mut best = [1usize; N];
-    best[N - 1] = cells;
-    let mut best_cost = (compression(&best), cells);
-    let mut c = [1usize; N];
-    loop {
-        let partial: usize = c[..N - 1].iter().product();
-        c[N - 1] = cells.div_ceil(partial);
-        let cost = (compression(&c), c.iter().product::<usize>());
-        if cost.0 < best_cost.0 || (cost.0 == best_cost.0 && cost.1 < best_cost.1) {
-            (best, best_cost) = (c, cost);
-        }
-        let mut k = 0;
-        while k < N - 1 {
-            c[k] += 1;
-            if c[..N - 1].iter().product::<usize>() <= cells {
-                break;
-            }
-            c[k] = 1;
-            k += 1;
-        }
-        if k == N - 1 {
-            break;
-        }
-    }
+    let best = least_cost_counts(cells, |c| (compression(c), c.iter().product::<usize>()));
     let mut x = vec![0.0; problem.var_count()];
     place_on_sites(&mut x, m, &sites, &best, &start.shift);
     x[m * Model::<N>::vars_per_body()..].copy_from_slice(container);

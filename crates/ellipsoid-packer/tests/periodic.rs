@@ -7,6 +7,16 @@ use ellipsoid_packer::starts::periodic_lattice_start;
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 
+/// The packing fraction at `x` of the model's `m` items of semi-axes `axes`.
+fn density<const N: usize>(model: &mut Model<N>, x: &[f64], m: usize, axes: &[f64; N]) -> f64 {
+    let unit = if N == 2 {
+        std::f64::consts::PI
+    } else {
+        4.0 / 3.0 * std::f64::consts::PI
+    };
+    m as f64 * unit * axes.iter().product::<f64>() / model.evaluate(x, None).unwrap().objective
+}
+
 /// The lattice start with `per_cell` items, loosened by `loose` (the cell dilated, the items
 /// turned and moved a little, deterministically), minimised.
 fn densest<const N: usize>(axes: [f64; N], per_cell: usize, loose: f64) -> (f64, f64) {
@@ -24,13 +34,7 @@ fn densest<const N: usize>(axes: [f64; N], per_cell: usize, loose: f64) -> (f64,
         .with_optimality_tolerance(1e-8);
     let r = local_minimisation(&mut model, &x, &settings, &mut |_| false).unwrap();
     assert!(r.certificate.is_feasible());
-    let unit = if N == 2 {
-        std::f64::consts::PI
-    } else {
-        4.0 / 3.0 * std::f64::consts::PI
-    };
-    let start = per_cell as f64 * unit * axes.iter().product::<f64>()
-        / model.evaluate(&x, None).unwrap().objective;
+    let start = density(&mut model, &x, per_cell, &axes);
     (r.density, start)
 }
 
@@ -80,13 +84,7 @@ fn periodic_lattice_starts_are_certified() {
             cert.is_feasible(),
             "{N}D, m = {m}, {per_cell} per cell: {cert:?}"
         );
-        let unit = if N == 2 {
-            std::f64::consts::PI
-        } else {
-            4.0 / 3.0 * std::f64::consts::PI
-        };
-        let density = m as f64 * unit * axes.iter().product::<f64>()
-            / model.evaluate(&x, None).unwrap().objective;
+        let density = density(&mut model, &x, m, &axes);
         assert!(density <= optimum * (1.0 + 1e-12), "{density}");
         // One unit cell, or 10 × 10 × 10: every site filled.
         if m == per_cell || m == 1000 {

@@ -17,32 +17,17 @@ use implicit_packing::model::{Model, ModelGradient, PAIR_LIST_SKIN};
 use implicit_packing::pair::separated_along_centre_line;
 use std::hint::black_box;
 use std::time::Instant;
-use testkit::Rng;
+
+mod common;
 
 fn configuration(m: usize, density: f64) -> (Vec<[f64; 3]>, Vec<f64>) {
-    let mut rng = Rng::new(m as u64);
-    let axes: Vec<[f64; 3]> = (0..m)
-        .map(|_| {
-            let s = 0.9 + 0.2 * rng.uniform();
-            [s, 0.75 * s, 0.5 * s]
-        })
-        .collect();
-    let vol: f64 = axes
-        .iter()
-        .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
-        .sum();
-    let side = (vol / density).cbrt();
-    let per = (m as f64).cbrt().ceil() as usize;
-    let h = side / per as f64;
-    let mut x = Vec::with_capacity(6 * m + 3);
-    for i in 0..m {
-        for idx in [i % per, (i / per) % per, i / (per * per)] {
-            x.push((idx as f64 + 0.5) * h - side / 2.0 + (rng.uniform() - 0.5) * 0.2 * h);
-        }
-        x.push(6.0 * rng.uniform() - 3.0);
-        x.push(3.0 * rng.uniform() - 1.5);
-        x.push(6.0 * rng.uniform() - 3.0);
-    }
+    let (axes, mut x, side) = common::configuration(m, density, |rng| {
+        [
+            6.0 * rng.uniform() - 3.0,
+            3.0 * rng.uniform() - 1.5,
+            6.0 * rng.uniform() - 3.0,
+        ]
+    });
     x.extend_from_slice(&[0.5 * side; 3]);
     (axes, x)
 }

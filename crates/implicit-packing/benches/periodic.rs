@@ -8,35 +8,19 @@ use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Model, ModelGradient};
 use std::hint::black_box;
 use std::time::Instant;
-use testkit::Rng;
+
+mod common;
 
 /// Semi-axes, the box variables and the periodic variables of one configuration.
 fn configuration(m: usize) -> (Vec<[f64; 3]>, Vec<f64>, Vec<f64>) {
-    let mut rng = Rng::new(m as u64);
-    let axes: Vec<[f64; 3]> = (0..m)
-        .map(|_| {
-            let s = 0.9 + 0.2 * rng.uniform();
-            [s, 0.75 * s, 0.5 * s]
-        })
-        .collect();
-    let volume: f64 = axes
-        .iter()
-        .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
-        .sum();
-    let side = (volume / 0.6).cbrt();
-    let per = (m as f64).cbrt().ceil() as usize;
-    let h = side / per as f64;
-    let (mut boxed, mut periodic) = (Vec::new(), Vec::new());
-    for i in 0..m {
-        for idx in [i % per, (i / per) % per, i / (per * per)] {
-            let c = (idx as f64 + 0.5) * h - side / 2.0 + (rng.uniform() - 0.5) * 0.2 * h;
-            boxed.push(c);
-            periodic.push(c / side + 0.5);
-        }
-        for _ in 0..3 {
-            let a = 6.0 * rng.uniform() - 3.0;
-            boxed.push(a);
-            periodic.push(a);
+    let (axes, mut boxed, side) = common::configuration(m, 0.6, |rng| {
+        std::array::from_fn(|_| 6.0 * rng.uniform() - 3.0)
+    });
+    // The same centres in fractions of the periodic cube, which starts at the box's corner.
+    let mut periodic = boxed.clone();
+    for item in periodic.chunks_mut(6) {
+        for c in &mut item[..3] {
+            *c = *c / side + 0.5;
         }
     }
     boxed.extend_from_slice(&[0.5 * side; 3]);

@@ -111,36 +111,7 @@ pub fn certify<const N: usize>(
     }
     let mut cert = Certificate::default();
     if bodies.len() > 1 {
-        let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
-        let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
-        let grid = cell_grid::Grid::<N>::with_radii(&radii)
-            .build(&centres)
-            .map_err(Error::Grid)?;
-        let mut failure = None;
-        grid.for_each_close_pair(|i, j, _, _| {
-            cert.pairs_checked += 1;
-            match contact(&bodies[i], &bodies[j]) {
-                Ok(c) => {
-                    cert.min_mu2 = Some(cert.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
-                    if c.mu2 < 1.0 {
-                        cert.overlapping.push(Overlap {
-                            items: (i.min(j), i.max(j)),
-                            mu2: c.mu2,
-                        });
-                    }
-                }
-                Err(e) => {
-                    failure.get_or_insert(Error::Certification {
-                        pair: (i, j),
-                        source: e,
-                    });
-                }
-            }
-        });
-        if let Some(e) = failure {
-            return Err(e);
-        }
-        cert.overlapping.sort_unstable_by_key(|o| o.items);
+        check_close_pairs(bodies, |i, j| Some(((i, j), (i, j))), &mut cert)?;
     }
     for (item, body) in bodies.iter().enumerate() {
         if containment_residual(body, container) > 0.0 {
@@ -163,20 +134,41 @@ fn certify_periodic<const N: usize>(
 ) -> Result<Certificate, Error> {
     let mut cert = Certificate::default();
     let (images, extended) = periodic_images(bodies, cell, 0.0)?;
-    let centres: Vec<[f64; N]> = extended.iter().map(Body::centre).collect();
-    let radii: Vec<f64> = extended.iter().map(Body::bounding_radius).collect();
+    check_close_pairs(
+        &extended,
+        |a, b| {
+            let (a, b) = (a.min(b), a.max(b));
+            images.is_representative(a, b).then(|| {
+                let (i, j) = (images.owner[a] as usize, images.owner[b] as usize);
+                ((a, b), (i, j))
+            })
+        },
+        &mut cert,
+    )?;
+    Ok(cert)
+}
+
+/// PW85 on the pairs of `bodies` whose enclosing balls meet, into `cert`: the count, the least
+/// μ² and the overlaps (sorted). `pair` maps a close pair of bodies to the bodies to compare
+/// and the items they stand for, or skips it (`None`). The first pair PW85 refuses is the
+/// error.
+fn check_close_pairs<const N: usize>(
+    bodies: &[Body<N>],
+    pair: impl Fn(usize, usize) -> Option<((usize, usize), (usize, usize))>,
+    cert: &mut Certificate,
+) -> Result<(), Error> {
+    let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
+    let radii: Vec<f64> = bodies.iter().map(Body::bounding_radius).collect();
     let grid = cell_grid::Grid::<N>::with_radii(&radii)
         .build(&centres)
         .map_err(Error::Grid)?;
     let mut failure = None;
     grid.for_each_close_pair(|a, b, _, _| {
-        let (a, b) = (a.min(b), a.max(b));
-        if !images.is_representative(a, b) {
+        let Some(((a, b), (i, j))) = pair(a, b) else {
             return;
-        }
+        };
         cert.pairs_checked += 1;
-        let (i, j) = (images.owner[a] as usize, images.owner[b] as usize);
-        match contact(&extended[a], &extended[b]) {
+        match contact(&bodies[a], &bodies[b]) {
             Ok(c) => {
                 cert.min_mu2 = Some(cert.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
                 if c.mu2 < 1.0 {
@@ -197,9 +189,11 @@ fn certify_periodic<const N: usize>(
     if let Some(e) = failure {
         return Err(e);
     }
+    // Items pair once each in a container; in a periodic cell two items may overlap through
+    // several images, ordered by μ².
     cert.overlapping
         .sort_unstable_by(|x, y| x.items.cmp(&y.items).then(x.mu2.total_cmp(&y.mu2)));
-    Ok(cert)
+    Ok(())
 }
 
 /// The items of a periodic cell and their images within reach of any item (enclosing balls of

@@ -51,6 +51,23 @@ fn relative(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
 
+/// The generic check `$check` as two tests, `$check::in_2d` and `$check::in_3d`.
+macro_rules! in_2d_and_3d {
+    ($check:ident) => {
+        mod $check {
+            #[test]
+            fn in_2d() {
+                super::$check::<2>();
+            }
+
+            #[test]
+            fn in_3d() {
+                super::$check::<3>();
+            }
+        }
+    };
+}
+
 /// The image sum equals the brute-force sum, also after moves that rebuild the image set and
 /// moves that do not; with one item (its own images), a few and many.
 fn image_sum_matches_brute_force<const N: usize>() {
@@ -82,15 +99,7 @@ fn image_sum_matches_brute_force<const N: usize>() {
     }
 }
 
-#[test]
-fn image_sum_matches_brute_force_2d() {
-    image_sum_matches_brute_force::<2>();
-}
-
-#[test]
-fn image_sum_matches_brute_force_3d() {
-    image_sum_matches_brute_force::<3>();
-}
+in_2d_and_3d!(image_sum_matches_brute_force);
 
 /// The gradient with respect to every variable (fractional centres, angles, cell entries)
 /// against central differences of the value.
@@ -124,15 +133,7 @@ fn gradient_matches_differences<const N: usize>() {
     }
 }
 
-#[test]
-fn gradient_matches_differences_2d() {
-    gradient_matches_differences::<2>();
-}
-
-#[test]
-fn gradient_matches_differences_3d() {
-    gradient_matches_differences::<3>();
-}
+in_2d_and_3d!(gradient_matches_differences);
 
 /// One disc of radius 1 in the hexagonal cell [[2, 1], [0, √3]], the densest packing of
 /// discs (π/(2√3) = 0.9069), and its affine image, one ellipse (2, 1) in [[4, 2], [0, √3]]:

@@ -220,13 +220,37 @@ pub fn on_input(args: &[&str], input: &Path) -> Output {
 
 /// `ellipack pack <scene> --out <out>`, run to its end.
 pub fn pack_into(scene: &Path, out: &Path) -> Output {
+    pack_into_with(scene, out, &[])
+}
+
+/// `ellipack pack <scene> --out <out> <extra>`, run to its end.
+pub fn pack_into_with(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     ellipack()
         .arg("pack")
         .arg(scene)
         .arg("--out")
         .arg(out)
+        .args(extra)
         .output()
         .unwrap()
+}
+
+/// The summary.json of the run folder `out`.
+pub fn summary_json(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// Asserts that the process exited with status 0, showing `context`, its standard output
+/// and its standard error otherwise, and returns its standard output.
+pub fn succeeded(output: &Output, context: &str) -> String {
+    let stdout = text(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{context}{stdout}{}",
+        text(&output.stderr)
+    );
+    stdout
 }
 
 /// Asserts that the process succeeded, showing its standard error otherwise.
