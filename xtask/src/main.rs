@@ -56,33 +56,7 @@ enum Command {
     /// docs/figures/periodic-density-time.{svg,png} and a section of docs/periodic.md. The
     /// peer needs xtask's `peer` feature:
     /// `cargo run --release -p xtask --features peer -- periodic-peer`.
-    PeriodicPeer {
-        /// Wall seconds per run (default: 300 for N ≥ 1000, 120 below).
-        #[arg(long)]
-        seconds: Option<f64>,
-        /// Numbers of ellipsoids.
-        #[arg(long = "n", num_args = 1.., default_values_t = [100, 1000])]
-        ns: Vec<usize>,
-        /// Who packs.
-        #[arg(long, value_enum, default_value_t = WhoArg::Both)]
-        who: WhoArg,
-        /// Random pairs of the overlap-test comparison (0: skip it; needs the peer).
-        #[arg(long, default_value_t = 200_000)]
-        overlap_pairs: usize,
-        /// Scene file of our run, `{count}` standing for the count (default: a variable periodic
-        /// cell).
-        #[arg(long)]
-        scene: Option<std::path::PathBuf>,
-        /// Seed of the peer's simulation and of the random pairs.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// The peer's largest trial translation.
-        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().translate)]
-        peer_translate: f64,
-        /// The peer's largest trial rotation (radians).
-        #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().rotate)]
-        peer_rotate: f64,
-    },
+    PeriodicPeer(PeerArgs),
     /// Run the parser fuzz suite (crates/ellipack/tests/fuzz.rs: random and mutated pairs,
     /// measure, scene, packing.csv, summary.json and packing.xyz files) with many more cases
     /// than the normal test run, in release mode. Exits non-zero if any input panics.
@@ -94,6 +68,36 @@ enum Command {
         #[arg(long)]
         dev: bool,
     },
+}
+
+/// The options of `cargo xtask periodic-peer`.
+#[derive(clap::Args)]
+struct PeerArgs {
+    /// Wall seconds per run (default: 300 for N ≥ 1000, 120 below).
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Numbers of ellipsoids.
+    #[arg(long = "n", num_args = 1.., default_values_t = [100, 1000])]
+    ns: Vec<usize>,
+    /// Who packs.
+    #[arg(long, value_enum, default_value_t = WhoArg::Both)]
+    who: WhoArg,
+    /// Random pairs of the overlap-test comparison (0: skip it; needs the peer).
+    #[arg(long, default_value_t = 200_000)]
+    overlap_pairs: usize,
+    /// Scene file of our run, `{count}` standing for the count (default: a variable periodic
+    /// cell).
+    #[arg(long)]
+    scene: Option<std::path::PathBuf>,
+    /// Seed of the peer's simulation and of the random pairs.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The peer's largest trial translation.
+    #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().translate)]
+    peer_translate: f64,
+    /// The peer's largest trial rotation (radians).
+    #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().rotate)]
+    peer_rotate: f64,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy)]
@@ -129,27 +133,7 @@ fn main() -> ExitCode {
                 Err(e) => failed(e),
             }
         }
-        Command::PeriodicPeer {
-            seconds,
-            ns,
-            who,
-            overlap_pairs,
-            scene,
-            seed,
-            peer_translate,
-            peer_rotate,
-        } => periodic_peer(
-            seconds,
-            ns,
-            who,
-            overlap_pairs,
-            scene,
-            seed,
-            xtask::periodic_peer::PeerMoves {
-                translate: peer_translate,
-                rotate: peer_rotate,
-            },
-        ),
+        Command::PeriodicPeer(args) => periodic_peer(args),
         Command::PaperTables {
             minutes,
             instances,
@@ -170,16 +154,10 @@ fn main() -> ExitCode {
                 threads,
                 resume,
             };
-            match xtask::paper_tables::run_all(&workspace_root(), &options) {
-                Ok(problems) if problems.is_empty() => ExitCode::SUCCESS,
-                Ok(problems) => {
-                    for p in problems {
-                        eprintln!("NOT CERTIFIED  {p}");
-                    }
-                    ExitCode::FAILURE
-                }
-                Err(e) => failed(e),
-            }
+            with_problems(
+                xtask::paper_tables::run_all(&workspace_root(), &options),
+                "NOT CERTIFIED",
+            )
         }
         Command::Validate { quick, check, part } => {
             let parts: Vec<Part> = match part {
@@ -205,17 +183,9 @@ fn main() -> ExitCode {
     }
 }
 
-fn periodic_peer(
-    seconds: Option<f64>,
-    ns: Vec<usize>,
-    who: WhoArg,
-    overlap_pairs: usize,
-    scene: Option<std::path::PathBuf>,
-    seed: u64,
-    peer_moves: xtask::periodic_peer::PeerMoves,
-) -> ExitCode {
-    use xtask::periodic_peer::{Options, PEER_DISABLED, PERIODIC_SCENE, Who};
-    let who = match who {
+fn periodic_peer(args: PeerArgs) -> ExitCode {
+    use xtask::periodic_peer::{Options, PEER_DISABLED, PERIODIC_SCENE, PeerMoves, Who};
+    let who = match args.who {
         WhoArg::Peer => Who::Peer,
         WhoArg::Ours => Who::Ours,
         WhoArg::Both => Who::Both,
@@ -224,7 +194,7 @@ fn periodic_peer(
         eprintln!("error: {PEER_DISABLED}");
         return ExitCode::FAILURE;
     }
-    let scene_template = match scene {
+    let scene_template = match args.scene {
         None => PERIODIC_SCENE.to_string(),
         Some(path) => match std::fs::read_to_string(&path) {
             Ok(text) => text,
@@ -235,37 +205,46 @@ fn periodic_peer(
         },
     };
     let options = Options {
-        seconds,
-        ns,
+        seconds: args.seconds,
+        ns: args.ns,
         who,
-        overlap_pairs,
+        overlap_pairs: args.overlap_pairs,
         scene_template,
-        seed,
-        peer_moves,
+        seed: args.seed,
+        peer_moves: PeerMoves {
+            translate: args.peer_translate,
+            rotate: args.peer_rotate,
+        },
     };
-    match xtask::periodic_peer::run(&workspace_root(), &options) {
+    with_problems(
+        xtask::periodic_peer::run(&workspace_root(), &options),
+        "NOT RUN",
+    )
+}
+
+/// The exit code of a study that lists its problems: success when there are none, else each
+/// printed after `label`; an error ends it.
+fn with_problems(outcome: Result<Vec<String>, impl std::fmt::Display>, label: &str) -> ExitCode {
+    match outcome {
         Ok(problems) if problems.is_empty() => ExitCode::SUCCESS,
         Ok(problems) => {
             for p in problems {
-                eprintln!("NOT RUN  {p}");
+                eprintln!("{label}  {p}");
             }
             ExitCode::FAILURE
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
+        Err(e) => failed(e),
     }
 }
 
-/// The fuzz suite is an ordinary test target, so that the normal run and this long run share
-/// every strategy; only the case count (`PROPTEST_CASES`) and the profile differ.
 /// Reports an error that ended a command and the exit code it gets.
 fn failed(e: impl std::fmt::Display) -> ExitCode {
     eprintln!("error: {e}");
     ExitCode::FAILURE
 }
 
+/// The fuzz suite is an ordinary test target, so that the normal run and this long run share
+/// every strategy; only the case count (`PROPTEST_CASES`) and the profile differ.
 fn fuzz(cases: u32, dev: bool) -> ExitCode {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut command = std::process::Command::new(cargo);

@@ -960,69 +960,90 @@ fn field<T: std::str::FromStr>(
     })
 }
 
-fn read_points(path: &Path) -> Result<Vec<Point>, Error> {
+/// One row of a table being read: its values by column name, with the file and line for
+/// errors.
+struct Fields<'a> {
+    path: &'a Path,
+    line: usize,
+    row: &'a [(String, String)],
+}
+
+impl Fields<'_> {
+    fn get<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
+        field(self.path, self.line, self.row, name)
+    }
+}
+
+/// Every row of the table at `path`, made by `make`.
+fn read_rows<T>(
+    path: &Path,
+    make: impl Fn(&Fields<'_>) -> Result<T, Error>,
+) -> Result<Vec<T>, Error> {
     read_table(path)?
         .iter()
         .enumerate()
         .map(|(k, row)| {
-            let line = k + 2;
-            Ok(Point {
-                who: field(path, line, row, "who")?,
-                n: field(path, line, row, "n")?,
-                seconds: field(path, line, row, "seconds")?,
-                packing_fraction: field(path, line, row, "packing_fraction")?,
+            make(&Fields {
+                path,
+                line: k + 2,
+                row,
             })
         })
         .collect()
+}
+
+fn read_points(path: &Path) -> Result<Vec<Point>, Error> {
+    read_rows(path, |f| {
+        Ok(Point {
+            who: f.get("who")?,
+            n: f.get("n")?,
+            seconds: f.get("seconds")?,
+            packing_fraction: f.get("packing_fraction")?,
+        })
+    })
 }
 
 fn read_runs(path: &Path) -> Result<Vec<RunRow>, Error> {
-    read_table(path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| {
-            let line = k + 2;
-            let min_mu2: String = field(path, line, row, "min_mu2")?;
-            Ok(RunRow {
-                who: field(path, line, row, "who")?,
-                n: field(path, line, row, "n")?,
-                budget_seconds: field(path, line, row, "budget_seconds")?,
-                final_fraction: field(path, line, row, "final_fraction")?,
-                final_seconds: field(path, line, row, "final_seconds")?,
-                checks: field(path, line, row, "checks")?,
-                rejected: field(path, line, row, "rejected")?,
-                min_mu2: if min_mu2.is_empty() {
-                    None
-                } else {
-                    Some(field(path, line, row, "min_mu2")?)
-                },
-                machine: field(path, line, row, "machine")?,
-                commit: field(path, line, row, "commit")?,
-                protocol: field(path, line, row, "protocol")?,
-            })
+    read_rows(path, |f| {
+        let min_mu2: String = f.get("min_mu2")?;
+        Ok(RunRow {
+            who: f.get("who")?,
+            n: f.get("n")?,
+            budget_seconds: f.get("budget_seconds")?,
+            final_fraction: f.get("final_fraction")?,
+            final_seconds: f.get("final_seconds")?,
+            checks: f.get("checks")?,
+            rejected: f.get("rejected")?,
+            min_mu2: if min_mu2.is_empty() {
+                None
+            } else {
+                Some(f.get("min_mu2")?)
+            },
+            machine: f.get("machine")?,
+            commit: f.get("commit")?,
+            protocol: f.get("protocol")?,
         })
-        .collect()
+    })
 }
 
 fn read_overlap(path: &Path) -> Result<Option<OverlapRow>, Error> {
-    let rows = read_table(path)?;
-    let Some(row) = rows.first() else {
-        return Ok(None);
-    };
-    Ok(Some(OverlapRow {
-        pairs: field(path, 2, row, "pairs")?,
-        peer_ns: field(path, 2, row, "peer_ns_per_pair")?,
-        pw85_ns: field(path, 2, row, "pw85_ns_per_pair")?,
-        peer_ns_spread: field(path, 2, row, "peer_ns_spread")?,
-        pw85_ns_spread: field(path, 2, row, "pw85_ns_spread")?,
-        peer_ns_near: field(path, 2, row, "peer_ns_near")?,
-        pw85_ns_near: field(path, 2, row, "pw85_ns_near")?,
-        disagreements: field(path, 2, row, "disagreements")?,
-        max_disagreement_mu2_minus_one: field(path, 2, row, "max_disagreement_mu2_minus_one")?,
-        overlapping: field(path, 2, row, "overlapping")?,
-        machine: field(path, 2, row, "machine")?,
-        commit: field(path, 2, row, "commit")?,
-    }))
+    let rows = read_rows(path, |f| {
+        Ok(OverlapRow {
+            pairs: f.get("pairs")?,
+            peer_ns: f.get("peer_ns_per_pair")?,
+            pw85_ns: f.get("pw85_ns_per_pair")?,
+            peer_ns_spread: f.get("peer_ns_spread")?,
+            pw85_ns_spread: f.get("pw85_ns_spread")?,
+            peer_ns_near: f.get("peer_ns_near")?,
+            pw85_ns_near: f.get("pw85_ns_near")?,
+            disagreements: f.get("disagreements")?,
+            max_disagreement_mu2_minus_one: f.get("max_disagreement_mu2_minus_one")?,
+            overlapping: f.get("overlapping")?,
+            machine: f.get("machine")?,
+            commit: f.get("commit")?,
+        })
+    })?;
+    Ok(rows.into_iter().next())
 }
 
 fn label(who: &str) -> &'static str {
@@ -1238,20 +1259,16 @@ mod tests {
         [1.0, 0.0, 0.0, 1.0, 0.0, 1.0]
     }
 
+    /// The certificate of two unit spheres at `a` and `b` in `cell`.
+    fn two_spheres(cell: &Cell, a: [f64; 3], b: [f64; 3], with_mu2: bool) -> PeriodicCertificate {
+        certify_periodic(cell, &[a, b], &[sphere(), sphere()], &[1.0, 1.0], with_mu2).unwrap()
+    }
+
     #[test]
     fn spheres_overlap_across_the_boundary_and_not_when_far_apart() {
         let cell = Cell::orthorhombic([10.0, 10.0, 10.0]);
-        let forms = [sphere(), sphere()];
-        let radii = [1.0, 1.0];
         // 0.8 apart through the face x = 0 / x = 10, 9.2 apart inside the box.
-        let across = certify_periodic(
-            &cell,
-            &[[0.5, 5.0, 5.0], [9.7, 5.0, 5.0]],
-            &forms,
-            &radii,
-            true,
-        )
-        .unwrap();
+        let across = two_spheres(&cell, [0.5, 5.0, 5.0], [9.7, 5.0, 5.0], true);
         assert_eq!(across.overlapping_pairs, 1);
         assert_eq!(across.first_overlap, Some((0, 1)));
         let mu2 = across.min_mu2.unwrap();
@@ -1260,36 +1277,15 @@ mod tests {
             "μ² = (0.8 / 2)² = 0.16, got {mu2}"
         );
         // The same pair with the second centre given three boxes farther out.
-        let unwrapped = certify_periodic(
-            &cell,
-            &[[0.5, 5.0, 5.0], [29.7, -15.0, 5.0]],
-            &forms,
-            &radii,
-            true,
-        )
-        .unwrap();
+        let unwrapped = two_spheres(&cell, [0.5, 5.0, 5.0], [29.7, -15.0, 5.0], true);
         assert_eq!(unwrapped.overlapping_pairs, 1);
         assert!((unwrapped.min_mu2.unwrap() - 0.16).abs() < 1e-12);
 
-        let far = certify_periodic(
-            &cell,
-            &[[2.0, 5.0, 5.0], [7.0, 5.0, 5.0]],
-            &forms,
-            &radii,
-            true,
-        )
-        .unwrap();
+        let far = two_spheres(&cell, [2.0, 5.0, 5.0], [7.0, 5.0, 5.0], true);
         assert!(far.is_certified());
         assert_eq!(far.images_tested, 0);
         // Across a corner: 0.6 apart along each axis through three faces (|r| ≈ 1.04).
-        let corner = certify_periodic(
-            &cell,
-            &[[0.3, 0.3, 0.3], [9.7, 9.7, 9.7]],
-            &forms,
-            &radii,
-            false,
-        )
-        .unwrap();
+        let corner = two_spheres(&cell, [0.3, 0.3, 0.3], [9.7, 9.7, 9.7], false);
         assert_eq!(corner.overlapping_pairs, 1);
     }
 
@@ -1302,28 +1298,12 @@ mod tests {
         let cell = Cell {
             lattice: [[4.5, 0.0, 0.0], [4.0, 4.5, 0.0], [0.0, 0.0, 4.5]],
         };
-        let forms = [sphere(), sphere()];
-        let radii = [1.0, 1.0];
-        let c = certify_periodic(
-            &cell,
-            &[[0.0, 0.0, 0.0], [-1.2, 1.4, 0.0]],
-            &forms,
-            &radii,
-            true,
-        )
-        .unwrap();
+        let c = two_spheres(&cell, [0.0, 0.0, 0.0], [-1.2, 1.4, 0.0], true);
         assert_eq!(c.overlapping_pairs, 1);
         let mu2 = c.min_mu2.unwrap();
         assert!((mu2 - 0.85).abs() < 1e-12, "μ² = 3.4 / 4, got {mu2}");
         // v = (−1.3, 1.7, 0), |v| ≈ 2.14, and every other image farther: no overlap.
-        let apart = certify_periodic(
-            &cell,
-            &[[0.0, 0.0, 0.0], [-1.3, 1.7, 0.0]],
-            &forms,
-            &radii,
-            false,
-        )
-        .unwrap();
+        let apart = two_spheres(&cell, [0.0, 0.0, 0.0], [-1.3, 1.7, 0.0], false);
         assert!(apart.is_certified());
     }
 
@@ -1376,18 +1356,8 @@ mod tests {
     }
 
     #[test]
-    fn ours_records_certified_densities_on_a_ball_scene() {
-        let scene = r#"dimension = 3
-seed = 1
-[container]
-kind = "ball"
-[[shapes]]
-count = {count}
-semi_axes = [1.0, 0.75, 0.5]
-[solver]
-threads = 1
-"#
-        .replace("{count}", "3");
+    fn ours_records_certified_densities_on_the_periodic_scene() {
+        let scene = PERIODIC_SCENE.replace("{count}", "3");
         let (points, row) = run_ours(&scene, 1.0).unwrap();
         assert!(!points.is_empty());
         assert!(
