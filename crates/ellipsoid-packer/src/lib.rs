@@ -46,5 +46,6 @@ pub mod fixed;
 pub mod local;
 pub mod multistart;
 pub mod starts;
+pub mod tiling;
 
 pub use error::Error;

@@ -421,7 +421,7 @@ fn unit_cell<const N: usize>(per_cell: usize) -> ([[f64; N]; N], Vec<[f64; N]>) 
 /// The numbers of unit cells `c_k` along each axis for `m` items, `per_cell` sites per unit
 /// cell of heights `h_k`: the fewest empty sites among the supercells whose heights `c_k h_k`
 /// differ by at most a factor 4, then the least spread of the heights.
-fn supercell<const N: usize>(m: usize, per_cell: usize, h: &[f64; N]) -> [usize; N] {
+pub(crate) fn supercell<const N: usize>(m: usize, per_cell: usize, h: &[f64; N]) -> [usize; N] {
     let cells = m.div_ceil(per_cell).max(1);
     let cost = |c: &[usize; N]| {
         let sites = per_cell * c.iter().product::<usize>();

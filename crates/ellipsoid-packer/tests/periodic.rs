@@ -106,3 +106,37 @@ fn periodic_lattice_starts_are_certified() {
     }
     check([1.0, 0.75, 0.5], 1000, 1, fcc);
 }
+
+/// The densest small cell tiled: 8 ellipses (2, 1) get the hexagonal density from a tiling of
+/// a small cell, certified, their cell the small cell's repeated.
+#[test]
+fn small_cells_tile_into_a_certified_start_at_their_density() {
+    use ellipsoid_packer::multistart::MultiStartSettings;
+    use ellipsoid_packer::tiling::tiled_start;
+    let mut model = Model::<2>::new(vec![[2.0, 1.0]; 8], ContainerShape::Periodic).unwrap();
+    let settings = MultiStartSettings::paper(2, 1).with_lattice_starts(4);
+    let (x, density) = tiled_start(
+        &mut model,
+        &settings,
+        std::time::Duration::from_millis(500),
+        &(),
+    )
+    .unwrap()
+    .expect("identical items in a periodic cell");
+    assert!(model.certify(&x).unwrap().is_feasible());
+    let hexagonal = std::f64::consts::PI / 12f64.sqrt();
+    assert!((density - hexagonal).abs() < 1e-4 * hexagonal, "{density}");
+    // Mixed items are not tiled.
+    let mut mixed =
+        Model::<2>::new(vec![[2.0, 1.0], [1.0, 1.0]], ContainerShape::Periodic).unwrap();
+    assert!(
+        tiled_start(
+            &mut mixed,
+            &settings,
+            std::time::Duration::from_millis(100),
+            &()
+        )
+        .unwrap()
+        .is_none()
+    );
+}
