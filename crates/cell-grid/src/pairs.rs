@@ -442,6 +442,12 @@ impl<F, const P: bool, const R: bool> Close<F, P, R> {
                     };
                     done = end;
                 }
+                // The quads may have filled the buffer exactly; the scalar loop below expects
+                // room for one more hit.
+                if n == BATCH {
+                    self.emit(g, &hits);
+                    n = 0;
+                }
             }
             for (k, pb) in ps.iter().enumerate().skip(done) {
                 let d = Self::delta(g, &pa, pb);

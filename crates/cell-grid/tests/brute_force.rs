@@ -83,6 +83,20 @@ fn all_points_identical() {
     assert_eq!(g.nonempty_cell_count(), 1);
 }
 
+/// A cell of 3 + 4k mutually close points, k = 16 … 18: the first point's candidates fill the
+/// hit buffer with whole quads of four (64 hits) and leave one to three for the scalar loop,
+/// which must flush the full buffer first.
+#[test]
+fn quads_that_fill_the_hit_buffer_exactly() {
+    let mut rng = Rng::new(11);
+    for m in [67, 68, 69, 70, 71, 131] {
+        let pts: Vec<[f64; 3]> = (0..m).map(|_| rng.point(0.0, 0.01)).collect();
+        assert_eq!(check_cutoff(&pts, 1.0), m * (m - 1) / 2, "m = {m}");
+        let radii = vec![1.0; m];
+        check_radii(&pts, &radii);
+    }
+}
+
 #[test]
 fn points_on_a_line() {
     let mut rng = Rng::new(3);
