@@ -438,7 +438,11 @@ fn run_n<const N: usize>(
     let prelude = prelude.elapsed();
     settings.time_limit = Some(time_limit.saturating_sub(prelude));
     settings.shard = options.shard.unwrap_or(Shard::WHOLE);
-    let result = match multistart(axes, kind, &x0, &settings, observer) {
+    let mut shifted = Shifted {
+        inner: observer,
+        by: prelude,
+    };
+    let result = match multistart(axes, kind, &x0, &settings, &mut shifted) {
         Ok(result) => result,
         Err(ellipsoid_packer::Error::NotReached(u)) => {
             let packing = packing_of::<N>(&mut problem, &u.x, scene.container)?;
@@ -498,6 +502,27 @@ fn run_n<const N: usize>(
         start_density: result.start_density,
         start_kept: result.start_kept,
     })
+}
+
+/// An observer whose progress times start earlier, at the run's start, by `by` (the time
+/// spent before the multi-start: the small cells of a periodic run).
+struct Shifted<'a> {
+    inner: &'a mut dyn Observer,
+    by: Duration,
+}
+
+impl Observer for Shifted<'_> {
+    fn finished(&mut self, progress: &MultiStartProgress) {
+        let mut progress = *progress;
+        progress.elapsed += self.by;
+        self.inner.finished(&progress);
+    }
+    fn iteration(&self, progress: &ellipsoid_packer::multistart::SolverProgress<'_>) {
+        self.inner.iteration(progress);
+    }
+    fn should_stop(&self) -> bool {
+        self.inner.should_stop()
+    }
 }
 
 /// A packing as the files hold it, with its own certificate.
