@@ -24,6 +24,7 @@ pub mod plot;
 pub mod reference;
 pub mod report;
 pub mod sample;
+pub mod scale;
 pub mod scene;
 pub mod snapshots;
 pub mod stiff;

@@ -50,6 +50,11 @@ enum Command {
     /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
     /// above; write validation/periodic_cells.csv and the table in docs/periodic.md.
     PeriodicCells(xtask::periodic_cells::Options),
+    /// One local minimisation of m ellipsoids (1, 0.75, 0.5) in a ball against m, with each
+    /// inner solver: iterations, evaluations, wall time, density, memory. Writes
+    /// validation/scale.csv, docs/figures/scale.{svg,png} and a table in docs/packing.md.
+    /// Two threads inside the model: `cargo run --release -p xtask --features rayon -- scale`.
+    Scale(xtask::scale::Options),
     /// Ellipsoids (1, 0.75, 0.5) in a periodic box, one thread: ellipack beside hoomd-rs
     /// (hard-particle Monte Carlo with `QuickCompress`), density against wall time, and the
     /// cost of both overlap tests. Writes validation/periodic_peer*.csv, the figure
@@ -134,6 +139,10 @@ fn main() -> ExitCode {
             }
         }
         Command::PeriodicPeer(args) => periodic_peer(args),
+        Command::Scale(options) => match xtask::scale::run_all(&workspace_root(), &options) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => failed(e),
+        },
         Command::PaperTables {
             minutes,
             instances,

@@ -176,7 +176,7 @@ fn between_markers(text: &str, table: &str) -> Option<String> {
 }
 
 /// The short hash of the checked-out commit, or `unknown`.
-fn commit() -> String {
+pub(crate) fn commit() -> String {
     std::process::Command::new("git")
         .args(["rev-parse", "--short", "HEAD"])
         .output()

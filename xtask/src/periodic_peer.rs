@@ -962,20 +962,20 @@ fn field<T: std::str::FromStr>(
 
 /// One row of a table being read: its values by column name, with the file and line for
 /// errors.
-struct Fields<'a> {
+pub(crate) struct Fields<'a> {
     path: &'a Path,
     line: usize,
     row: &'a [(String, String)],
 }
 
 impl Fields<'_> {
-    fn get<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
+    pub(crate) fn get<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
         field(self.path, self.line, self.row, name)
     }
 }
 
 /// Every row of the table at `path`, made by `make`.
-fn read_rows<T>(
+pub(crate) fn read_rows<T>(
     path: &Path,
     make: impl Fn(&Fields<'_>) -> Result<T, Error>,
 ) -> Result<Vec<T>, Error> {

@@ -3,7 +3,7 @@
 //! report back to the outer loop. A solver itself ([`Method`]) only picks directions and keeps
 //! its memory.
 
-use crate::projection::{all_finite, clamp, norm_inf, projected_gradient_norm};
+use crate::projection::{all_finite, clamp, norm_inf, projected_gradient_norm, step_dot};
 use crate::report::Control;
 
 /// A smooth function on the box, evaluated with its gradient.
@@ -253,12 +253,11 @@ pub(crate) fn line_search<S: Smooth + ?Sized>(
         if f.evaluations() >= at.settings.max_evaluations {
             return Err(InnerStatus::MaxEvaluations);
         }
-        let mut decrease = 0.0;
         for (i, t) in x_trial.iter_mut().enumerate() {
             // Rounding in x + αd may step a hair outside the box; the clamp keeps feasibility exact.
             *t = clamp(x[i] + alpha * direction[i], lower[i], upper[i]);
-            decrease += grad[i] * (*t - x[i]);
         }
+        let decrease = step_dot(grad, x_trial, x);
         let f_trial = f.value_grad(x_trial, g_trial);
         last_finite = f_trial.is_finite() && all_finite(g_trial);
         let sufficient = match acceptance {

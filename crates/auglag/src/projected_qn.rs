@@ -104,14 +104,11 @@ impl LbfgsWorkspace {
         };
         let s = &mut self.s[slot * n..(slot + 1) * n];
         let y = &mut self.y[slot * n..(slot + 1) * n];
-        let mut sy = 0.0;
-        let mut yy = 0.0;
         for i in 0..n {
             s[i] = self.x_trial[i] - x[i];
             y[i] = self.g_trial[i] - g[i];
-            sy += s[i] * y[i];
-            yy += y[i] * y[i];
         }
+        let (sy, yy) = (dot(s, y), dot(y, y));
         // A pair without positive curvature would make H indefinite; it is dropped.
         if sy > f64::EPSILON * yy && sy > 0.0 {
             self.pair_sy[slot] = sy;
@@ -159,9 +156,7 @@ impl LbfgsWorkspace {
             // q is zero off F, so sᵀq needs no mask.
             let a = self.rho[slot] * dot(s, q);
             self.alpha[slot] = a;
-            for ((qi, &yi), &fi) in q.iter_mut().zip(y).zip(&self.free) {
-                *qi -= a * yi * fi;
-            }
+            axpy_free(-a, y, q, (!self.all_free).then_some(&self.free));
         }
         let used = gamma.is_some();
         let gamma = gamma.unwrap_or_else(|| {
@@ -180,12 +175,25 @@ impl LbfgsWorkspace {
             let q = &mut self.direction;
             let b = self.rho[slot] * dot(y, q);
             let c = self.alpha[slot] - b;
-            for ((qi, &si), &fi) in q.iter_mut().zip(s).zip(&self.free) {
-                *qi += c * si * fi;
-            }
+            axpy_free(c, s, q, (!self.all_free).then_some(&self.free));
         }
         self.direction.iter_mut().for_each(|v| *v = -*v);
         used
+    }
+}
+
+/// q += a v on the free variables (`free`: 1.0 free, 0.0 active; `None` when all are free).
+///
+/// The vectors of a large problem do not fit the caches, so the two-loop recursion is bound
+/// by memory traffic: without active variables the mask is not read at all.
+fn axpy_free(a: f64, v: &[f64], q: &mut [f64], free: Option<&[f64]>) {
+    match free {
+        None => q.iter_mut().zip(v).for_each(|(qi, &vi)| *qi += a * vi),
+        Some(free) => {
+            for ((qi, &vi), &fi) in q.iter_mut().zip(v).zip(free) {
+                *qi += a * vi * fi;
+            }
+        }
     }
 }
 

@@ -6,7 +6,8 @@
 //! - [`has_avx2_fma`] — one cached detection of AVX2 and FMA;
 //! - [`multiversion!`] — a function compiled for baseline x86-64 and again with AVX2 + FMA,
 //!   the build chosen per call from the cached detection;
-//! - [`F64x4`] and [`Mask4`] (x86-64) — four `f64` lanes in one 256-bit register.
+//! - [`F64x4`] and [`Mask4`] (x86-64) — four `f64` lanes in one 256-bit register;
+//! - [`dot`] — the dot product of long slices with independent partial sums.
 //!
 //! Why compile twice: the kernels above are chains of dependent 3×3 products and short
 //! polynomial evaluations. The AVX encoding's three-operand instructions remove the register
@@ -48,8 +49,10 @@ use core::sync::atomic::{AtomicU8, Ordering};
 
 #[cfg(target_arch = "x86_64")]
 mod f64x4;
+mod reduce;
 #[cfg(target_arch = "x86_64")]
 pub use f64x4::{F64x4, Mask4};
+pub use reduce::dot;
 
 /// The environment variable that, set to `1`, makes [`has_avx2_fma`] answer `false`: the
 /// portable build then runs on every x86-64 processor, for tests and benches of that build.

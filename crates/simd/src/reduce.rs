@@ -1,0 +1,79 @@
+//! Reductions over long slices.
+
+/// Lanes of independent partial sums: two 256-bit registers in the AVX2 build.
+const LANES: usize = 8;
+
+/// Σ aᵢ bᵢ with [`LANES`] partial sums, combined pairwise at the end.
+///
+/// One running sum makes every addition wait for the one before (about four cycles each);
+/// independent partial sums let the additions overlap and fill vector registers. The
+/// summation order is fixed by the slice length alone, so the result is the same in every
+/// build and on every processor (no fused multiply–add: `a * b + c` is never contracted).
+#[inline(always)]
+fn dot_lanes<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0; LANES];
+    let (a_chunks, b_chunks) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+    let (a_tail, b_tail) = (a_chunks.remainder(), b_chunks.remainder());
+    for (x, y) in a_chunks.zip(b_chunks) {
+        for k in 0..LANES {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    for (k, (x, y)) in a_tail.iter().zip(b_tail).enumerate() {
+        acc[k] += x * y;
+    }
+    let quads = [
+        acc[0] + acc[4],
+        acc[1] + acc[5],
+        acc[2] + acc[6],
+        acc[3] + acc[7],
+    ];
+    (quads[0] + quads[2]) + (quads[1] + quads[3])
+}
+
+crate::multiversion! {
+    /// The dot product Σ aᵢ bᵢ of two slices (over the shorter one's length), with eight
+    /// independent partial sums: several times faster than one running sum on long slices,
+    /// and the same bits in the portable and the AVX2 build.
+    ///
+    /// ```
+    /// let a: Vec<f64> = (0..1000).map(f64::from).collect();
+    /// assert_eq!(simd::dot(&a, &[1.0; 1000]), 499_500.0);
+    /// ```
+    pub fn dot(a: &[f64], b: &[f64]) -> f64 => fused dot_lanes;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn every_length_matches_the_sum_in_exact_arithmetic() {
+        // Small integers: every partial sum is exact, whatever the order.
+        for n in 0..40 {
+            let a: Vec<f64> = (0..n).map(|i| (i % 7) as f64 - 3.0).collect();
+            let b: Vec<f64> = (0..n).map(|i| (i % 5) as f64 + 1.0).collect();
+            let exact: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            assert_eq!(dot(&a, &b), exact, "n = {n}");
+        }
+    }
+
+    #[test]
+    fn both_builds_give_the_same_bits() {
+        let a: Vec<f64> = (0..1003).map(|i| (i as f64 * 0.37).sin()).collect();
+        let b: Vec<f64> = (0..1003).map(|i| (i as f64 * 0.11).cos() * 1e3).collect();
+        assert_eq!(dot_lanes::<false>(&a, &b), dot(&a, &b));
+        // Rounding stays at the level of the condition of the sum.
+        let reference: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+        let scale: f64 = a.iter().zip(&b).map(|(x, y)| (x * y).abs()).sum();
+        assert!((dot(&a, &b) - reference).abs() <= 1e-13 * scale);
+    }
+
+    #[test]
+    fn the_shorter_slice_sets_the_length() {
+        assert_eq!(dot(&[1.0, 2.0, 3.0], &[1.0, 1.0]), 3.0);
+    }
+}
