@@ -107,6 +107,14 @@ pub fn short(x: f64) -> String {
     format!("{x:.3e}")
 }
 
+/// `text` with what lies between the markers `begin` and `end` replaced by `table` (`None`
+/// when a marker is missing): the generated part of a page, the rest kept as written.
+pub fn between_markers(text: &str, (begin, end): (&str, &str), table: &str) -> Option<String> {
+    let start = text.find(begin)? + begin.len();
+    let stop = start + text[start..].find(end)?;
+    Some(format!("{}\n{table}{}", &text[..start], &text[stop..]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

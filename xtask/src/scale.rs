@@ -432,9 +432,7 @@ const END: &str = "<!-- scale: end -->";
 
 /// `text` with what lies between the study's markers replaced by `table`.
 fn between_markers(text: &str, table: &str) -> Option<String> {
-    let start = text.find(BEGIN)? + BEGIN.len();
-    let end = start + text[start..].find(END)?;
-    Some(format!("{}\n{table}{}", &text[..start], &text[end..]))
+    crate::output::between_markers(text, (BEGIN, END), table)
 }
 
 #[cfg(test)]

@@ -44,48 +44,16 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     simd::dot(a, b)
 }
 
-/// Partial results a reduction keeps side by side: long reductions then do not wait on one
-/// running value (each `+` or `max` would wait about four cycles for the one before).
-const LANES: usize = 8;
-
-/// Sup-norm (NaN entries are skipped, as by `f64::max`), over [`LANES`] running maxima.
+/// Sup-norm ([`simd::norm_inf`]: NaN entries are skipped, as by `f64::max`).
 #[inline]
 pub(crate) fn norm_inf(a: &[f64]) -> f64 {
-    let mut m = [0.0f64; LANES];
-    let chunks = a.chunks_exact(LANES);
-    let tail = chunks.remainder();
-    for c in chunks {
-        for k in 0..LANES {
-            m[k] = m[k].max(c[k].abs());
-        }
-    }
-    let lanes = m.iter().fold(0.0, |acc: f64, &v| acc.max(v));
-    tail.iter().fold(lanes, |acc, v| acc.max(v.abs()))
+    simd::norm_inf(a)
 }
 
-/// gᵀ(t − x), the directional change of a step from x to t, over [`LANES`] partial sums
-/// combined in a fixed order.
+/// gᵀ(t − x), the directional change of a step from x to t ([`simd::step_dot`]).
 #[inline]
 pub(crate) fn step_dot(g: &[f64], t: &[f64], x: &[f64]) -> f64 {
-    let n = g.len().min(t.len()).min(x.len());
-    let (g, t, x) = (&g[..n], &t[..n], &x[..n]);
-    let mut acc = [0.0; LANES];
-    let whole = n - n % LANES;
-    for i in (0..whole).step_by(LANES) {
-        for k in 0..LANES {
-            acc[k] += g[i + k] * (t[i + k] - x[i + k]);
-        }
-    }
-    for i in whole..n {
-        acc[i - whole] += g[i] * (t[i] - x[i]);
-    }
-    let quads = [
-        acc[0] + acc[4],
-        acc[1] + acc[5],
-        acc[2] + acc[6],
-        acc[3] + acc[7],
-    ];
-    (quads[0] + quads[2]) + (quads[1] + quads[3])
+    simd::step_dot(g, t, x)
 }
 
 /// True if every entry is finite.
@@ -120,27 +88,5 @@ mod tests {
         let mut x = [-2.0, -1e300, 1e300];
         project(&mut x, &l, &u);
         assert_eq!(x, [0.0, -1e300, 1e300]);
-    }
-
-    #[test]
-    fn lane_reductions_match_the_plain_loops_at_every_length() {
-        for n in 0..41 {
-            // Small integers: every partial sum is exact, whatever the order.
-            let g: Vec<f64> = (0..n).map(|i| (i % 5) as f64 - 2.0).collect();
-            let t: Vec<f64> = (0..n).map(|i| (i % 7) as f64).collect();
-            let x: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
-            let plain: f64 = (0..n).map(|i| g[i] * (t[i] - x[i])).sum();
-            assert_eq!(step_dot(&g, &t, &x), plain, "n = {n}");
-            let plain_max = g.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
-            assert_eq!(norm_inf(&g), plain_max, "n = {n}");
-        }
-        // The largest entry counts wherever it sits, and NaN is skipped as by `f64::max`.
-        let mut v = vec![1.0; 19];
-        v[17] = -9.0;
-        v[3] = f64::NAN;
-        assert_eq!(norm_inf(&v), 9.0);
-        v[17] = 1.0;
-        v[9] = -4.0;
-        assert_eq!(norm_inf(&v), 4.0);
     }
 }

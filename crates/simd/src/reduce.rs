@@ -3,6 +3,18 @@
 /// Lanes of independent partial sums: two 256-bit registers in the AVX2 build.
 const LANES: usize = 8;
 
+/// The sum of the lanes, in a fixed pairwise order.
+#[inline(always)]
+fn combine(acc: [f64; LANES]) -> f64 {
+    let quads = [
+        acc[0] + acc[4],
+        acc[1] + acc[5],
+        acc[2] + acc[6],
+        acc[3] + acc[7],
+    ];
+    (quads[0] + quads[2]) + (quads[1] + quads[3])
+}
+
 /// Σ aᵢ bᵢ with [`LANES`] partial sums, combined pairwise at the end.
 ///
 /// One running sum makes every addition wait for the one before (about four cycles each);
@@ -24,13 +36,41 @@ fn dot_lanes<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
     for (k, (x, y)) in a_tail.iter().zip(b_tail).enumerate() {
         acc[k] += x * y;
     }
-    let quads = [
-        acc[0] + acc[4],
-        acc[1] + acc[5],
-        acc[2] + acc[6],
-        acc[3] + acc[7],
-    ];
-    (quads[0] + quads[2]) + (quads[1] + quads[3])
+    combine(acc)
+}
+
+/// Σ gᵢ (tᵢ − xᵢ) with [`LANES`] partial sums (as [`dot_lanes`]).
+#[inline(always)]
+fn step_dot_lanes<const FMA: bool>(g: &[f64], t: &[f64], x: &[f64]) -> f64 {
+    let n = g.len().min(t.len()).min(x.len());
+    let (g, t, x) = (&g[..n], &t[..n], &x[..n]);
+    let mut acc = [0.0; LANES];
+    let whole = n - n % LANES;
+    for i in (0..whole).step_by(LANES) {
+        for k in 0..LANES {
+            acc[k] += g[i + k] * (t[i + k] - x[i + k]);
+        }
+    }
+    for i in whole..n {
+        acc[i - whole] += g[i] * (t[i] - x[i]);
+    }
+    combine(acc)
+}
+
+/// max |aᵢ| over [`LANES`] running maxima; NaN entries are skipped, as by `f64::max`, so the
+/// result is the one of a single running maximum.
+#[inline(always)]
+fn norm_inf_lanes<const FMA: bool>(a: &[f64]) -> f64 {
+    let mut m = [0.0f64; LANES];
+    let chunks = a.chunks_exact(LANES);
+    let tail = chunks.remainder();
+    for c in chunks {
+        for k in 0..LANES {
+            m[k] = m[k].max(c[k].abs());
+        }
+    }
+    let lanes = m.iter().fold(0.0, |acc: f64, &v| acc.max(v));
+    tail.iter().fold(lanes, |acc, v| acc.max(v.abs()))
 }
 
 crate::multiversion! {
@@ -45,9 +85,30 @@ crate::multiversion! {
     pub fn dot(a: &[f64], b: &[f64]) -> f64 => fused dot_lanes;
 }
 
+crate::multiversion! {
+    /// gᵀ(t − x), the directional change of the step from x to t (over the shortest slice's
+    /// length), with eight partial sums as [`dot`], without storing t − x.
+    ///
+    /// ```
+    /// assert_eq!(simd::step_dot(&[1.0, 2.0], &[3.0, 5.0], &[1.0, 1.0]), 10.0);
+    /// ```
+    pub fn step_dot(g: &[f64], t: &[f64], x: &[f64]) -> f64 => fused step_dot_lanes;
+}
+
+crate::multiversion! {
+    /// The sup-norm max |aᵢ| (0 for an empty slice; NaN entries are skipped, as by
+    /// `f64::max`), over eight running maxima.
+    ///
+    /// ```
+    /// assert_eq!(simd::norm_inf(&[1.0, -7.0, f64::NAN, 3.0]), 7.0);
+    /// ```
+    pub fn norm_inf(a: &[f64]) -> f64 => fused norm_inf_lanes;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec;
     use std::vec::Vec;
 
     #[test]
@@ -70,6 +131,28 @@ mod tests {
         let reference: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
         let scale: f64 = a.iter().zip(&b).map(|(x, y)| (x * y).abs()).sum();
         assert!((dot(&a, &b) - reference).abs() <= 1e-13 * scale);
+    }
+
+    #[test]
+    fn lane_reductions_match_the_plain_loops_at_every_length() {
+        for n in 0..41 {
+            // Small integers: every partial sum is exact, whatever the order.
+            let g: Vec<f64> = (0..n).map(|i| (i % 5) as f64 - 2.0).collect();
+            let t: Vec<f64> = (0..n).map(|i| (i % 7) as f64).collect();
+            let x: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
+            let plain: f64 = (0..n).map(|i| g[i] * (t[i] - x[i])).sum();
+            assert_eq!(step_dot(&g, &t, &x), plain, "n = {n}");
+            let plain_max = g.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+            assert_eq!(norm_inf(&g), plain_max, "n = {n}");
+        }
+        // The largest entry counts wherever it sits, and NaN is skipped as by `f64::max`.
+        let mut v = vec![1.0; 19];
+        v[17] = -9.0;
+        v[3] = f64::NAN;
+        assert_eq!(norm_inf(&v), 9.0);
+        v[17] = 1.0;
+        v[9] = -4.0;
+        assert_eq!(norm_inf(&v), 4.0);
     }
 
     #[test]
