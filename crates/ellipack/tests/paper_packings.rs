@@ -36,7 +36,11 @@ fn every_row_of_the_table_has_its_certified_packing() {
         let instance = by_name(&name).unwrap_or_else(|| panic!("unknown instance {name}"));
         let dir = validation().join("paper-packings").join(&name);
         let (packing, _) = read_packing_dir(&dir).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(packing.items().len(), instance.count(), "{name}: item count");
+        assert_eq!(
+            packing.items().len(),
+            instance.count(),
+            "{name}: item count"
+        );
         let certificate = verify(&packing).unwrap();
         assert!(
             certificate.is_certified(),
