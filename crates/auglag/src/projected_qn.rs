@@ -156,7 +156,9 @@ impl LbfgsWorkspace {
             // q is zero off F, so sᵀq needs no mask.
             let a = self.rho[slot] * dot(s, q);
             self.alpha[slot] = a;
-            axpy_free(-a, y, q, (!self.all_free).then_some(&self.free));
+            for ((qi, &yi), &fi) in q.iter_mut().zip(y).zip(&self.free) {
+                *qi -= a * yi * fi;
+            }
         }
         let used = gamma.is_some();
         let gamma = gamma.unwrap_or_else(|| {
@@ -175,25 +177,12 @@ impl LbfgsWorkspace {
             let q = &mut self.direction;
             let b = self.rho[slot] * dot(y, q);
             let c = self.alpha[slot] - b;
-            axpy_free(c, s, q, (!self.all_free).then_some(&self.free));
+            for ((qi, &si), &fi) in q.iter_mut().zip(s).zip(&self.free) {
+                *qi += c * si * fi;
+            }
         }
         self.direction.iter_mut().for_each(|v| *v = -*v);
         used
-    }
-}
-
-/// q += a v on the free variables (`free`: 1.0 free, 0.0 active; `None` when all are free).
-///
-/// The vectors of a large problem do not fit the caches, so the two-loop recursion is bound
-/// by memory traffic: without active variables the mask is not read at all.
-fn axpy_free(a: f64, v: &[f64], q: &mut [f64], free: Option<&[f64]>) {
-    match free {
-        None => q.iter_mut().zip(v).for_each(|(qi, &vi)| *qi += a * vi),
-        Some(free) => {
-            for ((qi, &vi), &fi) in q.iter_mut().zip(v).zip(free) {
-                *qi += a * vi * fi;
-            }
-        }
     }
 }
 
