@@ -1,12 +1,13 @@
 //! `cargo xtask scale`: the cost of one local minimisation against the number of items m.
 //!
 //! Each run is the pipeline of `ellipsoid_packer::local::local_minimisation` as a multi-start
-//! runs it: ellipsoids (1, 0.75, 0.5) in a ball from the face-centred cubic start, a first
-//! solve at the paper's feasibility tolerance 1e-4, the polish at 1e-10, the certificate and
-//! the repair. A run still going when its wall-clock budget ends is stopped, and the point it
+//! runs it: ellipsoids (1, 0.75, 0.5) in a ball from the face-centred cubic start; with the
+//! augmented Lagrangian a first solve at the paper's feasibility tolerance 1e-4, the polish at
+//! 1e-10, the certificate and the repair; with compression its certified placements
+//! (`ellipsoid_packer::compression`). A run still going when its wall-clock budget ends is stopped, and the point it
 //! reached is certified and repaired like any other; its row says `budget`.
 //!
-//! Rows are kept by (m, inner solver, threads) in `validation/scale.csv`, so that sizes and
+//! Rows are kept by (m, method, threads) in `validation/scale.csv`, so that sizes and
 //! solvers can be measured in separate invocations (a large m takes its whole budget); the
 //! figure `docs/figures/scale.{svg,png}` and the table between the markers of
 //! `docs/packing.md` are drawn from every row.
@@ -19,7 +20,7 @@ use crate::output::{Outputs, Stability};
 use crate::periodic_peer::read_rows;
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use auglag::{InnerSolver, Progress};
-use ellipsoid_packer::local::{LocalSettings, local_minimisation};
+use ellipsoid_packer::local::{LocalMethod, LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
@@ -33,9 +34,10 @@ pub struct Options {
     /// Numbers of items.
     #[arg(long, num_args = 1.., default_values_t = [100, 1000, 10_000, 100_000])]
     pub sizes: Vec<usize>,
-    /// Inner solvers: `lbfgs` (projected L-BFGS), `spg` (spectral projected gradient),
-    /// `newton` (truncated Newton).
-    #[arg(long, num_args = 1.., default_values = ["lbfgs", "spg", "newton"])]
+    /// Methods: the augmented Lagrangian with the inner solver `lbfgs` (projected L-BFGS),
+    /// `spg` (spectral projected gradient) or `newton` (truncated Newton); `compression`;
+    /// `compression+lbfgs` (compression, then the augmented Lagrangian).
+    #[arg(long, num_args = 1.., default_values = ["lbfgs", "spg", "newton", "compression", "compression+lbfgs"])]
     pub solvers: Vec<String>,
     /// Wall-clock minutes per local minimisation; a run still going is stopped there and
     /// the point it reached certified and repaired.
@@ -79,15 +81,34 @@ fn study(message: String) -> Error {
 /// The semi-axes of every item: the paper's ellipsoids of Tables 6.3 and 6.4.
 const AXES: [f64; 3] = [1.0, 0.75, 0.5];
 
-fn inner_solver(name: &str) -> Result<InnerSolver, Error> {
-    match name {
-        "lbfgs" => Ok(InnerSolver::ProjectedLbfgs),
-        "spg" => Ok(InnerSolver::Spg),
-        "newton" => Ok(InnerSolver::TruncatedNewton),
-        other => Err(study(format!(
-            "unknown inner solver `{other}` (lbfgs, spg, newton)"
-        ))),
-    }
+/// The settings of one local minimisation by its name in the study: an inner solver of the
+/// augmented Lagrangian, or compression (alone or followed by the augmented Lagrangian), whose
+/// placements use projected L-BFGS.
+fn local_settings(name: &str) -> Result<LocalSettings, Error> {
+    let (solver, method) = match name {
+        "lbfgs" => (
+            InnerSolver::ProjectedLbfgs,
+            LocalMethod::AugmentedLagrangian,
+        ),
+        "spg" => (InnerSolver::Spg, LocalMethod::AugmentedLagrangian),
+        "newton" => (
+            InnerSolver::TruncatedNewton,
+            LocalMethod::AugmentedLagrangian,
+        ),
+        "compression" => (InnerSolver::ProjectedLbfgs, LocalMethod::Compression),
+        "compression+lbfgs" => (
+            InnerSolver::ProjectedLbfgs,
+            LocalMethod::CompressionThenLagrangian,
+        ),
+        other => {
+            return Err(study(format!(
+                "unknown method `{other}` (lbfgs, spg, newton, compression, compression+lbfgs)"
+            )));
+        }
+    };
+    Ok(LocalSettings::default()
+        .with_inner_solver(solver)
+        .with_method(method))
 }
 
 /// Threads the model's pair sums use: rayon's pool with the `rayon` feature, else one.
@@ -148,7 +169,7 @@ impl Tally {
 
 /// One local minimisation of `m` ellipsoids with `solver`, stopped after `budget`.
 fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
-    let settings = LocalSettings::default().with_inner_solver(inner_solver(solver)?);
+    let settings = local_settings(solver)?;
     let mut problem = Model::<3>::new(vec![AXES; m], ContainerShape::Ball)
         .map_err(|e| study(format!("m = {m}: {e}")))?;
     let x0 = lattice_start_of(&problem, &LatticeStart::centred());
@@ -234,7 +255,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<(), Error> {
         )));
     }
     for s in &options.solvers {
-        inner_solver(s)?;
+        local_settings(s)?;
     }
     let table = root.join("validation/scale.csv");
     let mut rows = read_table(&table)?;
@@ -397,15 +418,15 @@ fn figure(rows: &[Row]) -> Figure {
 
 fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| m | inner solver | threads | stop | outer / inner iterations | evaluations | Hessian \
-         products | first solve (s) | wall time (s) | budget (min) | density | certified | peak memory (MiB) \
+        "| m | method | threads | stop | outer / inner iterations | evaluations | Hessian \
+         products | first solve (s) | wall time (s) | ms per inner iteration | budget (min) | density | certified | peak memory (MiB) \
          | machine | commit |\n\
-         |---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---|\n",
+         |---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {} / {} | {} | {} | {:.1} | {:.1} | {} | {:.5} | {} | {:.0} | {} | {} |",
+            "| {} | {} | {} | {} | {} / {} | {} | {} | {:.1} | {:.1} | {:.2} | {} | {:.5} | {} | {:.0} | {} | {} |",
             r.m,
             r.solver,
             r.threads,
@@ -416,6 +437,7 @@ fn markdown(rows: &[Row]) -> String {
             r.hessian_products,
             r.first_solve_seconds,
             r.seconds,
+            1e3 * r.seconds / r.inner.max(1) as f64,
             r.budget_minutes,
             r.density,
             if r.certified { "yes" } else { "no" },

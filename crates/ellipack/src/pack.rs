@@ -11,7 +11,7 @@ use crate::packing::{
     PackingError, Summary,
 };
 use crate::scene::Scene;
-use ellipsoid_packer::local::LocalSettings;
+use ellipsoid_packer::local::{LocalMethod, LocalSettings};
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
@@ -395,6 +395,11 @@ fn run_n<const N: usize>(
         crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
         crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
         crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
+    };
+    local.method = match scene.solver.method {
+        crate::scene::MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,
+        crate::scene::MethodName::Compression => LocalMethod::Compression,
+        crate::scene::MethodName::CompressionLagrangian => LocalMethod::CompressionThenLagrangian,
     };
     local.fixed_container = fixed.is_some();
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);

@@ -38,6 +38,7 @@
 //! threads = 0                         # 0: every core (--threads overrides it)
 //! # local_minimisations = 50          # cap on multi-start local minimisations (default: none)
 //! inner_solver = "projected-lbfgs"    # or "spg", "truncated-newton"
+//! method = "lagrangian"               # or "compression", "compression-lagrangian" (large m)
 //! perturbation = 0.025                # multi-start perturbation, relative (paper: 2.5 % in 2D,
 //!                                     # 10 % in 3D: the default follows the dimension)
 //! lattice_starts = 16                 # dense lattice starts before the perturbations
@@ -183,6 +184,34 @@ impl InnerSolverName {
     }
 }
 
+/// The name, in a scene file, of how one local minimisation makes the container small
+/// ([`ellipsoid_packer::local::LocalMethod`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodName {
+    /// The paper's augmented Lagrangian with the container among the variables
+    /// (`"lagrangian"`).
+    #[default]
+    Lagrangian,
+    /// Compression: placements in shrinking fixed containers (`"compression"`); much faster
+    /// for thousands of items, somewhat less dense, the container's aspect kept.
+    Compression,
+    /// Compression, then the augmented Lagrangian from its packing
+    /// (`"compression-lagrangian"`).
+    CompressionLagrangian,
+}
+
+impl MethodName {
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MethodName::Lagrangian => "lagrangian",
+            MethodName::Compression => "compression",
+            MethodName::CompressionLagrangian => "compression-lagrangian",
+        }
+    }
+}
+
 /// A group of identical items.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeGroup {
@@ -207,6 +236,8 @@ pub struct SolverSettings {
     pub local_minimisations: Option<u64>,
     /// The subproblem solver.
     pub inner_solver: InnerSolverName,
+    /// How one local minimisation makes the container small.
+    pub method: MethodName,
     /// Largest relative perturbation of centres and angles between multi-start iterations, in
     /// [0, 1) (default: 0.025 in 2D, 0.10 in 3D, the paper's Section 6).
     pub perturbation: f64,
@@ -247,6 +278,7 @@ impl SolverSettings {
             threads: 0,
             local_minimisations: None,
             inner_solver: InnerSolverName::default(),
+            method: MethodName::default(),
             perturbation: default_perturbation(dimension),
             lattice_starts: DEFAULT_LATTICE_STARTS,
             from_best: true,
@@ -418,6 +450,7 @@ struct RawSolver {
     threads: Option<Spanned<i64>>,
     local_minimisations: Option<Spanned<i64>>,
     inner_solver: Option<InnerSolverName>,
+    method: Option<MethodName>,
     perturbation: Option<Spanned<f64>>,
     lattice_starts: Option<Spanned<i64>>,
     from_best: Option<bool>,
@@ -659,6 +692,7 @@ impl Scene {
             line(&mut out, "local_minimisations", n.to_string());
         }
         line(&mut out, "inner_solver", toml_string(s.inner_solver.name()));
+        line(&mut out, "method", toml_string(s.method.name()));
         line(&mut out, "perturbation", toml_float(s.perturbation));
         line(&mut out, "lattice_starts", s.lattice_starts.to_string());
         line(&mut out, "from_best", s.from_best.to_string());
@@ -1105,6 +1139,9 @@ impl Validator<'_> {
         }
         if let Some(solver) = raw.inner_solver {
             s.inner_solver = solver;
+        }
+        if let Some(method) = raw.method {
+            s.method = method;
         }
         if let Some(p) = &raw.perturbation {
             let v = *p.get_ref();

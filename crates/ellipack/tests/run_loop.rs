@@ -336,3 +336,22 @@ fn resume_refuses_a_folder_of_another_container_or_other_items() {
         packing_before
     );
 }
+
+/// `method = "compression"` in a scene runs compression in every local minimisation, and the
+/// folder certifies.
+#[test]
+fn a_scene_with_the_compression_method_packs_and_certifies() {
+    let dir = temp_dir("compression-method");
+    let scene = scene(
+        &dir,
+        30,
+        60.0,
+        "local_minimisations = 3\nmethod = \"compression\"\n",
+    );
+    let out = dir.join("out");
+    let o = pack(&[scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let (certified, said) = verify(&out);
+    assert!(certified, "{said}");
+    assert!(density(&out) > 0.7, "{}", density(&out));
+}

@@ -4,7 +4,7 @@
 mod common;
 
 use ellipack::packing::ContainerKind;
-use ellipack::scene::{DEFAULT_SCENE, Dimension, InnerSolverName, Scene, SceneError};
+use ellipack::scene::{DEFAULT_SCENE, Dimension, InnerSolverName, MethodName, Scene, SceneError};
 use std::time::Duration;
 
 const GOOD_3D: &str = r#"
@@ -30,6 +30,7 @@ time_limit = 12.5
 threads = 3
 local_minimisations = 9
 inner_solver = "spg"
+method = "compression-lagrangian"
 perturbation = 0.2
 
 [output]
@@ -80,6 +81,7 @@ fn a_full_scene_parses_to_what_it_says() {
     assert_eq!(s.threads, 3);
     assert_eq!(s.local_minimisations, Some(9));
     assert_eq!(s.inner_solver, InnerSolverName::Spg);
+    assert_eq!(s.method, MethodName::CompressionLagrangian);
     assert_eq!(s.perturbation, 0.2);
     let o = &scene.output;
     assert_eq!(
@@ -100,6 +102,7 @@ fn omitted_settings_take_the_papers_defaults() {
     assert_eq!(scene.solver.threads, 0);
     assert_eq!(scene.solver.local_minimisations, None);
     assert_eq!(scene.solver.inner_solver, InnerSolverName::ProjectedLbfgs);
+    assert_eq!(scene.solver.method, MethodName::Lagrangian);
     assert!(scene.output.pictures && scene.output.xyz);
     let three_d = parse(
         "dimension = 3\n[container]\nkind = \"ball\"\n[[shapes]]\ncount = 1\nsemi_axes = [1, 1, 1]\n",
@@ -206,6 +209,12 @@ fn wrong_types_are_named_with_their_line() {
         "solver.inner_solver",
         8,
         "unknown variant `newton`",
+    );
+    assert_error(
+        &minimal_2d("[solver]\nmethod = \"squeeze\"\n"),
+        "solver.method",
+        8,
+        "unknown variant `squeeze`",
     );
     assert_error(
         "dimension = 2\n[container]\nkind = \"hexagon\"\n",

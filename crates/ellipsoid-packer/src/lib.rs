@@ -8,6 +8,8 @@
 //!
 //! - [`starts`] — the paper's first initial solution, dense lattice starts, perturbations.
 //! - [`local`] — one local minimisation with its polish, certificate and repair.
+//! - [`compression`] — the container made small by placements in shrinking fixed containers,
+//!   for thousands of items.
 //! - [`multistart`] — the multi-start with chains, parallel rounds, a time limit, progress
 //!   and cancellation.
 //! - [`fixed`] — the multi-start in a container of given size: no minimisation, only
@@ -41,6 +43,7 @@ macro_rules! with_setters {
 }
 pub(crate) use with_setters;
 
+pub mod compression;
 mod error;
 pub mod fixed;
 pub mod local;

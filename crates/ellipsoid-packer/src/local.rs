@@ -25,6 +25,7 @@
 //!   solutions, Algencan).
 
 use crate::Error;
+use crate::compression::{add_counts, compression};
 use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Certificate, Model, ModelGradient};
@@ -55,6 +56,26 @@ pub struct LocalSettings {
     /// The solver works on items grown by [`FIXED_MARGIN`], so that a point it leaves barely
     /// infeasible for them is clear of overlap for the true items.
     pub fixed_container: bool,
+    /// How the container is made small: the paper's augmented Lagrangian, compression, or
+    /// both in turn.
+    pub method: LocalMethod,
+}
+
+/// How one local minimisation makes the container small.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LocalMethod {
+    /// The augmented Lagrangian on the paper's model, the container's dimensions among the
+    /// variables (first solve, then the polish).
+    #[default]
+    AugmentedLagrangian,
+    /// Compression ([`compression`](crate::compression)): placements in fixed containers
+    /// that shrink while they certify. Faster than the augmented Lagrangian on large
+    /// instances and somewhat less dense; the container keeps the start's aspect ratios.
+    Compression,
+    /// Compression, then the augmented Lagrangian from its packing: the density of the
+    /// augmented Lagrangian at a fraction of its iterations.
+    CompressionThenLagrangian,
 }
 
 /// The relative growth of every semi-axis while a fixed container is filled
@@ -79,6 +100,8 @@ crate::with_setters!(LocalSettings:
     with_polish_tolerance => polish_tolerance: Option<f64>,
     /// Sets [`LocalSettings::fixed_container`].
     with_fixed_container => fixed_container: bool,
+    /// Sets [`LocalSettings::method`].
+    with_method => method: LocalMethod,
 );
 
 impl Default for LocalSettings {
@@ -91,6 +114,7 @@ impl Default for LocalSettings {
             inner_solver: InnerSolver::ProjectedLbfgs,
             polish_tolerance: Some(1e-10),
             fixed_container: false,
+            method: LocalMethod::AugmentedLagrangian,
         }
     }
 }
@@ -148,6 +172,37 @@ pub fn local_minimisation<const N: usize>(
     if settings.fixed_container {
         return placement(problem, x0, settings, observe);
     }
+    match settings.method {
+        LocalMethod::AugmentedLagrangian => lagrangian(problem, x0, settings, observe),
+        LocalMethod::Compression => compression(problem, x0, settings, observe),
+        LocalMethod::CompressionThenLagrangian => {
+            let compressed = compression(problem, x0, settings, observe)?;
+            if compressed.report.stop_reason == auglag::StopReason::Interrupted {
+                return Ok(compressed);
+            }
+            let mut refined = lagrangian(problem, &compressed.x, settings, observe)?;
+            if refined.density <= compressed.density {
+                let mut kept = compressed;
+                add_counts(&mut kept.report, &refined.report);
+                return Ok(kept);
+            }
+            let mut report = compressed.report;
+            add_counts(&mut report, &refined.report);
+            report.stop_reason = refined.report.stop_reason;
+            refined.report = report;
+            Ok(refined)
+        }
+    }
+}
+
+/// The augmented Lagrangian on the paper's model from `x0`, certified and repaired, with
+/// the polish when the repair had something to do.
+fn lagrangian<const N: usize>(
+    problem: &mut Model<N>,
+    x0: &[f64],
+    settings: &LocalSettings,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+) -> Result<LocalResult, Error> {
     let mut run = solver(settings, observe);
     let mut solve = |problem: &mut Model<N>, x: &[f64], feasibility: f64| {
         let adapter = Adapter::new(problem, centre_bound::<N>(x0), None);
@@ -243,20 +298,13 @@ pub fn infeasibility<const N: usize>(problem: &mut Model<N>, x: &[f64]) -> Resul
 /// Solves of an adapter from a point at a feasibility (and complementarity) tolerance, the
 /// other limits from `settings`. `observe` may stop a solve; every later solve then stops at
 /// its first report, so that an interrupt ends the whole local minimisation.
-fn solver<'a, const N: usize>(
+pub(crate) fn solver<'a, const N: usize>(
     settings: &'a LocalSettings,
     observe: &'a mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> impl FnMut(&Adapter<'_, N>, &[f64], f64) -> Result<auglag::Solution, Error> + 'a {
     let mut interrupted = false;
     move |adapter, x, feasibility| {
-        let options = Options::default()
-            .with_feasibility_tolerance(feasibility)
-            .with_optimality_tolerance(settings.optimality_tolerance)
-            .with_complementarity_tolerance(feasibility)
-            .with_max_outer_iterations(settings.max_outer_iterations)
-            .with_max_inner_iterations(settings.max_inner_iterations)
-            .with_inner_solver(settings.inner_solver)
-            .with_scaling(true);
+        let options = solver_options(settings, feasibility);
         auglag::minimize_with_callback(adapter, x, &options, |progress: &Progress<'_>| {
             if interrupted || observe(progress) {
                 interrupted = true;
@@ -269,8 +317,21 @@ fn solver<'a, const N: usize>(
     }
 }
 
+/// The solver's options for a solve at a feasibility (and complementarity) tolerance, the
+/// other limits from `settings`.
+pub(crate) fn solver_options(settings: &LocalSettings, feasibility: f64) -> Options {
+    Options::default()
+        .with_feasibility_tolerance(feasibility)
+        .with_optimality_tolerance(settings.optimality_tolerance)
+        .with_complementarity_tolerance(feasibility)
+        .with_max_outer_iterations(settings.max_outer_iterations)
+        .with_max_inner_iterations(settings.max_inner_iterations)
+        .with_inner_solver(settings.inner_solver)
+        .with_scaling(true)
+}
+
 /// `LengthMismatch` unless the start `x` has one entry per variable of `problem`.
-fn check_start<const N: usize>(problem: &Model<N>, x: &[f64]) -> Result<(), Error> {
+pub(crate) fn check_start<const N: usize>(problem: &Model<N>, x: &[f64]) -> Result<(), Error> {
     if x.len() == problem.var_count() {
         return Ok(());
     }
@@ -334,20 +395,20 @@ pub fn certified_start<const N: usize>(
 
 /// Ten times the extent of the start (its farthest centre plus its largest container
 /// dimension): the box the centres are kept in during a local minimisation.
-fn centre_bound<const N: usize>(x0: &[f64]) -> f64 {
+pub(crate) fn centre_bound<const N: usize>(x0: &[f64]) -> f64 {
     let extent = x0.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     10.0 * extent.max(1.0)
 }
 
 /// A certified result with the solver's own point kept for a warm start.
-struct Certified {
-    result: LocalResult,
+pub(crate) struct Certified {
+    pub(crate) result: LocalResult,
     x_unrepaired: Vec<f64>,
     repair_factor: f64,
     report: Report,
 }
 
-fn certified<const N: usize>(
+pub(crate) fn certified<const N: usize>(
     problem: &mut Model<N>,
     solution: auglag::Solution,
 ) -> Result<Certified, Error> {
@@ -441,7 +502,7 @@ fn dilate<const N: usize>(problem: &Model<N>, x: &[f64], s: f64) -> Vec<f64> {
 
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality
 /// constraints h₁ = overlap, h₂ = containment, evaluated together.
-struct Adapter<'a, const N: usize> {
+pub(crate) struct Adapter<'a, const N: usize> {
     model: RefCell<&'a mut Model<N>>,
     gradient: RefCell<ModelGradient>,
     /// The point of the last Hessian product, with its constraint values and gradients: a
@@ -464,7 +525,7 @@ struct HessianPoint {
 }
 
 impl<'a, const N: usize> Adapter<'a, N> {
-    fn new(model: &'a mut Model<N>, centre_bound: f64, fixed: Option<Vec<f64>>) -> Self {
+    pub(crate) fn new(model: &'a mut Model<N>, centre_bound: f64, fixed: Option<Vec<f64>>) -> Self {
         // Every item contains a ball of its smallest semi-axis, so no container dimension can
         // be smaller than the largest of those: a safe lower bound that keeps the container
         // from collapsing through zero during early iterations.

@@ -282,7 +282,9 @@ pub fn farthest_point<const N: usize>(body: &Body<N>, a: &[f64; N]) -> (f64, [f6
     let phi = |tau: f64| {
         let mut p = 0.0;
         let mut dp = 0.0;
-        for k in 0..N {
+        // A term with no weight is absent from the secular equation: skipped, it cannot
+        // give 0/0 when τ reaches 0 (the centre orthogonal to the top axis, off the hard case).
+        for k in (0..N).filter(|&k| a2[k] != 0.0) {
             let t = tau + delta[k];
             let v = a2[k] / (t * t);
             p += v;

@@ -6,6 +6,7 @@ use implicit_packing::containment::{
     Container, ContainerShape, containment_gradient, containment_residual, farthest_point,
 };
 use implicit_packing::derivatives::angle_gradient_3d;
+use implicit_packing::model::Model;
 use implicit_packing::{Body, Ellipsoid};
 use testkit::Rng;
 
@@ -99,6 +100,30 @@ fn farthest_point_is_a_kkt_point_and_beats_sampling() {
         assert!(best <= h * (1.0 + 1e-14), "sampled {best} > exact {h}");
         assert!(h - best <= 2e-3 * h, "sampled {best} far below exact {h}");
     }
+}
+
+/// A centre orthogonal to the longest axis but off the container's centre (a lattice start
+/// shrunk by compression): the secular equation's top term has no weight, and its bracket
+/// starts at τ = 0, where that term once gave 0/0 and the model's containment NaN.
+#[test]
+fn centre_orthogonal_to_the_longest_axis_gives_a_finite_residual() {
+    let mut model = Model::<3>::new(vec![[1.0, 0.75, 0.5]], ContainerShape::Ball).unwrap();
+    let mut containment = |x: f64| {
+        let point = [
+            x,
+            0.4022467762180378,
+            1.0765969675575129,
+            0.004391924789480385,
+            0.0,
+            0.0,
+            2.1329680307096353,
+        ];
+        model.evaluate(&point, None).unwrap().containment
+    };
+    let (on, near) = (containment(0.0), containment(1e-9));
+    assert!(on.is_finite(), "{on}");
+    // Continuous in the centre: the same as a hair off the orthogonal plane.
+    assert!((on - near).abs() <= 1e-6 * near, "{on} against {near}");
 }
 
 #[test]
