@@ -160,7 +160,9 @@ pub fn item_measure<const N: usize>(problem: &Model<N>) -> f64 {
 ///
 /// # Errors
 /// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model on
-/// non-finite variables at the start.
+/// non-finite variables at the start; [`Error::Solver`] when the solver refuses the start;
+/// [`Error::NotCertifiable`] when no dilation up to 4 certifies the point reached (an item's
+/// centre outside the container).
 pub fn local_minimisation<const N: usize>(
     problem: &mut Model<N>,
     x0: &[f64],
@@ -180,17 +182,20 @@ pub fn local_minimisation<const N: usize>(
             if compressed.report.stop_reason == auglag::StopReason::Interrupted {
                 return Ok(compressed);
             }
-            let mut refined = lagrangian(problem, &compressed.x, settings, observe)?;
-            if refined.density <= compressed.density {
-                let mut kept = compressed;
-                add_counts(&mut kept.report, &refined.report);
-                return Ok(kept);
-            }
-            let mut report = compressed.report;
-            add_counts(&mut report, &refined.report);
-            report.stop_reason = refined.report.stop_reason;
-            refined.report = report;
-            Ok(refined)
+            // The compressed packing is certified: whatever the augmented Lagrangian does
+            // after it, it is never lost.
+            let Ok(refined) = lagrangian(problem, &compressed.x, settings, observe) else {
+                return Ok(compressed);
+            };
+            let stop_reason = refined.report.stop_reason;
+            let (mut kept, other) = if refined.density > compressed.density {
+                (refined, compressed)
+            } else {
+                (compressed, refined)
+            };
+            add_counts(&mut kept.report, &other.report);
+            kept.report.stop_reason = stop_reason;
+            Ok(kept)
         }
     }
 }
@@ -374,23 +379,32 @@ pub fn certified_start<const N: usize>(
         certificate,
         // No solver ran: no iterations, no evaluations beyond the certificate's.
         report: Report {
-            stop_reason: auglag::StopReason::Interrupted,
-            outer_iterations: 0,
-            inner_iterations: 0,
-            function_evaluations: 0,
-            gradient_evaluations: 0,
-            constraint_evaluations: 0,
-            hessian_products: 0,
-            infeasibility: 0.0,
-            complementarity: 0.0,
-            projected_gradient_norm: 0.0,
-            penalty: 0.0,
             objective,
             best_feasible_objective: Some(objective),
-            returned_best_feasible: false,
-            wall_time: std::time::Duration::ZERO,
+            ..empty_report()
         },
     }))
+}
+
+/// The report of no solve: no iterations, no evaluations, stopped before it began.
+pub(crate) fn empty_report() -> Report {
+    Report {
+        stop_reason: auglag::StopReason::Interrupted,
+        outer_iterations: 0,
+        inner_iterations: 0,
+        function_evaluations: 0,
+        gradient_evaluations: 0,
+        constraint_evaluations: 0,
+        hessian_products: 0,
+        infeasibility: 0.0,
+        complementarity: 0.0,
+        projected_gradient_norm: 0.0,
+        penalty: 0.0,
+        objective: f64::NAN,
+        best_feasible_objective: None,
+        returned_best_feasible: false,
+        wall_time: std::time::Duration::ZERO,
+    }
 }
 
 /// Ten times the extent of the start (its farthest centre plus its largest container

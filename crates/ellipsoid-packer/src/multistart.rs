@@ -438,8 +438,14 @@ pub fn multistart<const N: usize>(
             };
             if result.report.stop_reason == auglag::StopReason::Interrupted {
                 // Cut off by the time limit or an interrupt, usually still at its perturbed
-                // (infeasible) start: repaired, but not a result of the method.
+                // (infeasible) start: repaired, but not a result of the method, so it neither
+                // counts nor seeds a chain. It is certified all the same, and compression's
+                // steps are each a finished packing: a denser one is kept.
                 cut_off += 1;
+                if result.density > best.density {
+                    best = result;
+                    time_to_best = start.elapsed();
+                }
                 continue;
             }
             done += 1;

@@ -60,7 +60,8 @@ fn phi_u<const N: usize>(s: &[f64; N], g2: &[f64; N], u: f64) -> (f64, f64) {
     let mut dphi = 0.0;
     for k in 0..N {
         let inv = 1.0 / (1.0 + u * s[k]);
-        let q = g2[k] * inv * inv;
+        // A term without weight is absent: 0, not 0·∞ = NaN at a pole (see `phi_t`).
+        let q = if g2[k] == 0.0 { 0.0 } else { g2[k] * inv * inv };
         phi += q;
         dphi -= 2.0 * s[k] * q * inv;
     }
@@ -73,7 +74,10 @@ fn phi_t<const N: usize>(ins: &Inside<N>, g2: &[f64; N], t: f64) -> (f64, f64) {
     let mut dphi = 0.0;
     for k in 0..N {
         let inv = 1.0 / (ins.delta[k] + t * ins.r[k]);
-        let q = g2[k] * inv * inv;
+        // A term without weight is absent from the secular equation. At t = 0, where the
+        // bracket starts when the centre is orthogonal to the top direction, its pole would
+        // give 0·∞ = NaN; elsewhere 0 is what the product gives anyway, bit for bit.
+        let q = if g2[k] == 0.0 { 0.0 } else { g2[k] * inv * inv };
         phi += q;
         dphi -= 2.0 * ins.r[k] * q * inv;
     }

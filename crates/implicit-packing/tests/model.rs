@@ -407,3 +407,29 @@ fn containment_hessian_in_the_hard_case_is_finite() {
     assert!(out.containment.iter().all(|a| a.is_finite()));
     assert!(out.containment.iter().any(|&a| a != 0.0));
 }
+
+/// Aligned items whose centres differ along a short axis only, overlapping from barely to
+/// deeply: the pair's secular equation has a term without weight, whose pole sits at the end
+/// of the bracket. Every overlap is finite and positive.
+#[test]
+fn centres_along_a_short_axis_give_finite_overlaps() {
+    fn overlaps<const N: usize>(axes: [f64; N], along: usize) -> Vec<f64> {
+        let stride = Model::<N>::vars_per_body();
+        let mut model = Model::<N>::new(vec![axes; 2], ContainerShape::Box).unwrap();
+        (1..2000)
+            .map(|k| {
+                let mut x = vec![0.0; 2 * stride + N];
+                x[stride + along] = axes[along] * 2.0 * k as f64 / 2000.0;
+                x[2 * stride..].fill(10.0);
+                model.evaluate(&x, None).unwrap().overlap
+            })
+            .collect()
+    }
+    for (name, v) in [
+        ("2D", overlaps([2.0, 1.0], 1)),
+        ("3D, middle axis", overlaps([1.0, 0.75, 0.5], 1)),
+        ("3D, short axis", overlaps([1.0, 0.75, 0.5], 2)),
+    ] {
+        assert!(v.iter().all(|o| o.is_finite() && *o > 0.0), "{name}: {v:?}");
+    }
+}
