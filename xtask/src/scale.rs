@@ -4,8 +4,9 @@
 //! runs it: ellipsoids (1, 0.75, 0.5) in a ball from the face-centred cubic start; with the
 //! augmented Lagrangian a first solve at the paper's feasibility tolerance 1e-4, the polish at
 //! 1e-10, the certificate and the repair; with compression its certified placements
-//! (`ellipsoid_packer::compression`). A run still going when its wall-clock budget ends is stopped, and the point it
-//! reached is certified and repaired like any other; its row says `budget`.
+//! (`ellipsoid_packer::compression`). A run still going when its wall-clock budget ends is
+//! stopped, and the point it reached is certified and repaired like any other; its row says
+//! `budget`.
 //!
 //! Rows are kept by (m, method, threads) in `validation/scale.csv`, so that sizes and
 //! solvers can be measured in separate invocations (a large m takes its whole budget); the

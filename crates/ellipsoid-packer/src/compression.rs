@@ -140,13 +140,11 @@ impl<'a> Placer<'a> {
                     .max_outer_iterations
                     .min(PLACEMENT_OUTER_ITERATIONS),
             );
-        let mut total = crate::local::empty_report();
-        total.stop_reason = StopReason::Converged;
         Self {
             options: solver_options(&limits, tolerance),
             observe,
             interrupted: false,
-            total,
+            total: crate::local::empty_report(),
         }
     }
 
