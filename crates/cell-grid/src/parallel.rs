@@ -114,4 +114,42 @@ impl<const D: usize> PairList<D> {
             })
             .reduce(&init, &reduce))
     }
+
+    /// Parallel [`for_each_close_pair`](Self::for_each_close_pair) into states the caller
+    /// keeps: the rows are cut into consecutive ranges of about equal numbers of listed pairs,
+    /// `states` is resized to one per range (new ones `T::default()`), and range `k` folds
+    /// its pairs, in ascending `(i, j)` order, into `states[k]` after `start(&mut states[k])`.
+    ///
+    /// Read in the order of `states`, the pairs come in the order of the serial scan, whatever
+    /// the scheduling: a sum over the states in order is the same on every run with the same
+    /// number of threads. The states keep their memory from call to call, so a state that
+    /// collects pairs allocates only when a range holds more of them than ever before.
+    ///
+    /// # Errors
+    /// Those of [`refresh`](Self::refresh); `states` is left as it was then.
+    pub fn par_fold_close_pairs_into<T, S, G>(
+        &mut self,
+        points: &[[f64; D]],
+        states: &mut Vec<T>,
+        start: S,
+        fold: G,
+    ) -> Result<(), Error>
+    where
+        T: Send + Default,
+        S: Fn(&mut T) + Sync + Send,
+        G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
+    {
+        self.refresh(points)?;
+        let chunks = self.row_chunks(8 * rayon::current_num_threads().max(1));
+        states.resize_with(chunks.len(), T::default);
+        let list = &*self;
+        chunks
+            .into_par_iter()
+            .zip(states.par_iter_mut())
+            .for_each(|(rows, state)| {
+                start(state);
+                list.close_pairs_in(points, rows, &mut |i, j, d, d2| fold(state, i, j, d, d2));
+            });
+        Ok(())
+    }
 }

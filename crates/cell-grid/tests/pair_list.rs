@@ -223,6 +223,18 @@ fn the_parallel_fold_gives_the_serial_pairs_in_order() {
         .expect("valid");
     assert!(serial.len() > 20_000);
     assert_eq!(serial, folded);
+
+    // Into kept states: the same pairs, in order across the states; a second call with the
+    // states already full starts each over.
+    let mut states = vec![vec![(0, 0, [0.0; 3], 0.0)]];
+    for _ in 0..2 {
+        list.par_fold_close_pairs_into(&pts, &mut states, Vec::clear, |acc, i, j, d, d2| {
+            acc.push((i, j, d, d2))
+        })
+        .expect("valid");
+        assert!(states.len() > 1);
+        assert_eq!(serial, states.concat());
+    }
 }
 
 proptest! {

@@ -28,8 +28,12 @@
 //!
 //! Evaluation reuses the workspace of the [`Model`] (the bodies and the pair list): after the
 //! first call no memory is allocated unless `m` grows or a rebuild of the list finds more pairs
-//! than any before (serial path; with the `rayon` feature each task collects its pair gradients in
-//! a vector of its own, scattered serially afterwards). A value-only call does no gradient work.
+//! than any before. With the `rayon` feature the list's rows are cut into ranges of about equal
+//! numbers of pairs, one task each; a range keeps its non-zero pair gradients in a vector of its
+//! own (kept from call to call), and they are added to the gradient serially in the order of the
+//! pairs, so the gradient has the same bits on any number of threads. The per-body pass (torques
+//! to angle derivatives, containment) runs in groups of [`BODIES_PER_TASK`] bodies, summed in
+//! order. A value-only call does no gradient work.
 //! Pairs are skipped at once when their enclosing balls are apart (the list's exact test) or the
 //! plane orthogonal to the centre line separates them with a margin (an exact certificate: the pair
 //! term is then exactly zero, value and gradient, see
@@ -119,6 +123,8 @@ pub struct Model<const N: usize> {
     // The candidate pairs: a Verlet list over the grid (cell edge 2R plus the skin), rebuilt
     // only when an ellipsoid has moved more than half the skin since the last build.
     pairs: cell_grid::PairList<N>,
+    // The pair sums' per-range shares with the `rayon` feature (nothing without it).
+    ranges: RangeWork<N>,
     // In a periodic cell: the fractional positions, the images and their own list.
     lattice: Option<Lattice<N>>,
 }
@@ -176,6 +182,7 @@ impl<const N: usize> Model<N> {
             spins: Vec::new(),
             torques: Vec::new(),
             pairs,
+            ranges: RangeWork::default(),
         })
     }
 
@@ -254,12 +261,26 @@ impl<const N: usize> Model<N> {
             lattice.update(&cell, &self.bodies)?;
             return Ok(container);
         }
-        for (i, l) in self.semi_axes.iter().enumerate() {
-            let (body, spin) = make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
-            self.centres.push(body.centre());
-            self.bodies.push(body);
-            self.spins.push(spin);
+        let body_of =
+            |(i, l): (usize, &[f64; N])| make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            self.semi_axes
+                .par_iter()
+                .enumerate()
+                .map(body_of)
+                .unzip_into_vecs(&mut self.bodies, &mut self.spins);
         }
+        #[cfg(not(feature = "rayon"))]
+        {
+            let (bodies, spins) = (&mut self.bodies, &mut self.spins);
+            for (body, spin) in self.semi_axes.iter().enumerate().map(body_of) {
+                bodies.push(body);
+                spins.push(spin);
+            }
+        }
+        self.centres.extend(self.bodies.iter().map(|b| b.centre()));
         Ok(container)
     }
 
@@ -289,36 +310,35 @@ impl<const N: usize> Model<N> {
         let spins = &self.spins;
         match gradient {
             None => {
-                let (sum, count) = pair_sum_value((list, centres), bodies)?;
+                let (sum, count) = pair_sum_value((list, centres), bodies, &mut self.ranges)?;
                 ev.overlap = sum;
                 ev.pairs = count;
-                ev.containment = bodies
-                    .iter()
-                    .map(|b| containment_residual(b, &container))
-                    .sum();
+                ev.containment = containment_sum(bodies, &container);
             }
             Some(g) => {
                 g.reset(x.len());
-                let (sum, count) =
-                    pair_sum_gradient((list, centres), bodies, &mut self.torques, &mut g.overlap)?;
+                let (sum, count) = pair_sum_gradient(
+                    (list, centres),
+                    bodies,
+                    &mut self.ranges,
+                    &mut self.torques,
+                    &mut g.overlap,
+                )?;
                 ev.overlap = sum;
                 ev.pairs = count;
                 // One pass over the bodies for both: the overlap's torques become angle
-                // derivatives (`∂/∂α_b = ω_α · Σ_pairs τ_b`), and the containment residuals
-                // with their gradients. At m = 1e5 the bodies no longer fit in the last-level
-                // cache, and each pass over them costs several ns per ellipsoid.
-                for (i, b) in bodies.iter().enumerate() {
-                    let spin = spin_rows(b, spins[i]);
-                    scatter_force_torque(&mut g.overlap, i, &[0.0; N], &self.torques[i], &spin);
-                    let (r, cg) = containment_gradient(b, &container);
-                    if r == 0.0 {
-                        continue;
-                    }
-                    ev.containment += r;
-                    scatter_force_torque(&mut g.containment, i, &cg.centre, &cg.torque, &spin);
-                    for k in 0..self.kind.dimension_count(N) {
-                        g.containment[nb + k] += cg.container[k];
-                    }
+                // derivatives, and the containment residuals with their gradients. At m = 1e5
+                // the bodies no longer fit in the last-level cache, and each pass over them
+                // costs several ns per ellipsoid.
+                let (r, dc) = body_terms(
+                    (bodies, spins, &self.torques),
+                    &container,
+                    &mut g.overlap[..nb],
+                    &mut g.containment[..nb],
+                );
+                ev.containment = r;
+                for k in 0..self.kind.dimension_count(N) {
+                    g.containment[nb + k] += dc[k];
                 }
                 let nc = self.kind.dimension_count(N);
                 g.objective[nb..nb + nc].copy_from_slice(&dobj[..nc]);
@@ -847,10 +867,16 @@ fn grid_error(e: cell_grid::Error) -> Error {
 /// The pair list and the centres it is queried at.
 type Candidates<'a, const N: usize> = (&'a mut cell_grid::PairList<N>, &'a [[f64; N]]);
 
+/// The rayon pair sums' workspace; nothing on one thread.
+#[cfg(not(feature = "rayon"))]
+#[derive(Debug, Default)]
+struct RangeWork<const N: usize> {}
+
 #[cfg(not(feature = "rayon"))]
 fn pair_sum_value<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
+    _: &mut RangeWork<N>,
 ) -> Result<(f64, usize), Error> {
     let mut sum = 0.0;
     let count = through_kernel::<N, ValueOnly>((list, centres), bodies, &mut |_, _, &f| sum += f)?;
@@ -881,26 +907,109 @@ fn through_kernel<const N: usize, K: crate::batch::Kernel<N>>(
 fn pair_sum_value<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
+    ranges: &mut RangeWork<N>,
 ) -> Result<(f64, usize), Error> {
-    // Each task's queue is flushed before its sum is merged.
-    let ((sum, count), mut queue) = list
-        .par_fold_close_pairs(
-            centres,
-            || ((0.0, 0usize), KernelQueue::<N, ValueOnly>::default()),
-            |(acc, queue), i, j, _, _| {
-                acc.1 += 1;
-                queue.push(bodies, i, j, &mut |_, _, &f| acc.0 += f);
-            },
-            |(mut a, mut qa), (mut b, mut qb)| {
-                qa.flush(bodies, &mut |_, _, &f| a.0 += f);
-                qb.flush(bodies, &mut |_, _, &f| b.0 += f);
-                ((a.0 + b.0, a.1 + b.1), qa)
-            },
-        )
-        .map_err(grid_error)?;
-    let mut sum = sum;
-    queue.flush(bodies, &mut |_, _, &f| sum += f);
+    list.par_fold_close_pairs_into(
+        centres,
+        &mut ranges.values,
+        |s| s.kept = (0.0, 0, ()),
+        |s, i, j, _, _| {
+            let RangeShare { kept, queue } = s;
+            kept.1 += 1;
+            queue.push(bodies, i, j, &mut |_, _, &f| kept.0 += f);
+        },
+    )
+    .map_err(grid_error)?;
+    // In the order of the ranges, each queue's last pairs after its others: the order of
+    // the serial scan.
+    let (mut sum, mut count) = (0.0, 0);
+    for RangeShare { kept, queue } in &mut ranges.values {
+        queue.flush(bodies, &mut |_, _, &f| kept.0 += f);
+        sum += kept.0;
+        count += kept.1;
+    }
     Ok((sum, count))
+}
+
+/// Bodies per task of [`body_terms`]: fixed, so that its sums are grouped the same way on
+/// any number of threads.
+const BODIES_PER_TASK: usize = 2048;
+
+/// `Σ_b r_b`, the containment residuals summed as in [`body_terms`].
+fn containment_sum<const N: usize>(bodies: &[Body<N>], container: &Container<N>) -> f64 {
+    let group = |g: &[Body<N>]| -> f64 {
+        g.iter()
+            .map(|b| containment_residual(b, container))
+            .sum::<f64>()
+    };
+    #[cfg(feature = "rayon")]
+    let groups: Vec<f64> = {
+        use rayon::prelude::*;
+        bodies.par_chunks(BODIES_PER_TASK).map(group).collect()
+    };
+    #[cfg(not(feature = "rayon"))]
+    let groups = bodies.chunks(BODIES_PER_TASK).map(group);
+    groups.into_iter().sum()
+}
+
+/// The per-body part of a gradient: each body's summed pair torques (`torques`) become angle
+/// derivatives of the overlap, `∂/∂α_b = ω_α · Σ_pairs τ_b`, and its containment residual `r_b`
+/// adds its gradient; `overlap` and `containment` are the bodies' variables. Returns `Σ r_b`
+/// and `Σ ∂r_b/∂(container)`, summed over consecutive groups of [`BODIES_PER_TASK`] bodies in
+/// order (on rayon's pool with the `rayon` feature, one task per group).
+fn body_terms<const N: usize>(
+    (bodies, spins, torques): (&[Body<N>], &[[f64; 2]], &[[f64; 3]]),
+    container: &Container<N>,
+    overlap: &mut [f64],
+    containment: &mut [f64],
+) -> (f64, [f64; N]) {
+    let group = |first: usize, overlap: &mut [f64], containment: &mut [f64]| {
+        let (mut r_sum, mut dc) = (0.0, [0.0; N]);
+        for (k, (dov, dco)) in overlap
+            .chunks_exact_mut(Model::<N>::vars_per_body())
+            .zip(containment.chunks_exact_mut(Model::<N>::vars_per_body()))
+            .enumerate()
+        {
+            let (b, i) = (&bodies[first + k], first + k);
+            let spin = spin_rows(b, spins[i]);
+            scatter_force_torque(dov, 0, &[0.0; N], &torques[i], &spin);
+            let (r, cg) = containment_gradient(b, container);
+            if r == 0.0 {
+                continue;
+            }
+            r_sum += r;
+            scatter_force_torque(dco, 0, &cg.centre, &cg.torque, &spin);
+            for (d, c) in dc.iter_mut().zip(cg.container) {
+                *d += c;
+            }
+        }
+        (r_sum, dc)
+    };
+    let width = BODIES_PER_TASK * Model::<N>::vars_per_body();
+    #[cfg(feature = "rayon")]
+    let groups: Vec<(f64, [f64; N])> = {
+        use rayon::prelude::*;
+        overlap
+            .par_chunks_mut(width)
+            .zip(containment.par_chunks_mut(width))
+            .enumerate()
+            .map(|(t, (ov, co))| group(t * BODIES_PER_TASK, ov, co))
+            .collect()
+    };
+    #[cfg(not(feature = "rayon"))]
+    let groups = overlap
+        .chunks_mut(width)
+        .zip(containment.chunks_mut(width))
+        .enumerate()
+        .map(|(t, (ov, co))| group(t * BODIES_PER_TASK, ov, co));
+    let (mut r_sum, mut dc) = (0.0, [0.0; N]);
+    for (r, d) in groups {
+        r_sum += r;
+        for k in 0..N {
+            dc[k] += d[k];
+        }
+    }
+    (r_sum, dc)
 }
 
 /// Adds a force and a torque on body `b` to `out`: the force on its centre, and on its angle
@@ -968,6 +1077,7 @@ fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3
 fn pair_sum_gradient<const N: usize>(
     (list, centres): Candidates<'_, N>,
     bodies: &[Body<N>],
+    #[cfg_attr(not(feature = "rayon"), allow(unused_variables))] ranges: &mut RangeWork<N>,
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> Result<(f64, usize), Error> {
@@ -987,19 +1097,71 @@ fn pair_sum_gradient<const N: usize>(
     }
     #[cfg(feature = "rayon")]
     {
-        let (sum, count, terms) = pair_gradients((list, centres), bodies)?;
-        for (i, j, g) in &terms {
-            add_pair(out, torques, *i, *j, g);
+        list.par_fold_close_pairs_into(
+            centres,
+            &mut ranges.gradients,
+            |s| {
+                s.kept.0 = 0.0;
+                s.kept.1 = 0;
+                s.kept.2.clear();
+            },
+            |s, i, j, _, _| {
+                let RangeShare { kept, queue } = s;
+                kept.1 += 1;
+                queue.push(bodies, i, j, &mut keep(kept));
+            },
+        )
+        .map_err(grid_error)?;
+        // Serial, in the order of the ranges (each queue's last pairs after its others): the
+        // gradient is added in the order of the serial scan, the same bits as the serial
+        // path's whatever the scheduling; Σf is summed range by range.
+        let (mut sum, mut count) = (0.0, 0);
+        for RangeShare { kept, queue } in &mut ranges.gradients {
+            queue.flush(bodies, &mut keep(kept));
+            for (i, j, g) in &kept.2 {
+                add_pair(out, torques, *i, *j, g);
+            }
+            sum += kept.0;
+            count += kept.1;
         }
         Ok((sum, count))
     }
 }
 
-/// A task's share of the rayon pair sum: `Σf`, the pair count and the non-zero terms.
+/// A range's share of the rayon pair sums: what it kept and its kernel queue.
+#[cfg(feature = "rayon")]
+#[derive(Debug)]
+struct RangeShare<T, const N: usize, K> {
+    kept: T,
+    queue: KernelQueue<N, K>,
+}
+
+#[cfg(feature = "rayon")]
+impl<T: Default, const N: usize, K> Default for RangeShare<T, N, K> {
+    fn default() -> Self {
+        Self {
+            kept: T::default(),
+            queue: KernelQueue::default(),
+        }
+    }
+}
+
+/// The rayon pair sums' workspace, one share per range of rows of the pair list, kept from
+/// evaluation to evaluation so that the terms' vectors are allocated once.
+#[cfg(feature = "rayon")]
+#[derive(Debug, Default)]
+struct RangeWork<const N: usize> {
+    /// `Σf` and the pair count of a value-only call.
+    values: Vec<RangeShare<(f64, usize, ()), N, ValueOnly>>,
+    /// `Σf`, the pair count and the non-zero terms of a call with gradients.
+    gradients: Vec<RangeShare<Kept<N>, N, WithGradient>>,
+}
+
+/// A range's `Σf`, pair count and non-zero terms, in the order of its pairs.
 #[cfg(feature = "rayon")]
 type Kept<const N: usize> = (f64, usize, Vec<(usize, usize, PairGradient<N>)>);
 
-/// Adds the terms a queue emits to a task's share.
+/// Adds the terms a queue emits to a range's share.
 #[cfg(feature = "rayon")]
 fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>) + '_ {
     move |i, j, &(f, ref g)| {
@@ -1008,43 +1170,6 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
             acc.2.push((i, j, *g));
         }
     }
-}
-
-/// Σf, the pair count and the non-zero pair terms with their gradients, in the order of the
-/// pairs, gathered by rayon tasks; the caller scatters them serially, so that the result does
-/// not depend on the thread count beyond summation order.
-#[cfg(feature = "rayon")]
-fn pair_gradients<const N: usize>(
-    (list, centres): Candidates<'_, N>,
-    bodies: &[Body<N>],
-) -> Result<Kept<N>, Error> {
-    // Each task's queue is flushed before its terms are merged, so that they stay in the
-    // order of the pairs.
-    let (mut acc, mut queue) = list
-        .par_fold_close_pairs(
-            centres,
-            || {
-                (
-                    (0.0, 0usize, Vec::new()),
-                    KernelQueue::<N, WithGradient>::default(),
-                )
-            },
-            |(acc, queue), i, j, _, _| {
-                acc.1 += 1;
-                queue.push(bodies, i, j, &mut keep(acc));
-            },
-            |(mut a, mut qa), (mut b, mut qb)| {
-                qa.flush(bodies, &mut keep(&mut a));
-                qb.flush(bodies, &mut keep(&mut b));
-                a.0 += b.0;
-                a.1 += b.1;
-                a.2.append(&mut b.2);
-                (a, qa)
-            },
-        )
-        .map_err(grid_error)?;
-    queue.flush(bodies, &mut keep(&mut acc));
-    Ok(acc)
 }
 
 /// A body from its variables `[c, Ω]` (crate-built rotation, orthogonal by construction).

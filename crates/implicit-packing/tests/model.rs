@@ -108,6 +108,51 @@ fn grid_sum_equals_all_pairs_sum() {
     assert_same_bits(ev.overlap, all);
 }
 
+/// With the `rayon` feature the pair sums run in ranges of the pair list on rayon's pool:
+/// the gradient is scattered in the order of the pairs, so one and two threads (8 and 16
+/// ranges) give the same bits; `Σf` is summed range by range, so only to rounding.
+#[cfg(feature = "rayon")]
+#[test]
+fn two_threads_give_the_gradient_of_one() {
+    let mut rng = Rng::new(5);
+    let (axes, x) = config3(&mut rng, 4000, 0.6, ContainerShape::Ball);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut p = Model::<3>::new(axes.clone(), ContainerShape::Ball).unwrap();
+            let mut g = ModelGradient::default();
+            // Twice on one model: the second call reuses the ranges' vectors.
+            let first = p.evaluate(&x, Some(&mut g)).unwrap();
+            let first_g = g.overlap.clone();
+            let again = p.evaluate(&x, Some(&mut g)).unwrap();
+            assert_eq!(first, again);
+            assert_eq!(first_g, g.overlap);
+            let value = p.evaluate(&x, None).unwrap();
+            (again, g, value, p.overlap_all_pairs(&x).unwrap())
+        })
+    };
+    let (one, g1, v1, all) = run(1);
+    let (two, g2, v2, _) = run(2);
+    assert!(
+        one.pairs > 20_000,
+        "{} pairs: too few for several ranges",
+        one.pairs
+    );
+    assert_eq!(one.pairs, two.pairs);
+    assert_eq!(g1.overlap, g2.overlap);
+    assert_eq!(g1.containment, g2.containment);
+    for ev in [one, two, v1, v2] {
+        assert!(
+            (ev.overlap - all).abs() <= 1e-13 * all,
+            "{} {all}",
+            ev.overlap
+        );
+    }
+}
+
 #[track_caller]
 fn assert_same_bits(grid: f64, all_pairs: f64) {
     assert_eq!(grid.to_bits(), all_pairs.to_bits(), "{grid} {all_pairs}");
