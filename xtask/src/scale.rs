@@ -9,7 +9,8 @@
 //! `budget`.
 //!
 //! Rows are kept by (m, method, threads) in `validation/scale.csv`, so that sizes and
-//! solvers can be measured in separate invocations (a large m takes its whole budget); the
+//! solvers can be measured in separate invocations (a large m takes its whole budget; the
+//! table is read again before each row is added, so invocations may run side by side); the
 //! figure `docs/figures/scale.{svg,png}` and the table between the markers of
 //! `docs/packing.md` are drawn from every row.
 //!
@@ -36,7 +37,8 @@ pub struct Options {
     #[arg(long, num_args = 1.., default_values_t = [100, 1000, 10_000, 100_000])]
     pub sizes: Vec<usize>,
     /// Methods: the augmented Lagrangian with the inner solver `lbfgs` (projected L-BFGS),
-    /// `spg` (spectral projected gradient) or `newton` (truncated Newton); `compression`;
+    /// `spg` (spectral projected gradient), `newton` (truncated Newton, preconditioned) or
+    /// `newton-plain` (truncated Newton, plain conjugate gradients); `compression`;
     /// `compression+lbfgs` (compression, then the augmented Lagrangian).
     #[arg(long, num_args = 1.., default_values = ["lbfgs", "spg", "newton", "compression", "compression+lbfgs"])]
     pub solvers: Vec<String>,
@@ -96,6 +98,11 @@ fn local_settings(name: &str) -> Result<LocalSettings, Error> {
             InnerSolver::TruncatedNewton,
             LocalMethod::AugmentedLagrangian,
         ),
+        "newton-plain" => {
+            return Ok(LocalSettings::default()
+                .with_inner_solver(InnerSolver::TruncatedNewton)
+                .with_cg_preconditioner_memory(0));
+        }
         "compression" => (InnerSolver::ProjectedLbfgs, LocalMethod::Compression),
         "compression+lbfgs" => (
             InnerSolver::ProjectedLbfgs,
@@ -103,7 +110,7 @@ fn local_settings(name: &str) -> Result<LocalSettings, Error> {
         ),
         other => {
             return Err(study(format!(
-                "unknown method `{other}` (lbfgs, spg, newton, compression, compression+lbfgs)"
+                "unknown method `{other}` (lbfgs, spg, newton, newton-plain, compression, compression+lbfgs)"
             )));
         }
     };
@@ -259,7 +266,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<(), Error> {
         local_settings(s)?;
     }
     let table = root.join("validation/scale.csv");
-    let mut rows = read_table(&table)?;
+    read_table(&table)?;
     let budget = Duration::from_secs_f64(options.budget_minutes * 60.0);
     let mut sizes = options.sizes.clone();
     // Ascending, so that the process's peak memory after a row is that row's own.
@@ -272,6 +279,8 @@ pub fn run_all(root: &Path, options: &Options) -> Result<(), Error> {
                 "  density {:.5}, {:.1} s, {} ({} outer / {} inner iterations)",
                 row.density, row.seconds, row.stop, row.outer, row.inner
             );
+            // Read again: another invocation may have added rows since.
+            let mut rows = read_table(&table)?;
             rows.retain(|r| !(r.m == row.m && r.solver == row.solver && r.threads == row.threads));
             rows.push(row);
             rows.sort_by(|a, b| {

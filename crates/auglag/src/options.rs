@@ -52,6 +52,10 @@ pub struct Options {
     pub spg_memory: usize,
     /// Conjugate-gradient iterations per truncated-Newton step at most (≥ 1). Default 50.
     pub cg_iterations: usize,
+    /// Pairs of the previous truncated-Newton step's conjugate-gradient iterations kept as
+    /// the L-BFGS preconditioner of the next (Morales–Nocedal), 0 to 1024; 0 runs plain
+    /// conjugate gradients. Default 7.
+    pub cg_preconditioner_memory: usize,
     /// Safeguards [λ_min, λ_max] of the SPG spectral step. Default [1e-10, 1e10].
     pub spectral_step_bounds: (f64, f64),
     /// Initial penalty ρ₁; `None` (default) chooses it as Algencan does:
@@ -104,6 +108,8 @@ with_setters!(Options:
     with_spg_memory => spg_memory: usize,
     /// Sets [`Options::cg_iterations`].
     with_cg_iterations => cg_iterations: usize,
+    /// Sets [`Options::cg_preconditioner_memory`].
+    with_cg_preconditioner_memory => cg_preconditioner_memory: usize,
     /// Sets [`Options::spectral_step_bounds`].
     with_spectral_step_bounds => spectral_step_bounds: (f64, f64),
     /// Sets [`Options::initial_penalty`].
@@ -135,6 +141,7 @@ impl Default for Options {
             lbfgs_memory: 7,
             spg_memory: 10,
             cg_iterations: 50,
+            cg_preconditioner_memory: 7,
             spectral_step_bounds: (1e-10, 1e10),
             initial_penalty: None,
             penalty_increase: 10.0,
@@ -209,6 +216,12 @@ impl Options {
             self.cg_iterations as f64,
             self.cg_iterations >= 1,
             "must be at least 1",
+        )?;
+        require(
+            "cg_preconditioner_memory",
+            self.cg_preconditioner_memory as f64,
+            self.cg_preconditioner_memory <= MAX_LBFGS_MEMORY,
+            "must lie in 0..=1024 (the workspace holds 4·m n-vectors)",
         )?;
         let (lo, hi) = self.spectral_step_bounds;
         require(

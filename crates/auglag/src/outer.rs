@@ -158,9 +158,11 @@ impl<'p, 'o, P: Problem + ?Sized> Run<'p, 'o, P> {
             InnerSolver::ProjectedLbfgs => {
                 InnerWorkspace::Lbfgs(LbfgsWorkspace::new(n, options.lbfgs_memory))
             }
-            InnerSolver::TruncatedNewton => {
-                InnerWorkspace::Newton(NewtonWorkspace::new(n, options.cg_iterations))
-            }
+            InnerSolver::TruncatedNewton => InnerWorkspace::Newton(NewtonWorkspace::new(
+                n,
+                options.cg_iterations,
+                options.cg_preconditioner_memory,
+            )),
         };
         let mut run = Self {
             options,

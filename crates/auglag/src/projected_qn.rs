@@ -94,20 +94,75 @@ impl LbfgsWorkspace {
         (self.newest + self.memory - j) % self.memory
     }
 
-    /// Stores s = x_trial − x, y = g_trial − g if the curvature condition holds.
-    fn push_pair(&mut self, x: &[f64], g: &[f64]) {
-        let n = self.n;
-        let slot = if self.stored == 0 {
+    /// The slot the next pair is written to.
+    fn next_slot(&self) -> usize {
+        if self.stored == 0 {
             0
         } else {
             (self.newest + 1) % self.memory
-        };
+        }
+    }
+
+    /// Stores s = x_trial − x, y = g_trial − g if the curvature condition holds.
+    fn push_pair(&mut self, x: &[f64], g: &[f64]) {
+        let n = self.n;
+        let slot = self.next_slot();
         let s = &mut self.s[slot * n..(slot + 1) * n];
         let y = &mut self.y[slot * n..(slot + 1) * n];
         for i in 0..n {
             s[i] = self.x_trial[i] - x[i];
             y[i] = self.g_trial[i] - g[i];
         }
+        self.keep_if_curved(slot);
+    }
+
+    /// Stores the pair (s, y) if the curvature condition holds.
+    pub(crate) fn store(&mut self, s: &[f64], y: &[f64]) {
+        let n = self.n;
+        let slot = self.next_slot();
+        self.s[slot * n..(slot + 1) * n].copy_from_slice(s);
+        self.y[slot * n..(slot + 1) * n].copy_from_slice(y);
+        self.keep_if_curved(slot);
+    }
+
+    /// Number of pairs stored.
+    pub(crate) fn stored(&self) -> usize {
+        self.stored
+    }
+
+    /// Forgets every pair.
+    pub(crate) fn clear(&mut self) {
+        self.reset();
+    }
+
+    /// Sets the free variables of the next [`apply`](Self::apply)s (1.0 free, 0.0 active).
+    pub(crate) fn set_free(&mut self, free: &[f64], all_free: bool) {
+        self.free.copy_from_slice(free);
+        self.all_free = all_free;
+    }
+
+    /// `z = H_F r`, the inverse-Hessian approximation over the free variables applied to `r`
+    /// (zero off F): the two-loop recursion. Returns false, with `z = r`, when no stored pair
+    /// is usable.
+    pub(crate) fn apply(&mut self, r: &[f64], z: &mut [f64]) -> bool {
+        if self.stored == 0 || !self.two_loop(r) {
+            z.copy_from_slice(r);
+            return false;
+        }
+        for (zi, &d) in z.iter_mut().zip(&self.direction) {
+            *zi = -d;
+        }
+        true
+    }
+
+    /// Makes the pair just written to `slot` the newest if it has positive curvature,
+    /// `sᵀy > ε_mach yᵀy`.
+    fn keep_if_curved(&mut self, slot: usize) {
+        let n = self.n;
+        let (s, y) = (
+            &self.s[slot * n..(slot + 1) * n],
+            &self.y[slot * n..(slot + 1) * n],
+        );
         let (sy, yy) = (dot(s, y), dot(y, y));
         // A pair without positive curvature would make H indefinite; it is dropped.
         if sy > f64::EPSILON * yy && sy > 0.0 {

@@ -130,3 +130,86 @@ fn exact_and_quotient_hessians_agree_on_a_constrained_problem() {
         assert!((a - b).abs() < 1e-6, "{a} against {b}");
     }
 }
+
+/// f(x) = Σ dᵢ φ(xᵢ − 1), φ(t) = t²/2 + t⁴/4, dᵢ from 1 to 1e4: ill-conditioned, and its
+/// Hessian changes from one Newton step to the next.
+struct Quartic {
+    d: Vec<f64>,
+}
+
+impl Problem for Quartic {
+    fn dim(&self) -> usize {
+        self.d.len()
+    }
+    fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower.fill(f64::NEG_INFINITY);
+        upper.fill(f64::INFINITY);
+    }
+    fn n_eq(&self) -> usize {
+        0
+    }
+    fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        if let Some(g) = grad {
+            for ((g, &d), &x) in g.iter_mut().zip(&self.d).zip(x) {
+                let t = x - 1.0;
+                *g = d * (t + t * t * t);
+            }
+        }
+        self.d
+            .iter()
+            .zip(x)
+            .map(|(d, x)| {
+                let t = x - 1.0;
+                d * (0.5 * t * t + 0.25 * t.powi(4))
+            })
+            .sum()
+    }
+    fn constraints(&self, _x: &[f64], _c: &mut [f64]) {}
+    fn constraints_jt_times(&self, _x: &[f64], _w: &[f64], _out: &mut [f64]) {}
+    fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
+        let sf = phr.objective_scale();
+        for (((o, &d), &x), &vi) in out.iter_mut().zip(&self.d).zip(x).zip(v) {
+            let t = x - 1.0;
+            *o = sf * d * (1.0 + 3.0 * t * t) * vi;
+        }
+        true
+    }
+}
+
+/// The conjugate gradients preconditioned by the previous Newton step's pairs need fewer
+/// Hessian products than plain ones, to the same minimiser.
+#[test]
+fn the_preconditioner_saves_hessian_products() {
+    let n = 200;
+    let problem = Quartic {
+        d: (0..n)
+            .map(|i| 10f64.powf(4.0 * i as f64 / (n - 1) as f64))
+            .collect(),
+    };
+    let run = |pairs: usize| {
+        let options = Options::default()
+            .with_inner_solver(InnerSolver::TruncatedNewton)
+            .with_cg_preconditioner_memory(pairs)
+            .with_optimality_tolerance(1e-8);
+        minimize(&problem, &vec![-1.0; n], &options).unwrap()
+    };
+    let plain = run(0);
+    let preconditioned = run(7);
+    for s in [&plain, &preconditioned] {
+        assert_eq!(s.report.stop_reason, StopReason::Converged);
+        assert!(s.x.iter().all(|&x| (x - 1.0).abs() < 1e-6));
+    }
+    assert!(
+        preconditioned.report.hessian_products < plain.report.hessian_products,
+        "preconditioned {} Hessian products, plain {}",
+        preconditioned.report.hessian_products,
+        plain.report.hessian_products
+    );
+    eprintln!(
+        "Hessian products: preconditioned {}, plain {}; inner iterations {} and {}",
+        preconditioned.report.hessian_products,
+        plain.report.hessian_products,
+        preconditioned.report.inner_iterations,
+        plain.report.inner_iterations
+    );
+}

@@ -45,6 +45,10 @@ pub struct LocalSettings {
     pub max_inner_iterations: usize,
     /// The bound-constrained inner solver.
     pub inner_solver: InnerSolver,
+    /// With the truncated-Newton inner solver: conjugate-gradient pairs kept as the
+    /// preconditioner of the next step (`auglag::Options::cg_preconditioner_memory`; 0:
+    /// plain conjugate gradients).
+    pub cg_preconditioner_memory: usize,
     /// Feasibility tolerance of a second, warm-started solve from the first one's point
     /// (`None`: no polish). With the paper's 1e-4 the model leaves penetrations of about 1 %
     /// of the semi-axes, whose repair costs several per cent of density; a polish at 1e-10
@@ -96,6 +100,8 @@ crate::with_setters!(LocalSettings:
     with_max_inner_iterations => max_inner_iterations: usize,
     /// Sets [`LocalSettings::inner_solver`].
     with_inner_solver => inner_solver: InnerSolver,
+    /// Sets [`LocalSettings::cg_preconditioner_memory`].
+    with_cg_preconditioner_memory => cg_preconditioner_memory: usize,
     /// Sets [`LocalSettings::polish_tolerance`].
     with_polish_tolerance => polish_tolerance: Option<f64>,
     /// Sets [`LocalSettings::fixed_container`].
@@ -112,6 +118,7 @@ impl Default for LocalSettings {
             max_outer_iterations: 50,
             max_inner_iterations: 2_000,
             inner_solver: InnerSolver::ProjectedLbfgs,
+            cg_preconditioner_memory: Options::default().cg_preconditioner_memory,
             polish_tolerance: Some(1e-10),
             fixed_container: false,
             method: LocalMethod::AugmentedLagrangian,
@@ -332,6 +339,7 @@ pub(crate) fn solver_options(settings: &LocalSettings, feasibility: f64) -> Opti
         .with_max_outer_iterations(settings.max_outer_iterations)
         .with_max_inner_iterations(settings.max_inner_iterations)
         .with_inner_solver(settings.inner_solver)
+        .with_cg_preconditioner_memory(settings.cg_preconditioner_memory)
         .with_scaling(true)
 }
 
