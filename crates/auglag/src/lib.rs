@@ -6,9 +6,11 @@
 //!
 //! in the style of Algencan (Birgin & Martínez 2014): an outer loop on the
 //! Powell–Hestenes–Rockafellar augmented Lagrangian with multipliers projected onto a
-//! safeguarding box, and an inner solver for the bound-constrained subproblems — either a
-//! nonmonotone spectral projected gradient ([`InnerSolver::Spg`]) or an active-set projected
-//! L-BFGS ([`InnerSolver::ProjectedLbfgs`]). Memory is O(n) per iteration (no n×n matrix), all
+//! safeguarding box, and an inner solver for the bound-constrained subproblems — a nonmonotone
+//! spectral projected gradient ([`InnerSolver::Spg`]), an active-set projected L-BFGS
+//! ([`InnerSolver::ProjectedLbfgs`]), or an active-set truncated Newton whose conjugate
+//! gradients are preconditioned by an L-BFGS matrix of the previous step's pairs
+//! ([`InnerSolver::TruncatedNewton`]). Memory is O(n) per iteration (no n×n matrix), all
 //! buffers are allocated before the first iteration, and runs are deterministic.
 //!
 //! A model is seen only through the [`Problem`] trait. [`minimize`] or
@@ -47,6 +49,9 @@
 //!   constraints", SIAM J. Control Optim. 20(2), 1982; R. H. Byrd, P. Lu, J. Nocedal, C. Zhu,
 //!   "A limited memory algorithm for bound constrained optimization", SIAM J. Sci. Comput.
 //!   16(5), 1995.
+//! - R. S. Dembo, T. Steihaug, "Truncated-Newton algorithms for large-scale unconstrained
+//!   optimization", Math. Program. 26, 1983; J. L. Morales, J. Nocedal, "Automatic
+//!   preconditioning by limited memory quasi-Newton updating", SIAM J. Optim. 10(4), 2000.
 #![deny(missing_docs)]
 
 mod error;
