@@ -32,7 +32,7 @@
 //! numbers of pairs, one task each; a range keeps its non-zero pair gradients in a vector of its
 //! own (kept from call to call), and they are added to the gradient serially in the order of the
 //! pairs, so the gradient has the same bits on any number of threads. The per-body pass (torques
-//! to angle derivatives, containment) runs in groups of [`BODIES_PER_TASK`] bodies, summed in
+//! to angle derivatives, containment) runs in fixed groups of 2048 bodies, summed in
 //! order. A value-only call does no gradient work.
 //! Pairs are skipped at once when their enclosing balls are apart (the list's exact test) or the
 //! plane orthogonal to the centre line separates them with a margin (an exact certificate: the pair
