@@ -85,7 +85,8 @@ impl LbfgsWorkspace {
         }
     }
 
-    fn reset(&mut self) {
+    /// Forgets every pair.
+    pub(crate) fn reset(&mut self) {
         self.stored = 0;
     }
 
@@ -128,11 +129,6 @@ impl LbfgsWorkspace {
     /// Number of pairs stored.
     pub(crate) fn stored(&self) -> usize {
         self.stored
-    }
-
-    /// Forgets every pair.
-    pub(crate) fn clear(&mut self) {
-        self.reset();
     }
 
     /// Sets the free variables of the next [`apply`](Self::apply)s (1.0 free, 0.0 active).

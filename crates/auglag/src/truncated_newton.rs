@@ -148,7 +148,7 @@ impl NewtonWorkspace {
         if let Some(pair) = &mut self.preconditioner {
             let (current, collected) = &mut **pair;
             current.set_free(&self.free, all_free);
-            collected.clear();
+            collected.reset();
         }
         self.precondition();
         self.search.copy_from_slice(&self.preconditioned);

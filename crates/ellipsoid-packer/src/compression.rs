@@ -51,8 +51,8 @@ pub const PLACEMENT_INNER_ITERATIONS: usize = 1_000;
 /// gradient is as small as the overlap itself: the 1e-4 of the paper's solves would stop at
 /// penetrations whose repair costs more than a step gains.
 pub const PLACEMENT_OPTIMALITY: f64 = 1e-8;
-/// From its third outer iteration that runs the inner solver on, a placement whose
-/// infeasibility falls by less than this factor in one such outer iteration is given up.
+/// In its third outer iteration that runs the inner solver, a placement whose infeasibility
+/// falls by less than this factor is given up (later ones need [`LATE_STALL_FACTOR`]).
 /// Measured on 1e4 ellipsoids (1, 0.75, 0.5) in a ball: placements that failed fell by 1.2–4.9×
 /// there, those that succeeded by 35× or more; with 1e5 a successful first placement fell by
 /// 20× only.
@@ -185,8 +185,8 @@ impl<'a> Placer<'a> {
 
 /// The infeasibilities at the ends of a placement's outer iterations, and whether it fell by
 /// less than [`STALL_FACTOR`] in the third outer iteration that ran the inner solver, or by
-/// less than [`LATE_STALL_FACTOR`] in a later one. Outer iterations without inner iterations (the penalty still too small to move
-/// anything) do not count.
+/// less than [`LATE_STALL_FACTOR`] in a later one. Outer iterations without inner iterations
+/// (the penalty still too small to move anything) do not count.
 #[derive(Default)]
 struct Stall {
     /// Outer iterations that ran the inner solver.
