@@ -45,6 +45,10 @@ enum Command {
         /// validation/paper-packings/, and its row adds this budget to the earlier one.
         #[arg(long)]
         resume: bool,
+        /// How each local minimisation makes the container small: lagrangian (the paper's),
+        /// compression or compression-lagrangian. Default: the scene's (lagrangian).
+        #[arg(long, value_parser = xtask::paper_tables::method_named)]
+        method: Option<ellipack::scene::MethodName>,
     },
     /// Measure the periodic cell through the `ellipack pack` pipeline: variable cells with 1, 2
     /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
@@ -148,6 +152,7 @@ fn main() -> ExitCode {
             instances,
             threads,
             resume,
+            method,
         } => {
             let instances = if instances.is_empty() {
                 xtask::paper_tables::TARGETS
@@ -162,6 +167,7 @@ fn main() -> ExitCode {
                 instances,
                 threads,
                 resume,
+                method,
             };
             with_problems(
                 xtask::paper_tables::run_all(&workspace_root(), &options),

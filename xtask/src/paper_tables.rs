@@ -9,11 +9,14 @@
 //! dense than the committed one (which must read back and verify) writes nothing for that
 //! instance: its committed packing, picture and row stay.
 
+use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use ellipack::folder::HISTORY_FILE;
 use ellipack::instances::{INSTANCES, Instance, by_name, names};
 use ellipack::output::write_atomically;
-use ellipack::pack::{RunOptions, run};
+use ellipack::pack::{History, RunOptions, run};
 use ellipack::packing::write_files;
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
+use ellipack::scene::MethodName;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -35,6 +38,9 @@ pub struct Options {
     /// run starts from them, never writes a worse packing, and its row adds this budget to
     /// the earlier one.
     pub resume: bool,
+    /// How each local minimisation makes the container small (default: the scene's, the
+    /// paper's augmented Lagrangian).
+    pub method: Option<MethodName>,
 }
 
 /// One instance's result.
@@ -51,6 +57,8 @@ struct Row {
     budget_seconds: f64,
     /// Processor, cores and threads used.
     machine: String,
+    /// The local minimisation's method (its name in scene files).
+    method: String,
 }
 
 /// Runs the instances and writes the tables; returns a message for each instance that could
@@ -86,7 +94,10 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             instance.description(),
             options.minutes
         );
-        let scene = instance.scene();
+        let mut scene = instance.scene();
+        if let Some(method) = options.method {
+            scene.solver.method = method;
+        }
         let dir = root.join("validation/paper-packings").join(instance.name);
         // Resuming: the committed packing is the start to beat, and its row's budget, time to
         // best and local minimisations carry over.
@@ -111,10 +122,12 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             ..RunOptions::default()
         };
         let mut best = 0.0;
+        let mut history = History::new();
         let outcome = run(
             &scene,
             &run_options,
             &mut Callbacks::on_finished(|p: &MultiStartProgress| {
+                history.record(p);
                 if p.best_density > best {
                     best = p.best_density;
                     eprintln!(
@@ -147,6 +160,10 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         }
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         write_files(&dir, &outcome.packing, &outcome.summary, false).map_err(|e| e.to_string())?;
+        // A resumed run's history starts at its own zero: the earlier runs' histories are not
+        // kept, so the curve is this run's only.
+        write_atomically(&dir.join(HISTORY_FILE), history.into_text().as_bytes())
+            .map_err(|e| e.to_string())?;
         let picture = RenderOptions {
             width: 1200,
             label: Some(format!("{} ({} min)", instance.name, options.minutes)),
@@ -172,6 +189,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             min_mu2: c.min_mu2,
             budget_seconds: options.minutes * 60.0,
             machine: machine(threads),
+            method: scene.solver.method.name().to_string(),
         };
         if let Some((old, _)) = &earlier {
             // The table keeps nine decimals: the resumed packing itself reads back up to 5e-10
@@ -205,12 +223,121 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             .unwrap_or(usize::MAX)
     });
     write_atomically(&table, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+    let curves = curves(root, &rows);
+    let mut outputs = crate::output::Outputs::new(false);
+    render(
+        &density_time_figure(&curves),
+        &root.join("docs/figures"),
+        DENSITY_TIME_FIGURE,
+        &mut outputs,
+    )
+    .map_err(|e| e.to_string())?;
     write_atomically(
         &root.join("docs/paper-tables.md"),
-        markdown(&rows).as_bytes(),
+        markdown(&rows, &curves).as_bytes(),
     )
     .map_err(|e| e.to_string())?;
     Ok(problems)
+}
+
+/// The base name of the density-against-time figure in `docs/figures`.
+const DENSITY_TIME_FIGURE: &str = "paper_density_time";
+
+/// One instance's best certified density against wall time, relative to the paper's.
+struct Curve {
+    instance: &'static Instance,
+    /// (seconds, best density / paper density) at each local minimisation that improved it.
+    points: Vec<(f64, f64)>,
+    /// The end of the run's last local minimisation, up to which its best density holds.
+    end_seconds: f64,
+}
+
+/// The curves of the rows whose packing folder holds the history of the run that wrote it.
+fn curves(root: &Path, rows: &[Row]) -> Vec<Curve> {
+    rows.iter()
+        .filter_map(|r| {
+            let paper = r.instance.reference_density()?;
+            let dir = root.join("validation/paper-packings").join(r.instance.name);
+            let text = std::fs::read_to_string(dir.join(HISTORY_FILE)).ok()?;
+            let (points, end_seconds) = best_density_steps(&text, paper);
+            (!points.is_empty()).then_some(Curve {
+                instance: r.instance,
+                points,
+                end_seconds,
+            })
+        })
+        .collect()
+}
+
+/// The rows of a history (`local_minimisation,seconds,density,best_density`) at which the
+/// best density rose, as (seconds, best density / `paper`), and the time of its last row.
+/// Rows that do not parse are skipped: the file is our own output, and a torn one only thins
+/// the curve.
+fn best_density_steps(history: &str, paper: f64) -> (Vec<(f64, f64)>, f64) {
+    let mut steps: Vec<(f64, f64)> = Vec::new();
+    let mut end: f64 = 0.0;
+    for line in history.lines().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        let (Some(Ok(seconds)), Some(Ok(best))) = (
+            fields.get(1).map(|f| f.parse::<f64>()),
+            fields.get(3).map(|f| f.parse::<f64>()),
+        ) else {
+            continue;
+        };
+        end = end.max(seconds);
+        let ratio = best / paper;
+        if steps.last().is_none_or(|&(_, r)| ratio > r) {
+            steps.push((seconds, ratio));
+        }
+    }
+    (steps, end)
+}
+
+/// Best density / paper density against wall time, a staircase per instance: 2D instances
+/// above, 3D below, the paper's 48-hour best at 1.
+fn density_time_figure(curves: &[Curve]) -> Figure {
+    let panel = |title: &str, two: bool| {
+        let series = curves
+            .iter()
+            .filter(|c| (c.instance.dimension() == 2) == two)
+            .enumerate()
+            .map(|(k, c)| {
+                let mut points: Vec<(f64, f64)> = Vec::new();
+                for &(t, r) in &c.points {
+                    if let Some(&(_, previous)) = points.last() {
+                        points.push((t, previous));
+                    }
+                    points.push((t, r));
+                }
+                if let Some(&(_, last)) = points.last() {
+                    points.push((c.end_seconds, last));
+                }
+                Series {
+                    name: c.instance.name.to_string(),
+                    points,
+                    kind: Kind::Line,
+                    color: k,
+                }
+            })
+            .collect();
+        Panel {
+            title: title.into(),
+            x_label: "wall time of the run (s), logarithmic".into(),
+            x_log: true,
+            y_label: "best certified density / paper's".into(),
+            series,
+            hlines: vec![(1.0, "paper (48 h)".into())],
+            legend: Corner::LowerRight,
+            ..Panel::default()
+        }
+    };
+    Figure {
+        panels: vec![
+            panel("Ellipses (2, 1): Tables 6.1, 6.2 and circle-231", true),
+            panel("Ellipsoids (1, 0.75, 0.5): Tables 6.3 and 6.4", false),
+        ],
+        panel_height: 560,
+    }
 }
 
 /// The committed row of `instance`, when it is at least as dense as `density` and its packing
@@ -253,6 +380,33 @@ const PAPER_TO_BEST: &[(&str, &str, u32)] = &[
     ("cuboid-400", "1d22h32m20s", 45),
     ("cuboid-500", "1d01h44m10s", 16),
 ];
+
+/// The instance names of `rows`, comma-separated (`none` for no row).
+fn names_of<'a>(rows: impl Iterator<Item = &'a Row>) -> String {
+    let names: Vec<&str> = rows.map(|r| r.instance.name).collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// The method of a scene file's `solver.method` key named `name`.
+///
+/// # Errors
+/// A name that is none of them.
+pub fn method_named(name: &str) -> Result<MethodName, String> {
+    [
+        MethodName::Lagrangian,
+        MethodName::Compression,
+        MethodName::CompressionLagrangian,
+    ]
+    .into_iter()
+    .find(|m| m.name() == name)
+    .ok_or_else(|| {
+        format!("unknown method `{name}`: lagrangian, compression or compression-lagrangian")
+    })
+}
 
 /// The paper's time to best and local minimisations to best of an instance, if it gives them.
 fn paper_to_best(name: &str) -> Option<(&'static str, u32)> {
@@ -305,6 +459,11 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
             min_mu2: number("min_mu2"),
             budget_seconds: number("wall_budget_seconds").unwrap_or(f64::NAN),
             machine: field("machine").to_string(),
+            // Rows written before the column existed were all run with the default method.
+            method: match field("method") {
+                "" => MethodName::default().name().to_string(),
+                m => m.to_string(),
+            },
         });
     }
     rows
@@ -314,14 +473,14 @@ fn csv(rows: &[Row]) -> String {
     let mut out = String::from(
         "instance,paper_density,paper_time_to_best,paper_local_minimisations_to_best,density,ratio,\
          seconds_to_best,local_minimisations,failed_starts,wall_budget_seconds,certified,min_mu2,\
-         machine\n",
+         method,machine\n",
     );
     for r in rows {
         let paper = r.instance.reference_density();
         let to_best = paper_to_best(r.instance.name);
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.9},{},{:.1},{},{},{:.0},{},{},\"{}\"",
+            "{},{},{},{},{:.9},{},{:.1},{},{},{:.0},{},{},{},\"{}\"",
             r.instance.name,
             paper.map_or(String::new(), |d| format!("{d:.5}")),
             to_best.map_or("", |p| p.0),
@@ -334,13 +493,14 @@ fn csv(rows: &[Row]) -> String {
             r.budget_seconds,
             r.certified,
             r.min_mu2.map_or(String::new(), |m| format!("{m:.9}")),
+            r.method,
             r.machine.replace('"', "'"),
         );
     }
     out
 }
 
-fn markdown(rows: &[Row]) -> String {
+fn markdown(rows: &[Row], curves: &[Curve]) -> String {
     let mut out = String::from(
         "# The paper's instances\n\nGenerated by `cargo xtask paper-tables` (do not edit; \
          each run replaces the rows of the instances it ran, except that a fresh run less dense than the committed packing leaves that packing and its row as they were). Each instance was packed by the pipeline of `ellipack pack` — the \
@@ -350,21 +510,24 @@ fn markdown(rows: &[Row]) -> String {
          after 300 starts without a relative gain of 1e-5 — added on 2026-11-22, after the \
          ellipse-100 and cuboid-100 runs below), every local \
          minimisation certified with PW85 and exact containment and repaired — for the wall \
-         time and on the machine given in its row. The paper's figures are the best of a \
+         time, with the local method and on the machine given in its row (`lagrangian`: the \
+         paper's augmented Lagrangian with the container among the variables; \
+         `compression-lagrangian`: compression of the container first, then the augmented \
+         Lagrangian from its packing; `cargo xtask paper-tables --method`). The paper's figures are the best of a \
          48-hour multi-start on an Intel i7-3770 (Birgin, Lobato, Martínez, Section 6; \
          `≈` where the paper gives a radius only). The packings are in \
          `validation/paper-packings/<instance>/` (`ellipack verify` re-checks them, \
          `ellipack pack --instance <instance> --resume --out <that folder>` continues them; \
          `cargo xtask paper-tables --resume` does so for a row, whose budget, time to best and \
          local minimisations then count every run of it).\n\n\
-         | instance | paper density (48 h) | paper: time to best (local minimisations) | ours | ours / paper | time to best (s) | local minimisations | wall budget (min) | machine | certified |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---|---|\n",
+         | instance | paper density (48 h) | paper: time to best (local minimisations) | ours | ours / paper | time to best (s) | local minimisations | wall budget (min) | method | machine | certified |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|\n",
     );
     for r in rows {
         let paper = r.instance.reference_density();
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.5} | {} | {:.1} | {} | {:.0} | {} | {} |",
+            "| {} | {} | {} | {:.5} | {} | {:.1} | {} | {:.0} | {} | {} | {} |",
             r.instance.name,
             paper.map_or("—".into(), |d| format!("{d:.5}")),
             paper_to_best(r.instance.name).map_or("—".into(), |(t, k)| format!("{t} ({k})")),
@@ -373,11 +536,29 @@ fn markdown(rows: &[Row]) -> String {
             r.seconds_to_best,
             r.local_minimisations,
             r.budget_seconds / 60.0,
+            r.method,
             r.machine,
             if r.certified { "yes" } else { "**no**" },
         );
     }
     out.push('\n');
+    let _ = writeln!(
+        out,
+        "## Density against time\n\n\
+         ![Best certified density over the paper's against wall time](figures/{DENSITY_TIME_FIGURE}.png)\n\n\
+         The best certified density of the run that wrote each packing, over the paper's, after \
+         each local minimisation that raised it (from `history.csv` in the packing's folder; a \
+         resumed row's curve is its last run's). With a curve: {}. Without one: {} (their \
+         folders hold no history).\n",
+        names_of(
+            rows.iter()
+                .filter(|r| curves.iter().any(|c| c.instance.name == r.instance.name))
+        ),
+        names_of(
+            rows.iter()
+                .filter(|r| !curves.iter().any(|c| c.instance.name == r.instance.name))
+        ),
+    );
     for r in rows {
         let _ = writeln!(
             out,
@@ -395,6 +576,31 @@ mod tests {
 
     /// A fresh run keeps the committed packing when it is at least as dense and verifies, and
     /// only then.
+    #[test]
+    fn the_curve_steps_at_each_gain_and_ends_at_the_last_row() {
+        let history = "local_minimisation,seconds,density,best_density\n\
+                       1,2.0,0.80,0.80\n2,4.0,0.79,0.80\nnot,a,row\n3,6.5,0.90,0.90\n4,9.0,0.85,0.90\n";
+        let (steps, end) = best_density_steps(history, 0.9);
+        assert_eq!(steps.len(), 2);
+        assert_eq!(steps[0].0, 2.0);
+        assert!((steps[0].1 - 0.8 / 0.9).abs() < 1e-15);
+        assert_eq!(steps[1], (6.5, 1.0));
+        assert_eq!(end, 9.0);
+        assert_eq!(
+            best_density_steps("local_minimisation,seconds\n", 0.9).0,
+            []
+        );
+    }
+
+    #[test]
+    fn methods_are_read_by_their_scene_names() {
+        assert_eq!(
+            method_named("compression-lagrangian"),
+            Ok(MethodName::CompressionLagrangian)
+        );
+        assert!(method_named("simulated-annealing").is_err());
+    }
+
     #[test]
     fn a_denser_committed_packing_is_kept() {
         let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
