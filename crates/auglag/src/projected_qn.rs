@@ -38,6 +38,12 @@ use crate::projection::{dot, norm_inf};
 /// Upper limit ε̄ of the ε-active-set rule.
 const ACTIVE_EPSILON: f64 = 1e-3;
 
+/// With at most one active variable in this many, the two-loop recursion runs unmasked over
+/// all variables and corrects its inner products at the active ones; with more, it masks
+/// every pass. A fixed container (compression's placements) keeps one or two variables active
+/// at every iteration, which would otherwise cost a masked pass per pair.
+const SPARSE_ACTIVE: usize = 16;
+
 /// Buffers of the projected L-BFGS method, allocated once and reused by every inner solve.
 #[derive(Debug, Clone)]
 pub(crate) struct LbfgsWorkspace {
@@ -57,6 +63,10 @@ pub(crate) struct LbfgsWorkspace {
     /// 1.0 on free variables, 0.0 on active ones.
     free: Vec<f64>,
     all_free: bool,
+    /// The active variables' indices, when there are few (see [`SPARSE_ACTIVE`]).
+    active: Vec<usize>,
+    /// The slots of the pairs with positive curvature on the free variables, newest first.
+    usable: Vec<usize>,
     direction: Vec<f64>,
     x_trial: Vec<f64>,
     g_trial: Vec<f64>,
@@ -79,6 +89,8 @@ impl LbfgsWorkspace {
             pair_yy: vec![0.0; memory],
             free: vec![1.0; n],
             all_free: true,
+            active: Vec::new(),
+            usable: Vec::with_capacity(memory),
             direction: vec![0.0; n],
             x_trial: vec![0.0; n],
             g_trial: vec![0.0; n],
@@ -135,6 +147,26 @@ impl LbfgsWorkspace {
     pub(crate) fn set_free(&mut self, free: &[f64], all_free: bool) {
         self.free.copy_from_slice(free);
         self.all_free = all_free;
+        self.list_active();
+    }
+
+    /// Lists the active variables when there are few of them (none when all are free, or
+    /// when too many are active for the unmasked recursion).
+    fn list_active(&mut self) {
+        self.active.clear();
+        if self.all_free {
+            return;
+        }
+        let limit = self.n / SPARSE_ACTIVE;
+        for (i, &f) in self.free.iter().enumerate() {
+            if f == 0.0 {
+                if self.active.len() == limit {
+                    self.active.clear();
+                    return;
+                }
+                self.active.push(i);
+            }
+        }
     }
 
     /// `z = H_F r`, the inverse-Hessian approximation over the free variables applied to `r`
@@ -175,11 +207,112 @@ impl LbfgsWorkspace {
     /// Marks the ε-active variables (see the module docs).
     fn mark_free(&mut self, x: &[f64], g: &[f64], lower: &[f64], upper: &[f64], pg: f64) {
         self.all_free = mark_free(&mut self.free, (x, g), (lower, upper), pg);
+        self.list_active();
     }
 
     /// d = −H_F g_F by the two-loop recursion over the free variables. Returns false when no
     /// stored pair was usable (then d = −γ g_F with the fallback scaling).
     fn two_loop(&mut self, g: &[f64]) -> bool {
+        if self.all_free || !self.active.is_empty() {
+            self.two_loop_unmasked(g)
+        } else {
+            self.two_loop_masked(g)
+        }
+    }
+
+    /// [`two_loop`](Self::two_loop) with every variable free, or few active: the passes run
+    /// over all variables, fused in pairs ([`simd::axpy_dot`]: each update of q with the next
+    /// pair's inner product), and q and the inner products are corrected at the active
+    /// variables only.
+    fn two_loop_unmasked(&mut self, g: &[f64]) -> bool {
+        let n = self.n;
+        self.usable.clear();
+        let mut gamma = None;
+        for j in 0..self.stored {
+            let slot = self.slot(j);
+            let Some((sy, yy)) = self.curvature_on_free(slot) else {
+                continue;
+            };
+            gamma.get_or_insert(sy / yy);
+            self.rho[slot] = 1.0 / sy;
+            self.usable.push(slot);
+        }
+        let Self {
+            s,
+            y,
+            direction: q,
+            active,
+            usable,
+            rho,
+            alpha,
+            ..
+        } = self;
+        let s_of = |slot: usize| &s[slot * n..(slot + 1) * n];
+        let y_of = |slot: usize| &y[slot * n..(slot + 1) * n];
+        q.copy_from_slice(g);
+        zero_at(q, active);
+        // First loop, newest to oldest: αⱼ = ρⱼ sⱼᵀq, q ← q − αⱼ yⱼ.
+        if let Some(&first) = usable.first() {
+            let mut sq = dot(s_of(first), q);
+            for k in 0..usable.len() {
+                let slot = usable[k];
+                let a = rho[slot] * sq;
+                alpha[slot] = a;
+                let next = usable.get(k + 1).map_or(y_of(slot), |&next| s_of(next));
+                sq = simd::axpy_dot(q, -a, y_of(slot), next);
+                sq -= correct_at(q, next, active);
+            }
+        }
+        let gamma = gamma.unwrap_or_else(|| {
+            // Without curvature information, a first step of length at most 1 in sup-norm.
+            let gn = norm_inf(q);
+            if gn > 1.0 { 1.0 / gn } else { 1.0 }
+        });
+        q.iter_mut().for_each(|qi| *qi *= gamma);
+        // Second loop, oldest to newest: βⱼ = ρⱼ yⱼᵀq, q ← q + (αⱼ − βⱼ) sⱼ.
+        if let Some(&oldest) = usable.last() {
+            let mut yq = dot(y_of(oldest), q);
+            for k in (0..usable.len()).rev() {
+                let slot = usable[k];
+                let c = alpha[slot] - rho[slot] * yq;
+                let next = k.checked_sub(1).map_or(s_of(slot), |k| y_of(usable[k]));
+                yq = simd::axpy_dot(q, c, s_of(slot), next);
+                yq -= correct_at(q, next, active);
+            }
+        }
+        q.iter_mut().for_each(|v| *v = -*v);
+        !usable.is_empty()
+    }
+
+    /// s_Fᵀy_F and y_Fᵀy_F of the pair in `slot` when it has positive curvature on the free
+    /// variables: the full-space products less the terms of the few active variables, or,
+    /// when those terms carry half of yᵀy or more (where the difference would lose digits),
+    /// summed over the free variables.
+    fn curvature_on_free(&self, slot: usize) -> Option<(f64, f64)> {
+        let n = self.n;
+        let (s, y) = (
+            &self.s[slot * n..(slot + 1) * n],
+            &self.y[slot * n..(slot + 1) * n],
+        );
+        let (mut sy, mut yy) = (self.pair_sy[slot], self.pair_yy[slot]);
+        let (active_sy, active_yy) = self
+            .active
+            .iter()
+            .fold((0.0, 0.0), |(a, b), &i| (a + s[i] * y[i], b + y[i] * y[i]));
+        if active_yy <= 0.5 * yy {
+            (sy, yy) = (sy - active_sy, yy - active_yy);
+        } else {
+            (sy, yy) = (0.0, 0.0);
+            for ((&si, &yi), &fi) in s.iter().zip(y).zip(&self.free) {
+                sy += si * yi * fi;
+                yy += yi * yi * fi;
+            }
+        }
+        (sy > f64::EPSILON * yy && sy > 0.0 && yy > 0.0).then_some((sy, yy))
+    }
+
+    /// [`two_loop`](Self::two_loop) with many active variables: every pass masked.
+    fn two_loop_masked(&mut self, g: &[f64]) -> bool {
         let n = self.n;
         let q = &mut self.direction;
         for ((qi, &gi), &fi) in q.iter_mut().zip(g).zip(&self.free) {
@@ -235,6 +368,24 @@ impl LbfgsWorkspace {
         self.direction.iter_mut().for_each(|v| *v = -*v);
         used
     }
+}
+
+/// Sets `q` to 0 at the `active` indices.
+fn zero_at(q: &mut [f64], active: &[usize]) {
+    for &i in active {
+        q[i] = 0.0;
+    }
+}
+
+/// Sets `q` to 0 at the `active` indices and returns Σ vᵢ qᵢ over them (before zeroing): what
+/// an inner product vᵀq taken before the zeroing must lose.
+fn correct_at(q: &mut [f64], v: &[f64], active: &[usize]) -> f64 {
+    let mut sum = 0.0;
+    for &i in active {
+        sum += v[i] * q[i];
+        q[i] = 0.0;
+    }
+    sum
 }
 
 /// Marks the ε-active variables of step 1 (module docs) in `free` (1.0 free, 0.0 active);
@@ -398,6 +549,60 @@ mod tests {
         assert!((ws.direction[0] + 2.0).abs() < 1e-14);
         assert_eq!(ws.direction[1], 0.0);
         assert!((ws.direction[2] + 3.0).abs() < 1e-14);
+    }
+
+    /// With a few active variables, the unmasked recursion (corrected at the active ones)
+    /// gives the masked one's direction up to rounding, also when a pair's y lies mostly on
+    /// an active variable.
+    #[test]
+    fn few_active_variables_give_the_masked_direction() {
+        let n = 200;
+        let mut ws = LbfgsWorkspace::new(n, 5);
+        let wave = |k: usize, i: usize| ((k * 31 + i * 7) as f64 * 0.173).sin();
+        for k in 0..6 {
+            let s: Vec<f64> = (0..n).map(|i| wave(k, i)).collect();
+            // y = D s + a little coupling: positive curvature.
+            let mut y: Vec<f64> = (0..n)
+                .map(|i| (1.0 + (i % 9) as f64) * s[i] + 0.1 * s[(i + 1) % n])
+                .collect();
+            if k == 4 {
+                // This pair's yᵀy lies mostly on active variable 17.
+                y[17] = 400.0;
+                let mut s = s.clone();
+                s[17] = 1.0;
+                push(&mut ws, &s, &y);
+            } else {
+                push(&mut ws, &s, &y);
+            }
+        }
+        let g: Vec<f64> = (0..n).map(|i| wave(9, i) * 3.0).collect();
+        let mut free = vec![1.0; n];
+        for i in [0, 17, 103] {
+            free[i] = 0.0;
+        }
+        ws.set_free(&free, false);
+        assert_eq!(ws.active, [0, 17, 103]);
+        let mut masked = ws.clone();
+        assert!(ws.two_loop(&g));
+        assert!(masked.two_loop_masked(&g));
+        let scale = norm_inf(&masked.direction);
+        for i in 0..n {
+            assert!(
+                (ws.direction[i] - masked.direction[i]).abs() <= 1e-12 * scale,
+                "{i}: {} against {}",
+                ws.direction[i],
+                masked.direction[i]
+            );
+        }
+        for i in [0, 17, 103] {
+            assert_eq!(ws.direction[i], 0.0);
+        }
+
+        // Too many active variables for the correction: the masked loops run.
+        let mut free = vec![1.0; n];
+        free[..n / SPARSE_ACTIVE + 1].fill(0.0);
+        ws.set_free(&free, false);
+        assert!(ws.active.is_empty() && !ws.all_free);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! - [`multiversion!`] — a function compiled for baseline x86-64 and again with AVX2 + FMA,
 //!   the build chosen per call from the cached detection;
 //! - [`F64x4`] and [`Mask4`] (x86-64) — four `f64` lanes in one 256-bit register;
-//! - [`dot`], [`step_dot`], [`norm_inf`] — reductions over long slices with independent
+//! - [`dot`], [`step_dot`], [`norm_inf`], [`axpy_dot`] — reductions over long slices with independent
 //!   partial results.
 //!
 //! Why compile twice: the kernels above are chains of dependent 3×3 products and short
@@ -53,7 +53,7 @@ mod f64x4;
 mod reduce;
 #[cfg(target_arch = "x86_64")]
 pub use f64x4::{F64x4, Mask4};
-pub use reduce::{dot, norm_inf, step_dot};
+pub use reduce::{axpy_dot, dot, norm_inf, step_dot};
 
 /// The environment variable that, set to `1`, makes [`has_avx2_fma`] answer `false`: the
 /// portable build then runs on every x86-64 processor, for tests and benches of that build.

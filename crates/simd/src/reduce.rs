@@ -57,6 +57,29 @@ fn step_dot_lanes<const FMA: bool>(g: &[f64], t: &[f64], x: &[f64]) -> f64 {
     combine(acc)
 }
 
+/// qᵢ ← qᵢ + a yᵢ, then Σ sᵢ qᵢ over the updated q, in one pass with [`LANES`] partial sums
+/// (as [`dot_lanes`]).
+#[inline(always)]
+fn axpy_dot_lanes<const FMA: bool>(q: &mut [f64], a: f64, y: &[f64], s: &[f64]) -> f64 {
+    let n = q.len().min(y.len()).min(s.len());
+    let (q, y, s) = (&mut q[..n], &y[..n], &s[..n]);
+    let mut acc = [0.0; LANES];
+    let whole = n - n % LANES;
+    for i in (0..whole).step_by(LANES) {
+        for k in 0..LANES {
+            let v = q[i + k] + a * y[i + k];
+            q[i + k] = v;
+            acc[k] += s[i + k] * v;
+        }
+    }
+    for i in whole..n {
+        let v = q[i] + a * y[i];
+        q[i] = v;
+        acc[i - whole] += s[i] * v;
+    }
+    combine(acc)
+}
+
 /// max |aᵢ| over [`LANES`] running maxima; NaN entries are skipped, as by `f64::max`, so the
 /// result is the one of a single running maximum.
 #[inline(always)]
@@ -93,6 +116,20 @@ crate::multiversion! {
     /// assert_eq!(simd::step_dot(&[1.0, 2.0], &[3.0, 5.0], &[1.0, 1.0]), 10.0);
     /// ```
     pub fn step_dot(g: &[f64], t: &[f64], x: &[f64]) -> f64 => fused step_dot_lanes;
+}
+
+crate::multiversion! {
+    /// qᵢ ← qᵢ + a yᵢ, and the dot product Σ sᵢ qᵢ with the updated q (over the shortest
+    /// slice's length), in one pass over memory instead of two: the step of the L-BFGS
+    /// two-loop recursion that updates q and takes the next pair's inner product with it.
+    /// The sum has the order, and so the bits, of [`dot`] of the updated q.
+    ///
+    /// ```
+    /// let mut q = [1.0, 2.0];
+    /// assert_eq!(simd::axpy_dot(&mut q, 2.0, &[1.0, 1.0], &[1.0, 10.0]), 43.0);
+    /// assert_eq!(q, [3.0, 4.0]);
+    /// ```
+    pub fn axpy_dot(q: &mut [f64], a: f64, y: &[f64], s: &[f64]) -> f64 => fused axpy_dot_lanes;
 }
 
 crate::multiversion! {
@@ -153,6 +190,19 @@ mod tests {
         v[17] = 1.0;
         v[9] = -4.0;
         assert_eq!(norm_inf(&v), 4.0);
+    }
+
+    #[test]
+    fn axpy_dot_updates_q_and_gives_the_bits_of_dot() {
+        for n in [0, 1, 7, 8, 9, 1003] {
+            let y: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let s: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos() * 1e3).collect();
+            let mut q: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+            let updated: Vec<f64> = q.iter().zip(&y).map(|(qi, yi)| qi + -0.3 * yi).collect();
+            let d = axpy_dot(&mut q, -0.3, &y, &s);
+            assert_eq!(q, updated, "n = {n}");
+            assert_eq!(d.to_bits(), dot(&s, &updated).to_bits(), "n = {n}");
+        }
     }
 
     #[test]
