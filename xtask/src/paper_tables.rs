@@ -95,9 +95,6 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             options.minutes
         );
         let mut scene = instance.scene();
-        if let Some(method) = options.method {
-            scene.solver.method = method;
-        }
         let dir = root.join("validation/paper-packings").join(instance.name);
         // Resuming: the committed packing is the start to beat, and its row's budget, time to
         // best and local minimisations carry over.
@@ -114,6 +111,13 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         };
         if options.resume && earlier.is_none() {
             eprintln!("  nothing to resume in {}: a fresh run", dir.display());
+        }
+        // A resumed row goes on with its own method unless another one is asked for.
+        let earlier_method = earlier
+            .as_ref()
+            .and_then(|(row, _)| method_named(&row.method).ok());
+        if let Some(method) = options.method.or(earlier_method) {
+            scene.solver.method = method;
         }
         let run_options = RunOptions {
             time_limit: Some(Duration::from_secs_f64(options.minutes * 60.0)),
@@ -205,6 +209,9 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             if old.machine != row.machine {
                 row.machine = format!("{} (resumed from: {})", row.machine, old.machine);
             }
+            if old.method != row.method {
+                row.method = format!("{} (resumed from: {})", row.method, old.method);
+            }
         }
         rows.push(row);
     }
@@ -293,31 +300,19 @@ fn best_density_steps(history: &str, paper: f64) -> (Vec<(f64, f64)>, f64) {
     (steps, end)
 }
 
-/// Best density / paper density against wall time, a staircase per instance: 2D instances
-/// above, 3D below, the paper's 48-hour best at 1.
+/// Best density / paper density against wall time, a staircase per instance, one panel per
+/// table of the paper (circle-231 with Table 6.1), the paper's 48-hour best at 1.
 fn density_time_figure(curves: &[Curve]) -> Figure {
-    let panel = |title: &str, two: bool| {
+    let panel = |title: &str, sources: &[&str]| {
         let series = curves
             .iter()
-            .filter(|c| (c.instance.dimension() == 2) == two)
+            .filter(|c| sources.contains(&c.instance.source))
             .enumerate()
-            .map(|(k, c)| {
-                let mut points: Vec<(f64, f64)> = Vec::new();
-                for &(t, r) in &c.points {
-                    if let Some(&(_, previous)) = points.last() {
-                        points.push((t, previous));
-                    }
-                    points.push((t, r));
-                }
-                if let Some(&(_, last)) = points.last() {
-                    points.push((c.end_seconds, last));
-                }
-                Series {
-                    name: c.instance.name.to_string(),
-                    points,
-                    kind: Kind::Line,
-                    color: k,
-                }
+            .map(|(k, c)| Series {
+                name: c.instance.name.to_string(),
+                points: staircase(c),
+                kind: Kind::Line,
+                color: k,
             })
             .collect();
         Panel {
@@ -333,11 +328,38 @@ fn density_time_figure(curves: &[Curve]) -> Figure {
     };
     Figure {
         panels: vec![
-            panel("Ellipses (2, 1): Tables 6.1, 6.2 and circle-231", true),
-            panel("Ellipsoids (1, 0.75, 0.5): Tables 6.3 and 6.4", false),
+            panel(
+                "Ellipses (2, 1) in an ellipse (Table 6.1); circle-231 (Section 6.1.2)",
+                &["Table 6.1", "Section 6.1.2"],
+            ),
+            panel("Ellipses (2, 1) in a rectangle (Table 6.2)", &["Table 6.2"]),
+            panel(
+                "Ellipsoids (1, 0.75, 0.5) in a ball (Table 6.3)",
+                &["Table 6.3"],
+            ),
+            panel(
+                "Ellipsoids (1, 0.75, 0.5) in a cuboid (Table 6.4)",
+                &["Table 6.4"],
+            ),
         ],
-        panel_height: 560,
+        panel_height: 480,
     }
+}
+
+/// A curve's points as a staircase: each ratio holds until the next, the last one until the
+/// run's last local minimisation ended.
+fn staircase(c: &Curve) -> Vec<(f64, f64)> {
+    let mut points: Vec<(f64, f64)> = Vec::new();
+    for &(t, r) in &c.points {
+        if let Some(&(_, previous)) = points.last() {
+            points.push((t, previous));
+        }
+        points.push((t, r));
+    }
+    if let Some(&(_, last)) = points.last() {
+        points.push((c.end_seconds, last));
+    }
+    points
 }
 
 /// The committed row of `instance`, when it is at least as dense as `density` and its packing
@@ -549,7 +571,7 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
          The best certified density of the run that wrote each packing, over the paper's, after \
          each local minimisation that raised it (from `history.csv` in the packing's folder; a \
          resumed row's curve is its last run's). With a curve: {}. Without one: {} (their \
-         folders hold no history).\n",
+         folders hold no history of a run, or one without a finished local minimisation).\n",
         names_of(
             rows.iter()
                 .filter(|r| curves.iter().any(|c| c.instance.name == r.instance.name))
@@ -574,8 +596,6 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
 mod tests {
     use super::*;
 
-    /// A fresh run keeps the committed packing when it is at least as dense and verifies, and
-    /// only then.
     #[test]
     fn the_curve_steps_at_each_gain_and_ends_at_the_last_row() {
         let history = "local_minimisation,seconds,density,best_density\n\
@@ -601,6 +621,8 @@ mod tests {
         assert!(method_named("simulated-annealing").is_err());
     }
 
+    /// A fresh run keeps the committed packing when it is at least as dense and verifies, and
+    /// only then.
     #[test]
     fn a_denser_committed_packing_is_kept() {
         let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");

@@ -54,7 +54,8 @@ pub(crate) struct LbfgsWorkspace {
     y: Vec<f64>,
     stored: usize,
     newest: usize,
-    /// Per-pair scratch for the two-loop recursion: 1/(s_Fᵀy_F) (0 = skipped) and αⱼ.
+    /// Per-pair scratch for the two-loop recursion: 1/(s_Fᵀy_F) (the masked loops write 0 for
+    /// a skipped pair) and αⱼ.
     rho: Vec<f64>,
     alpha: Vec<f64>,
     /// Full-space sᵀy and yᵀy of each stored pair, reused whenever no variable is active.
@@ -252,6 +253,8 @@ impl LbfgsWorkspace {
         q.copy_from_slice(g);
         zero_at(q, active);
         // First loop, newest to oldest: αⱼ = ρⱼ sⱼᵀq, q ← q − αⱼ yⱼ.
+        // The last update's fused product is y_oldestᵀq, which the second loop starts from.
+        let mut y_oldest_q = 0.0;
         if let Some(&first) = usable.first() {
             let mut sq = dot(s_of(first), q);
             for k in 0..usable.len() {
@@ -262,6 +265,7 @@ impl LbfgsWorkspace {
                 sq = simd::axpy_dot(q, -a, y_of(slot), next);
                 sq -= correct_at(q, next, active);
             }
+            y_oldest_q = sq;
         }
         let gamma = gamma.unwrap_or_else(|| {
             // Without curvature information, a first step of length at most 1 in sup-norm.
@@ -270,8 +274,8 @@ impl LbfgsWorkspace {
         });
         q.iter_mut().for_each(|qi| *qi *= gamma);
         // Second loop, oldest to newest: βⱼ = ρⱼ yⱼᵀq, q ← q + (αⱼ − βⱼ) sⱼ.
-        if let Some(&oldest) = usable.last() {
-            let mut yq = dot(y_of(oldest), q);
+        if !usable.is_empty() {
+            let mut yq = gamma * y_oldest_q;
             for k in (0..usable.len()).rev() {
                 let slot = usable[k];
                 let c = alpha[slot] - rho[slot] * yq;
@@ -286,8 +290,8 @@ impl LbfgsWorkspace {
 
     /// s_Fᵀy_F and y_Fᵀy_F of the pair in `slot` when it has positive curvature on the free
     /// variables: the full-space products less the terms of the few active variables, or,
-    /// when those terms carry half of yᵀy or more (where the difference would lose digits),
-    /// summed over the free variables.
+    /// when those terms carry half of sᵀy or yᵀy or more (where the difference would lose
+    /// digits), summed over the free variables.
     fn curvature_on_free(&self, slot: usize) -> Option<(f64, f64)> {
         let n = self.n;
         let (s, y) = (
@@ -299,7 +303,7 @@ impl LbfgsWorkspace {
             .active
             .iter()
             .fold((0.0, 0.0), |(a, b), &i| (a + s[i] * y[i], b + y[i] * y[i]));
-        if active_yy <= 0.5 * yy {
+        if active_yy <= 0.5 * yy && active_sy.abs() <= 0.5 * sy.abs() {
             (sy, yy) = (sy - active_sy, yy - active_yy);
         } else {
             (sy, yy) = (0.0, 0.0);
@@ -543,8 +547,7 @@ mod tests {
                 ws.direction
             );
         }
-        ws.free = vec![1.0, 0.0, 1.0];
-        ws.all_free = false;
+        ws.set_free(&[1.0, 0.0, 1.0], false);
         ws.two_loop(&g);
         assert!((ws.direction[0] + 2.0).abs() < 1e-14);
         assert_eq!(ws.direction[1], 0.0);

@@ -10,8 +10,8 @@
 //! gained at least a tenth of δ in density (unless the step before it was dropped or gained
 //! less: then δ stays),
 //! and halves otherwise. A step that is not denser is dropped and δ halves. The run ends when
-//! δ falls below [`LAST_STEP`] or after [`JAMMED_AFTER`] dropped steps in a row. A start that is no
-//! packing is placed in its own container first (or, failing that, dilated).
+//! δ falls below [`LAST_STEP`] or after [`JAMMED_AFTER`] dropped steps in a row. A start that
+//! is no packing is placed in its own container first (or, failing that, dilated).
 //!
 //! A placement in a container that still admits a packing is a zero-residual problem: its
 //! infeasibility falls by orders of magnitude per outer iteration once the penalty has grown.
@@ -150,8 +150,9 @@ impl Schedule {
     }
 
     /// A step whose packing was kept; `progress` when it gained at least a tenth of δ. δ
-    /// grows by half (up to [`FIRST_STEP`]) after progress that did not follow a failure,
-    /// stays after progress that did, and halves without progress.
+    /// grows by half (up to [`FIRST_STEP`]) after progress that followed a step with progress,
+    /// stays after progress that followed a dropped step or a small gain, and halves without
+    /// progress.
     fn kept(&mut self, progress: bool) {
         self.failures = 0;
         if !progress {
@@ -394,7 +395,9 @@ mod tests {
         assert_eq!(schedule.step(), Some(FIRST_STEP / 2.0));
         schedule.kept(true);
         assert_eq!(schedule.step(), Some(FIRST_STEP / 2.0));
-        // JAMMED_AFTER failures in a row end it, a kept step in between does not.
+        // JAMMED_AFTER failures in a row end it while δ is still above LAST_STEP; a kept step
+        // in between starts the count again.
+        let mut schedule = Schedule::new();
         for _ in 1..JAMMED_AFTER {
             schedule.failed();
         }
@@ -404,6 +407,7 @@ mod tests {
             assert!(schedule.step().is_some());
         }
         schedule.failed();
+        assert!(schedule.step < FIRST_STEP && schedule.step >= LAST_STEP);
         assert_eq!(schedule.step(), None);
         // And δ below LAST_STEP ends it too.
         let mut schedule = Schedule::new();
