@@ -49,6 +49,10 @@ enum Command {
         /// compression or compression-lagrangian. Default: the scene's (lagrangian).
         #[arg(long, value_parser = xtask::paper_tables::method_named)]
         method: Option<ellipack::scene::MethodName>,
+        /// The multi-start's random seed (default: the instance's, 0); it is written in each
+        /// packing's summary.json.
+        #[arg(long)]
+        seed: Option<u64>,
     },
     /// Measure the periodic cell through the `ellipack pack` pipeline: variable cells with 1, 2
     /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
@@ -153,6 +157,7 @@ fn main() -> ExitCode {
             threads,
             resume,
             method,
+            seed,
         } => {
             let instances = if instances.is_empty() {
                 xtask::paper_tables::TARGETS
@@ -168,6 +173,7 @@ fn main() -> ExitCode {
                 threads,
                 resume,
                 method,
+                seed,
             };
             with_problems(
                 xtask::paper_tables::run_all(&workspace_root(), &options),

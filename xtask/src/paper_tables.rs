@@ -41,6 +41,8 @@ pub struct Options {
     /// How each local minimisation makes the container small (default: the scene's, the
     /// paper's augmented Lagrangian).
     pub method: Option<MethodName>,
+    /// The multi-start's random seed (default: the instance's).
+    pub seed: Option<u64>,
 }
 
 /// One instance's result.
@@ -95,6 +97,9 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             options.minutes
         );
         let mut scene = instance.scene();
+        if let Some(seed) = options.seed {
+            scene.seed = seed;
+        }
         let dir = root.join("validation/paper-packings").join(instance.name);
         // Resuming: the committed packing is the start to beat, and its row's budget, time to
         // best and local minimisations carry over.
