@@ -35,11 +35,11 @@
 
 use crate::Error;
 use crate::local::{
-    Adapter, LocalResult, LocalSettings, centre_bound, certified, certified_start, check_start,
-    repair, solver_options,
+    Adapter, LocalResult, LocalSettings, centre_bound, certified, certified_as, certified_start,
+    check_start, repair, solver_options,
 };
 use auglag::{Control, Event, Progress, Report, StopReason};
-use implicit_packing::model::Model;
+use implicit_packing::model::{Certificate, Model};
 
 /// The first relative shrink δ of the container's linear size, and the largest.
 pub const FIRST_STEP: f64 = 0.02;
@@ -51,6 +51,12 @@ pub const LAST_STEP: f64 = 1e-4;
 /// to 1e-4) all failed, at 10 s each; in another, four given up in a row (down to δ = 0.0025)
 /// ended the run at 0.4 % less density. At m = 1e5 a step given up costs 100–170 s.
 pub const JAMMED_AFTER: usize = 5;
+/// A placement may stop before its tolerance: at the end of an outer iteration whose point,
+/// dilated to a packing ([`repair`]), keeps this fraction κ of the step, a container
+/// (1 − δ)·s ≤ 1 − κδ times the best one's. Polishing a placement to feasibility 1e-10 took
+/// its last one or two outer iterations, a quarter of all the inner iterations of a 1e5 run;
+/// the repair gives away at most (1 − κ)δ of the linear size, which shrinks with δ.
+pub const KEPT_FRACTION: f64 = 0.9;
 /// Outer iterations of one placement at most.
 pub const PLACEMENT_OUTER_ITERATIONS: usize = 6;
 /// Inner iterations of one outer iteration of a placement at most.
@@ -99,11 +105,9 @@ pub fn compression<const N: usize>(
         && !placer.interrupted
     {
         let trial = problem.dilated(&best.x, 1.0 - step);
-        let packing = placer
-            .place(problem, &trial)
-            .and_then(|solution| certified(problem, solution).ok())
-            .map(|c| c.result);
-        match packing {
+        // The dilation that leaves KEPT_FRACTION of the step: (1 − δ)·s = 1 − κδ.
+        let enough = (1.0 - KEPT_FRACTION * step) / (1.0 - step);
+        match placer.place(problem, &trial, Some(enough)) {
             Some(p) if p.density > best.density => {
                 // A step that gains less than a tenth of what it asked for (3δ in 3D) ends
                 // against a jammed packing.
@@ -207,31 +211,71 @@ impl<'a> Placer<'a> {
         }
     }
 
-    /// The items of `x` placed in its container; `None` when the placement stalled or the
-    /// solver refused it (a failed step: the best packing stands). A placement the observer
-    /// stopped is returned as it is.
+    /// The items of `x` placed in its container, certified (repaired); `None` when the
+    /// placement stalled, the solver refused it or its point could not be repaired (a failed
+    /// step: the best packing stands). With `enough`, the placement stops at the end of the
+    /// first outer iteration whose point a dilation by at most `enough` makes a packing. A
+    /// placement the observer stopped is returned as it is.
     fn place<const N: usize>(
         &mut self,
         problem: &mut Model<N>,
         x: &[f64],
-    ) -> Option<auglag::Solution> {
+        enough: Option<f64>,
+    ) -> Option<LocalResult> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
         let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container));
         let mut stall = Stall::default();
+        let mut early = None;
         let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
         let solution =
             auglag::minimize_with_callback(&adapter, x, &self.options, |p: &Progress<'_>| {
                 *interrupted |= observe(p);
                 if *interrupted || stall.stalled(p) {
-                    Control::Stop
-                } else {
-                    Control::Continue
+                    return Control::Stop;
                 }
+                if let (Some(limit), Event::Outer { .. }) = (enough, p.event) {
+                    early = adapter
+                        .with_model(|m| repaired_within(m, p.x, limit))
+                        .map(|r| (p.x.to_vec(), r));
+                    if early.is_some() {
+                        return Control::Stop;
+                    }
+                }
+                Control::Continue
             })
             .ok()?;
+        drop(adapter);
         add_counts(&mut self.total, &solution.report);
-        (!stall.stalled).then_some(solution)
+        if stall.stalled {
+            return None;
+        }
+        let packing = match early {
+            Some((x, repaired)) => {
+                certified_as(problem, auglag::Solution { x, ..solution }, repaired)
+            }
+            None => certified(problem, solution),
+        };
+        packing.ok().map(|c| c.result)
     }
+}
+
+/// The repair of `x` ([`repair`]) when its dilation is at most `limit`; `None` otherwise or when
+/// the model refuses `x`. One certificate rejects most points: each overlapping pair asks for a
+/// dilation of at least 1/μ.
+fn repaired_within<const N: usize>(
+    problem: &mut Model<N>,
+    x: &[f64],
+    limit: f64,
+) -> Option<(Vec<f64>, f64, Certificate)> {
+    let certificate = problem.certify(x).ok()?;
+    let pairs_ask_too_much = certificate
+        .overlapping
+        .iter()
+        .any(|o| !(o.mu2 > 0.0 && 1.0 / o.mu2.sqrt() <= limit));
+    if pairs_ask_too_much {
+        return None;
+    }
+    repair(problem, x).ok().filter(|(_, s, _)| *s <= limit)
 }
 
 /// The infeasibilities at the ends of a placement's outer iterations, and whether it fell by
@@ -282,10 +326,8 @@ fn first_packing<const N: usize>(
     if let Ok(packing) = certified_start(problem, x0)? {
         return Ok(packing);
     }
-    if let Some(solution) = placer.place(problem, x0)
-        && let Ok(c) = certified(problem, solution)
-    {
-        return Ok(c.result);
+    if let Some(packing) = placer.place(problem, x0, None) {
+        return Ok(packing);
     }
     let (x, _, _) = repair(problem, x0)?;
     certified_start(problem, &x)?.map_err(|c| Error::NotCertifiable {
@@ -315,6 +357,22 @@ mod tests {
 
     fn density<const N: usize>(p: &mut Model<N>, x: &[f64]) -> f64 {
         item_measure(p) / p.evaluate(x, None).unwrap().objective
+    }
+
+    #[test]
+    fn a_placement_is_accepted_only_within_its_dilation() {
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
+        // Unit spheres 1.5 apart in a ball of radius 3: the repair needs s = 4/3 exactly.
+        let x = vec![
+            -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
+        ];
+        assert!(repaired_within(&mut p, &x, 1.3).is_none());
+        let (y, s, cert) = repaired_within(&mut p, &x, 1.34).unwrap();
+        assert!(cert.is_feasible() && (s - 4.0 / 3.0).abs() < 1e-9);
+        assert!((y[6] - y[0] - 2.0).abs() < 1e-9);
+        // A packing needs nothing.
+        let (_, s, _) = repaired_within(&mut p, &y, 1.0).unwrap();
+        assert_eq!(s, 1.0);
     }
 
     #[test]

@@ -13,11 +13,11 @@
 //!
 //! The model satisfies its constraints only to a tolerance, so every result is certified with
 //! PW85 verdicts and exact containment ([`Model::certify`]) and, if anything still overlaps
-//! or sticks out, repaired by the least uniform dilation of the centres and the container:
-//! scaling every centre and the container by s leaves the shapes as they are and multiplies
-//! every pair's contact function by s², so the overlapping pairs need s ≥ 1/μ_ij exactly, and
-//! containment, which improves monotonically with s, is settled by bisection. The repair costs
-//! a factor s^N in density, which is reported.
+//! or sticks out, repaired ([`repair`]): scaling every centre and the container by s leaves
+//! the shapes as they are and multiplies every pair's contact function by s², so the
+//! overlapping pairs need s = max 1/μ_ij exactly; an item still outside is then held by
+//! scaling the container alone by its containment scale t. The repair costs a factor (s·t)^N
+//! in density, which is reported.
 //!
 //! # References
 //! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
@@ -136,7 +136,7 @@ pub struct LocalResult {
     pub density: f64,
     /// The same before repair (the solver's own point).
     pub density_before_repair: f64,
-    /// The dilation factor s ≥ 1 applied by the repair (1 when none was needed).
+    /// The container's linear factor s ≥ 1 applied by the repair (1 when none was needed).
     pub repair_factor: f64,
     /// Container area or volume after repair.
     pub objective: f64,
@@ -434,9 +434,20 @@ pub(crate) fn certified<const N: usize>(
     problem: &mut Model<N>,
     solution: auglag::Solution,
 ) -> Result<Certified, Error> {
+    let repaired = repair(problem, &solution.x)?;
+    certified_as(problem, solution, repaired)
+}
+
+/// [`certified`] with the repair of the solver's point already done (`repaired` as returned
+/// by [`repair`] for `solution.x`).
+pub(crate) fn certified_as<const N: usize>(
+    problem: &mut Model<N>,
+    solution: auglag::Solution,
+    repaired: (Vec<f64>, f64, Certificate),
+) -> Result<Certified, Error> {
+    let (x, repair_factor, certificate) = repaired;
     let items = item_measure(problem);
     let before = problem.evaluate(&solution.x, None)?.objective;
-    let (x, repair_factor, certificate) = repair(problem, &solution.x)?;
     let objective = problem.evaluate(&x, None)?.objective;
     Ok(Certified {
         result: LocalResult {
@@ -454,11 +465,23 @@ pub(crate) fn certified<const N: usize>(
     })
 }
 
-/// The least uniform dilation s ≥ 1 of the centres and the container after which the packing
-/// passes [`Model::certify`]; returns the dilated variables, s and the certificate.
+/// A packing made of `x` by the least enlargement of its container found in two exact steps:
+/// the centres and the container dilated by s = max 1/μ_ij over the overlapping pairs
+/// (dilating the centres multiplies every pair's contact function μ² by s²), then the
+/// container alone scaled about its centre by t, the largest containment scale of an item
+/// still outside (the least factor that holds it, [`containment_scale`]; the centres stay, so
+/// no pair changes). Returns the packing, the container's linear factor s·t ≥ 1 and the
+/// certificate. Scaling the container alone costs far less than dilating everything: an item
+/// a depth d outside needs t − 1 ≈ d/R of a container of size R, but a dilation only gains
+/// (s − 1)·(R − |c|) on it, s − 1 ≈ d/r for an item of size r at the wall. When rounding leaves
+/// anything uncertified, the least uniform dilation that certifies (by doubling and bisection)
+/// is returned instead.
+///
+/// [`containment_scale`]: implicit_packing::certificate::containment_scale
 ///
 /// # Errors
-/// Errors of the model (non-finite variables).
+/// Errors of the model (non-finite variables); [`Error::NotCertifiable`] when no dilation up
+/// to 4 makes a packing (an item whose centre lies outside the container).
 pub fn repair<const N: usize>(
     problem: &mut Model<N>,
     x: &[f64],
@@ -467,16 +490,51 @@ pub fn repair<const N: usize>(
     if certificate.is_feasible() {
         return Ok((x.to_vec(), 1.0, certificate));
     }
-    // Pairs: μ² grows as s², so s = 1/μ settles each overlapping pair exactly; a relative
-    // margin keeps the verdict clear of rounding at tangency.
-    const MARGIN: f64 = 1e-12;
-    let mut s = 1.0_f64;
-    for overlap in &certificate.overlapping {
-        if overlap.mu2 > 0.0 {
-            s = s.max(1.0 / overlap.mu2.sqrt());
+    let (s, y, dilated) = if certificate.overlapping.is_empty() {
+        (1.0, x.to_vec(), certificate.clone())
+    } else {
+        let s = pair_dilation(&certificate);
+        let y = dilate::<N>(problem, x, s);
+        let dilated = problem.certify(&y)?;
+        (s, y, dilated)
+    };
+    if dilated.overlapping.is_empty() {
+        if dilated.outside.is_empty() {
+            return Ok((y, s, dilated));
+        }
+        let t = dilated.outside.iter().fold(1.0_f64, |t, o| t.max(o.scale)) * (1.0 + MARGIN);
+        let z = container_scaled::<N>(problem, &y, t);
+        let held = problem.certify(&z)?;
+        if held.is_feasible() {
+            return Ok((z, s * t, held));
         }
     }
-    let mut s = s * (1.0 + MARGIN);
+    least_uniform_dilation(problem, x, &certificate)
+}
+
+/// A relative margin on every factor keeps the verdicts clear of rounding at tangency.
+const MARGIN: f64 = 1e-12;
+
+/// The dilation of centres and container that settles every overlapping pair of `certificate`
+/// exactly, s = max 1/μ_ij (μ² grows as s²), with the margin.
+fn pair_dilation(certificate: &Certificate) -> f64 {
+    let s = certificate
+        .overlapping
+        .iter()
+        .filter(|o| o.mu2 > 0.0)
+        .fold(1.0_f64, |s, o| s.max(1.0 / o.mu2.sqrt()));
+    s * (1.0 + MARGIN)
+}
+
+/// The least uniform dilation s ≥ 1 of the centres and the container after which `x` passes
+/// [`Model::certify`] (`certificate` is that of `x`): the pairs' s = max 1/μ_ij, then
+/// containment, which improves monotonically with s, by doubling and bisection.
+fn least_uniform_dilation<const N: usize>(
+    problem: &mut Model<N>,
+    x: &[f64],
+    certificate: &Certificate,
+) -> Result<(Vec<f64>, f64, Certificate), Error> {
+    let mut s = pair_dilation(certificate);
     // Containment and any pair the formula could not settle: grow until certified, then
     // bisect back to the least factor that passes.
     let mut lo = 1.0;
@@ -515,6 +573,15 @@ pub fn repair<const N: usize>(
         }
     }
     Ok((y, hi, cert))
+}
+
+/// The container's dimensions of `x` multiplied by `t` (scaled about its centre); the items
+/// stay.
+fn container_scaled<const N: usize>(problem: &Model<N>, x: &[f64], t: f64) -> Vec<f64> {
+    let bodies_end = problem.len() * Model::<N>::vars_per_body();
+    let mut y = x.to_vec();
+    y[bodies_end..].iter_mut().for_each(|v| *v *= t);
+    y
 }
 
 /// Centres and container dimensions multiplied by `s`; angles unchanged ([`Model::dilated`]).
@@ -575,6 +642,12 @@ impl<'a, const N: usize> Adapter<'a, N> {
         } else {
             phr.objective_scale()
         }
+    }
+
+    /// Runs `f` on the model between two evaluations (its values are a function of the point
+    /// alone, so a certificate taken here changes nothing the solver sees).
+    pub(crate) fn with_model<R>(&self, f: impl FnOnce(&mut Model<N>) -> R) -> R {
+        f(&mut self.model.borrow_mut())
     }
 
     fn body_variables(&self) -> usize {
@@ -832,6 +905,36 @@ mod tests {
             r.density
         );
         assert!(r.repair_factor >= 1.0 && r.density <= r.density_before_repair);
+    }
+
+    #[test]
+    fn repair_holds_an_item_outside_by_scaling_the_container_alone() {
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
+        // A unit sphere at 2.5 from the centre of a ball of radius 3 sticks out by 0.5: the
+        // container needs t = 3.5/3, a uniform dilation s = 2 (2.5 s + 1 ≤ 3 s).
+        let x = vec![
+            2.5, 0.0, 0.0, 0.0, 0.0, 0.0, -1.5, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
+        ];
+        let (y, s, cert) = repair(&mut p, &x).unwrap();
+        assert!(cert.is_feasible());
+        assert!((s - 3.5 / 3.0).abs() < 1e-9, "{s}");
+        assert_eq!(y[..12], x[..12]);
+        assert!((y[12] - 3.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn repair_separates_then_holds_by_the_product_of_the_two_factors() {
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
+        // Unit spheres 1.5 apart in a ball of radius 1.2: s = 4/3 moves them to ±1 in a ball
+        // of radius 1.6, which t = 2/1.6 then makes 2. A uniform dilation needs 1/0.45.
+        let x = vec![
+            0.75, 0.0, 0.0, 0.0, 0.0, 0.0, -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 1.2,
+        ];
+        let (y, s, cert) = repair(&mut p, &x).unwrap();
+        assert!(cert.is_feasible());
+        assert!((s - 4.0 / 3.0 * 1.25).abs() < 1e-9, "{s}");
+        assert!((y[0] - 1.0).abs() < 1e-9 && (y[6] + 1.0).abs() < 1e-9);
+        assert!((y[12] - 2.0).abs() < 1e-9, "{}", y[12]);
     }
 
     #[test]
