@@ -224,7 +224,7 @@ impl<'a> Placer<'a> {
     ) -> Option<LocalResult> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
         let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container));
-        let mut stall = Stall::default();
+        let mut stall = Stall::new(self.options.max_inner_iterations);
         let mut early = None;
         let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
         let solution =
@@ -280,10 +280,15 @@ fn repaired_within<const N: usize>(
 
 /// The infeasibilities at the ends of a placement's outer iterations, and whether it fell by
 /// less than [`STALL_FACTOR`] in the third outer iteration that ran the inner solver, or by
-/// less than [`LATE_STALL_FACTOR`] in a later one. Outer iterations without inner iterations
-/// (the penalty still too small to move anything) do not count.
-#[derive(Default)]
+/// less than [`LATE_STALL_FACTOR`] in a later one, while the inner solver used all its
+/// iterations. Outer iterations without inner iterations (the penalty still too small to move
+/// anything) do not count. An inner solve that ended before its cap solved its subproblem: the
+/// penalty was too small to pull harder, and the next outer iteration raises it, so a small
+/// fall there is no sign of a container too small (at m = 1e5 such falls ended five
+/// placements in a row, each after 12–540 inner iterations).
 struct Stall {
+    /// Inner iterations of one outer iteration at most.
+    cap: usize,
     /// Outer iterations that ran the inner solver.
     working: usize,
     inner: usize,
@@ -292,10 +297,21 @@ struct Stall {
 }
 
 impl Stall {
+    fn new(cap: usize) -> Self {
+        Self {
+            cap,
+            working: 0,
+            inner: 0,
+            previous: None,
+            stalled: false,
+        }
+    }
+
     fn stalled(&mut self, progress: &Progress<'_>) -> bool {
         if let Event::Outer { infeasibility, .. } = progress.event
             && progress.total_inner_iterations > self.inner
         {
+            let capped = progress.total_inner_iterations - self.inner >= self.cap;
             self.inner = progress.total_inner_iterations;
             self.working += 1;
             let factor = if self.working >= 4 {
@@ -304,6 +320,7 @@ impl Stall {
                 STALL_FACTOR
             };
             if self.working >= 3
+                && capped
                 && self
                     .previous
                     .is_some_and(|before| infeasibility > before / factor)
@@ -476,7 +493,7 @@ mod tests {
 
     #[test]
     fn a_stall_is_seen_only_in_working_outer_iterations() {
-        let mut stall = Stall::default();
+        let mut stall = Stall::new(5);
         let values = [
             (1, 10, 1.0),
             (2, 10, 1.0),
@@ -495,7 +512,7 @@ mod tests {
 
         // The third working outer iteration needs a fall of 8×, the later ones 30×.
         let falls = |values: &[(usize, usize, f64)]| {
-            let mut stall = Stall::default();
+            let mut stall = Stall::new(10);
             values
                 .iter()
                 .map(|&(outer, inner, inf)| stall.stalled(&progress(outer, inner, inf)))
@@ -508,6 +525,21 @@ mod tests {
         assert_eq!(falls(&fourth), [false, false, false, true]);
         fourth[3].2 = 0.001;
         assert_eq!(falls(&fourth), [false, false, false, false]);
+    }
+
+    #[test]
+    fn a_small_fall_is_no_stall_when_the_inner_solve_ended_before_its_cap() {
+        let run = |cap: usize| {
+            let mut stall = Stall::new(cap);
+            [(1, 10, 1.0), (2, 20, 0.5), (3, 30, 0.4), (4, 39, 0.39)]
+                .iter()
+                .map(|&(outer, inner, inf)| stall.stalled(&progress(outer, inner, inf)))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(run(10), [false, false, true, true]);
+        // Outer 4 used 9 of 10: with outer 3 capped the verdict stands; with a cap of 11
+        // neither counts.
+        assert_eq!(run(11), [false, false, false, false]);
     }
 
     fn progress(outer: usize, inner: usize, infeasibility: f64) -> Progress<'static> {
