@@ -299,7 +299,7 @@ pub struct RunOutcome {
     pub summary: Summary,
     /// Density of the solver's point before the repair dilation.
     pub density_before_repair: f64,
-    /// The repair's dilation factor (1: none needed).
+    /// The repair's factor, the container's linear scale (1: none needed).
     pub repair_factor: f64,
     /// Seconds from the start to the best packing.
     pub seconds_to_best: f64,

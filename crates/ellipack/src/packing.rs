@@ -848,12 +848,14 @@ pub struct ShardOrigin {
     pub seed: u64,
 }
 
-/// The repair that made the solver's point certifiable: every centre and the container were
-/// scaled by `dilation` ≥ 1, which lowered the density from `density_before` to the summary's.
+/// The repair that made the solver's point certifiable: the centres and the container were
+/// scaled by the factor that separates the overlapping pairs, then the container alone by the
+/// one that holds the items still outside; `dilation` ≥ 1 is the container's linear scale in
+/// all, which lowered the density from `density_before` to the summary's.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Repair {
-    /// The dilation factor s ≥ 1 (1: nothing needed repair).
+    /// The container's linear scale s ≥ 1 (1: nothing needed repair).
     pub dilation: f64,
     /// Density of the solver's point before the dilation.
     pub density_before: f64,

@@ -96,8 +96,8 @@ fn sighup_stops_the_run_and_writes_the_best_certified_packing() {
 fn a_time_limit_inside_the_first_local_minimisation_still_writes_a_certified_packing() {
     let dir = temp_dir("anytime");
     let scene = scene(&dir, 2000, 60.0, "");
-    // 1 s cuts the first local minimisation of 2000 ellipses off at a point no dilation
-    // repairs; 0.3 s at one whose repair halves the density.
+    // 0.3 s and 1 s cut the first local minimisation of 2000 ellipses off at points far from
+    // a packing: the repair certifies them at a fraction of the density, or not at all.
     for limit in ["0.3", "1"] {
         let out = dir.join(format!("out-{limit}"));
         let o = pack(&[

@@ -4,8 +4,10 @@
 //! Each step scales the centres and the container of the best packing by 1 − δ (the shapes
 //! stay), which leaves overlaps of relative depth about δ. A placement in that fixed container
 //! (the augmented Lagrangian of [`local`](crate::local) with objective 0) drives the model's
-//! overlap and containment toward 0, and the least dilation s ≥ 1 that certifies its point
-//! ([`repair`]) gives a packing in a container scaled by (1 − δ)·s. A step whose packing is
+//! overlap and containment toward 0, and the repair of its point ([`repair`]: the pairs
+//! separated by a dilation, the items still outside held by scaling the container alone, a
+//! factor s ≥ 1 in all) gives a packing in a container scaled by (1 − δ)·s; a placement stops
+//! as soon as that keeps [`KEPT_FRACTION`] of the step. A step whose packing is
 //! denser than the best is kept; the next δ grows by half, up to [`FIRST_STEP`], when the step
 //! gained at least a tenth of δ in density (unless the step before it was dropped or gained
 //! less: then δ stays),
@@ -16,9 +18,9 @@
 //! A placement in a container that still admits a packing is a zero-residual problem: its
 //! infeasibility falls by orders of magnitude per outer iteration once the penalty has grown.
 //! One whose infeasibility falls by less than [`STALL_FACTOR`] in its third working outer
-//! iteration, or by less than [`LATE_STALL_FACTOR`] in a later one, is given up there: a
-//! container that is too small shows exactly that, and a failed step would otherwise cost all
-//! its iterations.
+//! iteration, or by less than [`LATE_STALL_FACTOR`] in a later one, while its inner solver
+//! used all its iterations, is given up there: a container that is too small shows exactly
+//! that, and a failed step would otherwise cost all its iterations.
 //!
 //! Compared with the augmented Lagrangian with the container among the variables (whose two
 //! aggregated constraints have gradients that vanish on the feasible set, so that it acts as a
@@ -36,7 +38,7 @@
 use crate::Error;
 use crate::local::{
     Adapter, LocalResult, LocalSettings, centre_bound, certified, certified_as, certified_start,
-    check_start, repair, solver_options,
+    check_start, repair, separated_then_held, solver_options,
 };
 use auglag::{Control, Event, Progress, Report, StopReason};
 use implicit_packing::model::{Certificate, Model};
@@ -87,8 +89,8 @@ pub const LATE_STALL_FACTOR: f64 = 30.0;
 ///
 /// # Errors
 /// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model
-/// on non-finite variables; [`Error::NotCertifiable`] when `x0` is no packing and no dilation
-/// up to 4 makes it one. A placement that fails in any way is a step not taken, never an
+/// on non-finite variables; [`Error::NotCertifiable`] when `x0` is no packing and no repair
+/// by a factor up to 4 makes it one. A placement that fails in any way is a step not taken, never an
 /// error: the best packing so far stands.
 pub fn compression<const N: usize>(
     problem: &mut Model<N>,
@@ -230,9 +232,10 @@ impl<'a> Placer<'a> {
         let solution =
             auglag::minimize_with_callback(&adapter, x, &self.options, |p: &Progress<'_>| {
                 *interrupted |= observe(p);
-                if *interrupted || stall.stalled(p) {
+                if *interrupted {
                     return Control::Stop;
                 }
+                // A point good enough is kept even where the fall would say stall.
                 if let (Some(limit), Event::Outer { .. }) = (enough, p.event) {
                     early = adapter
                         .with_model(|m| repaired_within(m, p.x, limit))
@@ -241,12 +244,16 @@ impl<'a> Placer<'a> {
                         return Control::Stop;
                     }
                 }
-                Control::Continue
+                if stall.stalled(p) {
+                    Control::Stop
+                } else {
+                    Control::Continue
+                }
             })
             .ok()?;
         drop(adapter);
         add_counts(&mut self.total, &solution.report);
-        if stall.stalled {
+        if stall.stalled && early.is_none() {
             return None;
         }
         let packing = match early {
@@ -259,9 +266,9 @@ impl<'a> Placer<'a> {
     }
 }
 
-/// The repair of `x` ([`repair`]) when its dilation is at most `limit`; `None` otherwise or when
-/// the model refuses `x`. One certificate rejects most points: each overlapping pair asks for a
-/// dilation of at least 1/μ.
+/// The repair of `x` ([`repair`], its two exact steps only) when its factor is at most
+/// `limit`; `None` otherwise or when the model refuses `x`. One certificate rejects most
+/// points: each overlapping pair asks for a dilation of at least 1/μ.
 fn repaired_within<const N: usize>(
     problem: &mut Model<N>,
     x: &[f64],
@@ -275,17 +282,20 @@ fn repaired_within<const N: usize>(
     if pairs_ask_too_much {
         return None;
     }
-    repair(problem, x).ok().filter(|(_, s, _)| *s <= limit)
+    separated_then_held(problem, x, &certificate)
+        .ok()
+        .flatten()
+        .filter(|(_, s, _)| *s <= limit)
 }
 
 /// The infeasibilities at the ends of a placement's outer iterations, and whether it fell by
 /// less than [`STALL_FACTOR`] in the third outer iteration that ran the inner solver, or by
 /// less than [`LATE_STALL_FACTOR`] in a later one, while the inner solver used all its
 /// iterations. Outer iterations without inner iterations (the penalty still too small to move
-/// anything) do not count. An inner solve that ended before its cap solved its subproblem: the
-/// penalty was too small to pull harder, and the next outer iteration raises it, so a small
-/// fall there is no sign of a container too small (at m = 1e5 such falls ended five
-/// placements in a row, each after 12–540 inner iterations).
+/// anything) do not count. An inner solve that ended before its cap mostly solved its
+/// subproblem (or its line search could go no further): the next outer iteration raises the
+/// penalty, so a small fall there is no sign of a container too small (at m = 1e5 such falls
+/// ended five placements in a row, each after 12–540 inner iterations).
 struct Stall {
     /// Inner iterations of one outer iteration at most.
     cap: usize,
@@ -537,8 +547,8 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         assert_eq!(run(10), [false, false, true, true]);
-        // Outer 4 used 9 of 10: with outer 3 capped the verdict stands; with a cap of 11
-        // neither counts.
+        // Outer 3 used its cap of 10 and fell 1.25×: a stall (and it stays one). With a cap
+        // of 11 neither outer 3 nor outer 4 (9 iterations) used its cap.
         assert_eq!(run(11), [false, false, false, false]);
     }
 

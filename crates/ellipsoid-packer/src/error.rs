@@ -10,8 +10,8 @@ pub enum Error {
     /// The augmented-Lagrangian solver refused the problem.
     #[error("solver: {0}")]
     Solver(#[from] auglag::Error),
-    /// The solver's point could not be certified by any dilation up to `max_dilation` (an
-    /// item's centre outside the container is never repaired by dilation).
+    /// The solver's point could not be certified by any repair whose factor (the container's
+    /// linear scale) is at most `max_dilation`: an item far outside the container.
     #[error(
         "the solver's point cannot be certified by a dilation up to {max_dilation}: \
          {overlapping} overlapping pairs, {outside} items outside the container"

@@ -4,7 +4,8 @@
 //! ([`implicit_packing`]): it minimises the container's area or volume subject to the model's
 //! overlap and containment constraints with the augmented Lagrangian of [`auglag`], certifies
 //! every result with PW85 and exact containment ([`implicit_packing::certificate`]), repairs
-//! it by the least dilation, and repeats from many starts.
+//! it by the least enlargement of the container ([`local::repair`]), and repeats from many
+//! starts.
 //!
 //! - [`starts`] — the paper's first initial solution, dense lattice starts, perturbations.
 //! - [`local`] — one local minimisation with its polish, certificate and repair.

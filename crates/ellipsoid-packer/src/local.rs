@@ -168,8 +168,8 @@ pub fn item_measure<const N: usize>(problem: &Model<N>) -> f64 {
 /// # Errors
 /// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model on
 /// non-finite variables at the start; [`Error::Solver`] when the solver refuses the start;
-/// [`Error::NotCertifiable`] when no dilation up to 4 certifies the point reached (an item's
-/// centre outside the container).
+/// [`Error::NotCertifiable`] when no repair by a factor up to 4 certifies the point reached
+/// (an item far outside the container).
 pub fn local_minimisation<const N: usize>(
     problem: &mut Model<N>,
     x0: &[f64],
@@ -480,8 +480,8 @@ pub(crate) fn certified_as<const N: usize>(
 /// [`containment_scale`]: implicit_packing::certificate::containment_scale
 ///
 /// # Errors
-/// Errors of the model (non-finite variables); [`Error::NotCertifiable`] when no dilation up
-/// to 4 makes a packing (an item whose centre lies outside the container).
+/// Errors of the model (non-finite variables); [`Error::NotCertifiable`] when no factor up to
+/// 4 makes a packing (an item far outside the container).
 pub fn repair<const N: usize>(
     problem: &mut Model<N>,
     x: &[f64],
@@ -490,27 +490,43 @@ pub fn repair<const N: usize>(
     if certificate.is_feasible() {
         return Ok((x.to_vec(), 1.0, certificate));
     }
+    match separated_then_held(problem, x, &certificate)? {
+        Some(repaired) if repaired.1 <= MAX_DILATION => Ok(repaired),
+        _ => least_uniform_dilation(problem, x, &certificate),
+    }
+}
+
+/// The two exact steps of [`repair`] for a point `x` whose certificate is `certificate`: the
+/// packing, its factor s·t and its certificate, or `None` when rounding leaves anything
+/// uncertified.
+pub(crate) fn separated_then_held<const N: usize>(
+    problem: &mut Model<N>,
+    x: &[f64],
+    certificate: &Certificate,
+) -> Result<Option<(Vec<f64>, f64, Certificate)>, Error> {
     let (s, y, dilated) = if certificate.overlapping.is_empty() {
         (1.0, x.to_vec(), certificate.clone())
     } else {
-        let s = pair_dilation(&certificate);
+        let s = pair_dilation(certificate);
         let y = dilate::<N>(problem, x, s);
         let dilated = problem.certify(&y)?;
         (s, y, dilated)
     };
-    if dilated.overlapping.is_empty() {
-        if dilated.outside.is_empty() {
-            return Ok((y, s, dilated));
-        }
-        let t = dilated.outside.iter().fold(1.0_f64, |t, o| t.max(o.scale)) * (1.0 + MARGIN);
-        let z = container_scaled::<N>(problem, &y, t);
-        let held = problem.certify(&z)?;
-        if held.is_feasible() {
-            return Ok((z, s * t, held));
-        }
+    if !dilated.overlapping.is_empty() {
+        return Ok(None);
     }
-    least_uniform_dilation(problem, x, &certificate)
+    if dilated.outside.is_empty() {
+        return Ok(Some((y, s, dilated)));
+    }
+    let t = dilated.outside.iter().fold(1.0_f64, |t, o| t.max(o.scale)) * (1.0 + MARGIN);
+    let z = container_scaled::<N>(problem, &y, t);
+    let held = problem.certify(&z)?;
+    Ok(held.is_feasible().then_some((z, s * t, held)))
 }
+
+/// Past this factor of the container's linear size a point is given up: an item far outside
+/// (its centre outside the container, for a dilation) is no packing worth keeping.
+const MAX_DILATION: f64 = 4.0;
 
 /// A relative margin on every factor keeps the verdicts clear of rounding at tangency.
 const MARGIN: f64 = 1e-12;
@@ -541,8 +557,7 @@ fn least_uniform_dilation<const N: usize>(
     let mut y = dilate::<N>(problem, x, s);
     let mut cert = problem.certify(&y)?;
     // Dilation scales a centre and the container together, so an item whose centre is
-    // outside the container is never repaired: past a factor of 4 the point is given up.
-    const MAX_DILATION: f64 = 4.0;
+    // outside the container is never repaired: past MAX_DILATION the point is given up.
     while !cert.is_feasible() {
         lo = s;
         s = 1.0 + 2.0 * (s - 1.0).max(1e-9);
@@ -920,6 +935,19 @@ mod tests {
         assert!((s - 3.5 / 3.0).abs() < 1e-9, "{s}");
         assert_eq!(y[..12], x[..12]);
         assert!((y[12] - 3.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn repair_holds_an_item_outside_a_box_by_scaling_its_half_sides() {
+        let mut p = Model::<2>::new(vec![[2.0, 1.0]; 2], ContainerShape::Box).unwrap();
+        // The first ellipse reaches x = 4.5 in a box of half-sides (4, 2): t = 4.5/4, and the
+        // box keeps its aspect.
+        let x = vec![2.5, 0.0, 0.0, -1.6, 0.0, 0.0, 4.0, 2.0];
+        let (y, s, cert) = repair(&mut p, &x).unwrap();
+        assert!(cert.is_feasible());
+        assert!((s - 1.125).abs() < 1e-9, "{s}");
+        assert_eq!(y[..6], x[..6]);
+        assert!((y[6] - 4.5).abs() < 1e-9 && (y[7] - 2.25).abs() < 1e-9);
     }
 
     #[test]

@@ -196,7 +196,8 @@ pub struct MultiStartResult {
     /// first ended at a point that could not be certified).
     pub local_minimisations: usize,
     /// Starts abandoned because their local minimisation ended at a point that could not be
-    /// certified (an item's centre outside the container, which no dilation repairs).
+    /// certified (an item so far outside the container that no repair by a factor up to 4
+    /// holds it).
     pub failed_starts: usize,
     /// Chains begun after the first ([`MultiStartSettings::restart_after`]).
     pub restarts: usize,
@@ -302,7 +303,7 @@ pub fn multistart<const N: usize>(
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
     // A certified start is the first best packing: whatever happens to the first local
-    // minimisation (cut off by the time limit at a point no dilation repairs, or ending worse
+    // minimisation (cut off by the time limit at a point no repair certifies, or ending worse
     // than a packing it resumes from), the run has a certified packing at every moment.
     let start_result = certified_start(&mut problem, x0)?.ok();
     let start_density = start_result.as_ref().map(|r| r.density);
@@ -429,8 +430,8 @@ pub fn multistart<const N: usize>(
             chain.restarts += 1;
         }
         for result in results {
-            // A start whose local minimisation ends at a point no dilation can certify (an
-            // item's centre outside the container) is a failed start, not a failed run: the
+            // A start whose local minimisation ends at a point no repair can certify (an item
+            // far outside the container) is a failed start, not a failed run: the
             // best packing so far stands.
             let Ok(result) = result else {
                 failed_starts += 1;
