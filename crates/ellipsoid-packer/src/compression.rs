@@ -90,8 +90,8 @@ pub const LATE_STALL_FACTOR: f64 = 30.0;
 /// # Errors
 /// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model
 /// on non-finite variables; [`Error::NotCertifiable`] when `x0` is no packing and no repair
-/// by a factor up to 4 makes it one. A placement that fails in any way is a step not taken, never an
-/// error: the best packing so far stands.
+/// by a factor up to 4 makes it one. A placement that fails in any way is a step not taken,
+/// never an error: the best packing so far stands.
 pub fn compression<const N: usize>(
     problem: &mut Model<N>,
     x0: &[f64],
