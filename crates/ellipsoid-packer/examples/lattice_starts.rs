@@ -1,9 +1,11 @@
 //! One local minimisation from each of the first K dense lattice starts, against the paper's
-//! start: `cargo run --release -p ellipsoid-packer --example lattice_starts -- 3 box 100 8`.
+//! start: `cargo run --release -p ellipsoid-packer --example lattice_starts -- 3 box 100 8`;
+//! with a fifth argument `tightest`, from the K tightest cuts of the lattice instead
+//! (`-- 2 box 1000 16 tightest`, the starts that lead a multi-start).
 
 use ellipsoid_packer::local::{LocalSettings, item_measure, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
-use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
+use ellipsoid_packer::starts::{LatticeStart, lattice_start_of, tightest_lattice_starts};
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::Instant;
@@ -16,10 +18,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let kind = common::container_kind(args.get(2).map_or("ball", String::as_str))?;
     let m: usize = args.get(3).map_or(Ok(100), |s| s.parse())?;
     let k: usize = args.get(4).map_or(Ok(8), |s| s.parse())?;
+    let tightest = args.get(5).is_some_and(|s| s == "tightest");
     if dim == 2 {
-        run::<2>(vec![[2.0, 1.0]; m], kind, k)
+        run::<2>(vec![[2.0, 1.0]; m], kind, k, tightest)
     } else {
-        run::<3>(vec![[1.0, 0.75, 0.5]; m], kind, k)
+        run::<3>(vec![[1.0, 0.75, 0.5]; m], kind, k, tightest)
     }
 }
 
@@ -27,6 +30,7 @@ fn run<const N: usize>(
     axes: Vec<[f64; N]>,
     kind: ContainerShape,
     k: usize,
+    tightest: bool,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let mut p = Model::<N>::new(axes, kind)?;
     let settings = LocalSettings::default();
@@ -45,10 +49,15 @@ fn run<const N: usize>(
         };
     let x0 = lattice_start(&p);
     one(&mut p, "paper".into(), x0)?;
-    for i in 0..k {
-        let s = LatticeStart::<N>::sequence(i);
+    let starts = if tightest {
+        tightest_lattice_starts(&p, k)
+    } else {
+        (0..k).map(LatticeStart::<N>::sequence).collect()
+    };
+    for s in starts {
         let x0 = lattice_start_of(&p, &s);
-        one(&mut p, format!("{s:?}"), x0)?;
+        let dims = &x0[x0.len() - N..];
+        one(&mut p, format!("{s:?}, container {dims:.4?}"), x0)?;
     }
     Ok(())
 }

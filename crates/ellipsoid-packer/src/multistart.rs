@@ -3,10 +3,11 @@
 //! 6.2).
 //!
 //! Each round runs one start per thread. Start 0 is the given point. The next
-//! [`MultiStartSettings::lattice_starts`] starts are dense lattice starts
-//! ([`LatticeStart::sequence`]: hexagonal and face-centred cubic lattices in several
-//! orientations, shifts and container aspects), which reach structures that perturbations of
-//! one solution rarely find. Every later start `k` perturbs the current solution with its own
+//! [`MultiStartSettings::lattice_starts`] starts are dense lattice starts (hexagonal and
+//! face-centred cubic lattices in several orientations, shifts and container aspects): first
+//! the 16 tightest cuts of the lattice ([`tightest_lattice_starts`]), then
+//! [`LatticeStart::sequence`]. They reach structures that perturbations of one solution rarely
+//! find. Every later start `k` perturbs the current solution with its own
 //! generator seeded by `(seed, k)`: centres move by up to `fraction × container extent` per
 //! coordinate, angles by up to `fraction × π` (the paper: 2.5 % in 2D, 10 % in 3D). The current
 //! solution is the best packing so far ([`MultiStartSettings::from_best`], a monotonic basin
@@ -37,7 +38,7 @@
 
 use crate::Error;
 use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
-use crate::starts::{LatticeStart, lattice_start_of, perturb};
+use crate::starts::{LatticeStart, lattice_start_of, perturb, tightest_lattice_starts};
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::{Duration, Instant};
@@ -379,6 +380,11 @@ pub fn multistart<const N: usize>(
             return Err(Error::StoppedBeforeStart);
         }
     };
+    let tightest = if uses_lattice_starts(settings) {
+        tightest_lattice_starts(&problem, TIGHTEST_CUTS)
+    } else {
+        Vec::new()
+    };
     let mut current = first.x.clone();
     // Starts cut off by the time limit or an interrupt; they still advance the start index.
     let mut cut_off = 0;
@@ -404,7 +410,7 @@ pub fn multistart<const N: usize>(
                 };
                 match origin {
                     Start::Lattice(n) => {
-                        lattice_start_of(&problem, &LatticeStart::sequence(shard.global(n)))
+                        lattice_start_of(&problem, &lattice_start(&tightest, shard.global(n)))
                     }
                     Start::Perturbed(amplitude) => perturb::<N>(
                         if settings.from_best {
@@ -568,9 +574,29 @@ pub(crate) fn minimise_start<const N: usize>(
     })
 }
 
+/// Lattice starts that are the tightest cuts ([`tightest_lattice_starts`]) before
+/// [`LatticeStart::sequence`] takes over.
+const TIGHTEST_CUTS: usize = 16;
+
+/// Whether a run's settings ever ask for a lattice start.
+fn uses_lattice_starts(settings: &MultiStartSettings) -> bool {
+    settings.lattice_starts > 0
+        || settings.fresh_lattice_every > 0
+        || (settings.from_best && settings.restart_after > 0)
+}
+
+/// Lattice start number `n` of a run: the tightest cuts first, then the sequence.
+fn lattice_start<const N: usize>(tightest: &[LatticeStart<N>], n: usize) -> LatticeStart<N> {
+    tightest
+        .get(n)
+        .copied()
+        .unwrap_or_else(|| LatticeStart::sequence(n - tightest.len()))
+}
+
 /// Where start `index` (≥ 1) of a run comes from.
 pub(crate) enum Start {
-    /// Dense lattice start number n of [`LatticeStart::sequence`].
+    /// Dense lattice start number n: the tightest cuts of the lattice, then
+    /// [`LatticeStart::sequence`].
     Lattice(usize),
     /// A perturbation of the current solution with this largest relative amplitude.
     Perturbed(f64),
@@ -604,6 +630,16 @@ mod tests {
             ..MultiStartSettings::paper(2, seed)
         };
         multistart(&axes, ContainerShape::Ellipsoid, &x0, &settings, &mut ()).unwrap()
+    }
+
+    #[test]
+    fn lattice_starts_take_the_tightest_cuts_then_the_sequence() {
+        let p = Model::<2>::new(vec![[2.0, 1.0]; 30], ContainerShape::Box).unwrap();
+        let tightest = tightest_lattice_starts(&p, 3);
+        assert_eq!(lattice_start(&tightest, 2), tightest[2]);
+        assert_eq!(lattice_start(&tightest, 3), LatticeStart::sequence(0));
+        assert_eq!(lattice_start(&tightest, 7), LatticeStart::sequence(4));
+        assert_eq!(lattice_start::<2>(&[], 5), LatticeStart::sequence(5));
     }
 
     #[test]
