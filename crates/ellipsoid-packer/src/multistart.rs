@@ -6,7 +6,8 @@
 //! [`MultiStartSettings::lattice_starts`] starts are dense lattice starts (hexagonal and
 //! face-centred cubic lattices in several orientations, shifts and container aspects): first
 //! the 16 tightest cuts of the lattice ([`tightest_lattice_starts`]), then
-//! [`LatticeStart::sequence`]. They reach structures that perturbations of one solution rarely
+//! [`LatticeStart::sequence`], every item turned by up to 0.01 rad to break the lattice's
+//! symmetry ([`turned`]). They reach structures that perturbations of one solution rarely
 //! find. Every later start `k` perturbs the current solution with its own
 //! generator seeded by `(seed, k)`: centres move by up to `fraction × container extent` per
 //! coordinate, angles by up to `fraction × π` (the paper: 2.5 % in 2D, 10 % in 3D). The current
@@ -38,7 +39,7 @@
 
 use crate::Error;
 use crate::local::{LocalResult, LocalSettings, certified_start, local_minimisation};
-use crate::starts::{LatticeStart, lattice_start_of, perturb, tightest_lattice_starts};
+use crate::starts::{LatticeStart, lattice_start_of, perturb, tightest_lattice_starts, turned};
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 use std::time::{Duration, Instant};
@@ -410,7 +411,14 @@ pub fn multistart<const N: usize>(
                 };
                 match origin {
                     Start::Lattice(n) => {
-                        lattice_start_of(&problem, &lattice_start(&tightest, shard.global(n)))
+                        let n = shard.global(n);
+                        turned::<N>(
+                            &lattice_start_of(&problem, &lattice_start(&tightest, n)),
+                            semi_axes.len(),
+                            LATTICE_TURN,
+                            settings.seed,
+                            n as u64,
+                        )
                     }
                     Start::Perturbed(amplitude) => perturb::<N>(
                         if settings.from_best {
@@ -577,6 +585,10 @@ pub(crate) fn minimise_start<const N: usize>(
 /// Lattice starts that are the tightest cuts ([`tightest_lattice_starts`]) before
 /// [`LatticeStart::sequence`] takes over.
 const TIGHTEST_CUTS: usize = 16;
+
+/// Largest turn (radians) of every item's angles on a lattice start ([`turned`]), which breaks
+/// the lattice's symmetry.
+const LATTICE_TURN: f64 = 0.01;
 
 /// Whether a run's settings ever ask for a lattice start.
 fn uses_lattice_starts(settings: &MultiStartSettings) -> bool {

@@ -806,6 +806,32 @@ pub fn perturb<const N: usize>(
     y
 }
 
+/// `x` with every item's angles moved by up to `amplitude` radians, from a generator seeded by
+/// `(seed, index)`; centres and container stay.
+///
+/// On a lattice start every item is unrotated in a mirror-symmetric arrangement, where the
+/// model's derivatives in the angles cancel, and a local minimisation can end with the
+/// lattice barely changed. For 1000 ellipses (2, 1) in a rectangle, rows along x in a
+/// 162 × 43.6 box: 0.89181 from the start as cut, 0.89547 with every angle turned by up to
+/// 0.01 rad; the cuts with rows along y end alike either way (0.89293, 0.89352).
+pub fn turned<const N: usize>(
+    x: &[f64],
+    items: usize,
+    amplitude: f64,
+    seed: u64,
+    index: u64,
+) -> Vec<f64> {
+    let stride = Model::<N>::vars_per_body();
+    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut y = x.to_vec();
+    for i in 0..items {
+        for v in N..stride {
+            y[i * stride + v] += amplitude * (2.0 * rng.uniform() - 1.0);
+        }
+    }
+    y
+}
+
 /// SplitMix64 (Steele, Lea, Flood 2014): small, fast and good enough to place perturbations;
 /// kept here so that runs are reproducible without a random-number dependency (the crate's
 /// tests draw from it too).
@@ -932,6 +958,26 @@ mod tests {
                     "{k}: {low} {high} {half}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn turning_moves_only_angles_within_the_amplitude_and_reproducibly() {
+        let p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerShape::Box).unwrap();
+        let x = lattice_start_of(&p, &LatticeStart::sequence(1));
+        let y = turned::<3>(&x, 20, 0.01, 7, 3);
+        assert_eq!(y, turned::<3>(&x, 20, 0.01, 7, 3));
+        assert_ne!(y, turned::<3>(&x, 20, 0.01, 7, 4));
+        for (i, (a, b)) in x.iter().zip(&y).enumerate() {
+            let angle = i < 20 * 6 && i % 6 >= 3;
+            assert!(
+                if angle {
+                    (a - b).abs() <= 0.01 && a != b
+                } else {
+                    a == b
+                },
+                "{i}"
+            );
         }
     }
 
