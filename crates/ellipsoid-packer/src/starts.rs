@@ -780,7 +780,7 @@ pub fn perturb<const N: usize>(
     index: u64,
 ) -> Vec<f64> {
     let stride = Model::<N>::vars_per_body();
-    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut rng = SplitMix64::stream(seed, index);
     let dims = &x[items * stride..];
     // A periodic cell is the only container with N (N + 1) / 2 dimensions; its centres are
     // fractional, so the half-cell is 1/2.
@@ -812,8 +812,9 @@ pub fn perturb<const N: usize>(
 /// On a lattice start every item is unrotated in a mirror-symmetric arrangement, where the
 /// model's derivatives in the angles cancel, and a local minimisation can end with the
 /// lattice barely changed. For 1000 ellipses (2, 1) in a rectangle, rows along x in a
-/// 162 × 43.6 box: 0.89181 from the start as cut, 0.89547 with every angle turned by up to
-/// 0.01 rad; the cuts with rows along y end alike either way (0.89293, 0.89352).
+/// 162 × 43.6 box: 0.89181 from the start as cut, 0.89549 with every angle turned by up to
+/// 0.01 rad; the cuts with rows along y end alike either way (0.89293 and 0.89263, 0.89352
+/// twice).
 pub fn turned<const N: usize>(
     x: &[f64],
     items: usize,
@@ -822,7 +823,7 @@ pub fn turned<const N: usize>(
     index: u64,
 ) -> Vec<f64> {
     let stride = Model::<N>::vars_per_body();
-    let mut rng = SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut rng = SplitMix64::stream(seed, index);
     let mut y = x.to_vec();
     for i in 0..items {
         for v in N..stride {
@@ -840,6 +841,11 @@ pub(crate) struct SplitMix64(u64);
 impl SplitMix64 {
     pub(crate) fn new(seed: u64) -> Self {
         Self(seed)
+    }
+
+    /// The generator of stream `index` of a run seeded by `seed`.
+    pub(crate) fn stream(seed: u64, index: u64) -> Self {
+        Self::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15))
     }
 
     /// Uniform in `[0, 1)`.
