@@ -6,9 +6,9 @@
 //! [`MultiStartSettings::lattice_starts`] starts are dense lattice starts (hexagonal and
 //! face-centred cubic lattices in several orientations, shifts and container aspects): first
 //! the 16 tightest cuts of the lattice ([`tightest_lattice_starts`]), then
-//! [`LatticeStart::sequence`], every item turned by up to 0.01 rad to break the lattice's
-//! symmetry ([`turned`]). They reach structures that perturbations of one solution rarely
-//! find. Every later start `k` perturbs the current solution with its own
+//! [`LatticeStart::sequence`]; on each, every item is turned by up to 0.01 rad to break the
+//! lattice's symmetry ([`turned`]). They reach structures that perturbations of one solution
+//! rarely find. Every later start `k` perturbs the current solution with its own
 //! generator seeded by `(seed, k)`: centres move by up to `fraction × container extent` per
 //! coordinate, angles by up to `fraction × π` (the paper: 2.5 % in 2D, 10 % in 3D). The current
 //! solution is the best packing so far ([`MultiStartSettings::from_best`], a monotonic basin
