@@ -53,6 +53,10 @@ enum Command {
         /// packing's summary.json.
         #[arg(long)]
         seed: Option<u64>,
+        /// Run nothing: write the table, docs/paper-tables.md and the density-against-time
+        /// figure again from the committed rows and histories.
+        #[arg(long, conflicts_with_all = ["instances", "resume"])]
+        report_only: bool,
     },
     /// Measure the periodic cell through the `ellipack pack` pipeline: variable cells with 1, 2
     /// and 4 items of three shapes, and a fixed cube of ellipsoids at packing fraction 0.60 and
@@ -158,8 +162,11 @@ fn main() -> ExitCode {
             resume,
             method,
             seed,
+            report_only,
         } => {
-            let instances = if instances.is_empty() {
+            let instances = if report_only {
+                Vec::new()
+            } else if instances.is_empty() {
                 xtask::paper_tables::TARGETS
                     .iter()
                     .map(|s| s.to_string())

@@ -5,9 +5,10 @@
 //! Writes `validation/paper_tables.csv`, `docs/paper-tables.md`, a picture per instance
 //! (`docs/figures/paper_<name>.{svg,png}`) and the packings themselves
 //! (`validation/paper-packings/<name>/packing.csv` + `summary.json`, which `ellipack verify`
-//! re-checks and `ellipack pack --resume` continues from). A fresh run whose packing is less
-//! dense than the committed one (which must read back and verify) writes nothing for that
-//! instance: its committed packing, picture and row stay.
+//! re-checks and `ellipack pack --resume` continues from), and each run's history
+//! (`validation/paper-runs/<name>.csv`, the density-against-time figure's data). A fresh run
+//! whose packing is less dense than the committed one (which must read back and verify)
+//! writes only its history for that instance: its committed packing, picture and row stay.
 
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
@@ -61,6 +62,9 @@ struct Row {
     machine: String,
     /// The local minimisation's method (its name in scene files).
     method: String,
+    /// The repository's commit when the row ran (for rows older than the column: the commit
+    /// that landed the packing).
+    commit: String,
 }
 
 /// Runs the instances and writes the tables; returns a message for each instance that could
@@ -149,6 +153,16 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             }),
         )
         .map_err(|e| format!("{}: {e}", instance.name))?;
+        // Every run's history is kept, also of a run whose packing is not kept: the figure
+        // shows how the code of the latest run gets to its density.
+        let history = history.into_text();
+        let runs = root.join(RUNS_DIR);
+        std::fs::create_dir_all(&runs).map_err(|e| format!("{}: {e}", runs.display()))?;
+        write_atomically(
+            &runs.join(format!("{}.csv", instance.name)),
+            history.as_bytes(),
+        )
+        .map_err(|e| e.to_string())?;
         let c = outcome.summary.certificate;
         if !c.is_certified() {
             problems.push(format!(
@@ -171,8 +185,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         write_files(&dir, &outcome.packing, &outcome.summary, false).map_err(|e| e.to_string())?;
         // A resumed run's history starts at its own zero: the earlier runs' histories are not
         // kept, so the curve is this run's only.
-        write_atomically(&dir.join(HISTORY_FILE), history.into_text().as_bytes())
-            .map_err(|e| e.to_string())?;
+        write_atomically(&dir.join(HISTORY_FILE), history.as_bytes()).map_err(|e| e.to_string())?;
         let picture = RenderOptions {
             width: 1200,
             label: Some(format!("{} ({} min)", instance.name, options.minutes)),
@@ -199,6 +212,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             budget_seconds: options.minutes * 60.0,
             machine: machine(threads),
             method: scene.solver.method.name().to_string(),
+            commit: crate::periodic_cells::commit(),
         };
         if let Some((old, _)) = &earlier {
             // The table keeps nine decimals: the resumed packing itself reads back up to 5e-10
@@ -255,6 +269,9 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
 /// The base name of the density-against-time figure in `docs/figures`.
 const DENSITY_TIME_FIGURE: &str = "paper_density_time";
 
+/// The folder of each instance's latest run history, `<instance>.csv`.
+const RUNS_DIR: &str = "validation/paper-runs";
+
 /// One instance's best certified density against wall time, relative to the paper's.
 struct Curve {
     instance: &'static Instance,
@@ -262,23 +279,40 @@ struct Curve {
     points: Vec<(f64, f64)>,
     /// The end of the run's last local minimisation, up to which its best density holds.
     end_seconds: f64,
+    /// Whether the run wrote the row's packing (else it ended less dense than the row).
+    wrote_row: bool,
 }
 
-/// The curves of the rows whose packing folder holds the history of the run that wrote it.
+/// The curve of each row's latest run: its history in [`RUNS_DIR`], or for a run older than
+/// that folder, the history in the packing's folder (written by the run that wrote it).
 fn curves(root: &Path, rows: &[Row]) -> Vec<Curve> {
     rows.iter()
         .filter_map(|r| {
             let paper = r.instance.reference_density()?;
-            let dir = root.join("validation/paper-packings").join(r.instance.name);
-            let text = std::fs::read_to_string(dir.join(HISTORY_FILE)).ok()?;
+            let latest = root.join(RUNS_DIR).join(format!("{}.csv", r.instance.name));
+            let packing = root
+                .join("validation/paper-packings")
+                .join(r.instance.name)
+                .join(HISTORY_FILE);
+            let text = std::fs::read_to_string(latest)
+                .or_else(|_| std::fs::read_to_string(packing))
+                .ok()?;
             let (points, end_seconds) = best_density_steps(&text, paper);
-            (!points.is_empty()).then_some(Curve {
+            let &(_, last) = points.last()?;
+            Some(Curve {
                 instance: r.instance,
+                wrote_row: ended_at_the_row(last * paper, r.density),
                 points,
                 end_seconds,
             })
         })
         .collect()
+}
+
+/// Whether a run whose best density was `best` (a history's nine decimals) is the one that
+/// wrote a row of density `row`: a run that did not ended strictly less dense.
+fn ended_at_the_row(best: f64, row: f64) -> bool {
+    best >= row - 2e-9
 }
 
 /// The rows of a history (`local_minimisation,seconds,density,best_density`) at which the
@@ -314,7 +348,11 @@ fn density_time_figure(curves: &[Curve]) -> Figure {
             .filter(|c| sources.contains(&c.instance.source))
             .enumerate()
             .map(|(k, c)| Series {
-                name: c.instance.name.to_string(),
+                name: if c.wrote_row {
+                    c.instance.name.to_string()
+                } else {
+                    format!("{} (latest run)", c.instance.name)
+                },
                 points: staircase(c),
                 kind: Kind::Line,
                 color: k,
@@ -491,6 +529,7 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
                 "" => MethodName::default().name().to_string(),
                 m => m.to_string(),
             },
+            commit: field("commit").to_string(),
         });
     }
     rows
@@ -500,14 +539,14 @@ fn csv(rows: &[Row]) -> String {
     let mut out = String::from(
         "instance,paper_density,paper_time_to_best,paper_local_minimisations_to_best,density,ratio,\
          seconds_to_best,local_minimisations,failed_starts,wall_budget_seconds,certified,min_mu2,\
-         method,machine\n",
+         method,machine,commit\n",
     );
     for r in rows {
         let paper = r.instance.reference_density();
         let to_best = paper_to_best(r.instance.name);
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.9},{},{:.1},{},{},{:.0},{},{},{},\"{}\"",
+            "{},{},{},{},{:.9},{},{:.1},{},{},{:.0},{},{},{},\"{}\",{}",
             r.instance.name,
             paper.map_or(String::new(), |d| format!("{d:.5}")),
             to_best.map_or("", |p| p.0),
@@ -522,6 +561,7 @@ fn csv(rows: &[Row]) -> String {
             r.min_mu2.map_or(String::new(), |m| format!("{m:.9}")),
             r.method,
             r.machine.replace('"', "'"),
+            r.commit,
         );
     }
     out
@@ -530,32 +570,36 @@ fn csv(rows: &[Row]) -> String {
 fn markdown(rows: &[Row], curves: &[Curve]) -> String {
     let mut out = String::from(
         "# The paper's instances\n\nGenerated by `cargo xtask paper-tables` (do not edit; \
-         each run replaces the rows of the instances it ran, except that a fresh run less dense than the committed packing leaves that packing and its row as they were). Each instance was packed by the pipeline of `ellipack pack` — the \
-         multi-start of `ellipsoid-packer` (the paper's lattice start, 16 dense lattice starts — \
-         since 2026-11-28 the 16 tightest cuts of the lattice, every item turned by up to \
-         0.01 rad, with which only the rectangle-1000 row was run —, then perturbations of the best packing at amplitudes 1, 1/2 and 1/4 of the paper's, \
-         every 8th start a further lattice start, and a new chain from fresh lattice starts \
-         after 300 starts without a relative gain of 1e-5 — added on 2026-11-22, after the \
-         ellipse-100 and cuboid-100 runs below), every local \
-         minimisation certified with PW85 and exact containment and repaired — for the wall \
-         time, with the local method and on the machine given in its row (`lagrangian`: the \
-         paper's augmented Lagrangian with the container among the variables; \
-         `compression-lagrangian`: compression of the container first, then the augmented \
-         Lagrangian from its packing; `cargo xtask paper-tables --method`). The paper's figures are the best of a \
-         48-hour multi-start on an Intel i7-3770 (Birgin, Lobato, Martínez, Section 6; \
-         `≈` where the paper gives a radius only). The packings are in \
-         `validation/paper-packings/<instance>/` (`ellipack verify` re-checks them, \
-         `ellipack pack --instance <instance> --resume --out <that folder>` continues them; \
-         `cargo xtask paper-tables --resume` does so for a row, whose budget, time to best and \
-         local minimisations then count every run of it).\n\n\
-         | instance | paper density (48 h) | paper: time to best (local minimisations) | ours | ours / paper | time to best (s) | local minimisations | wall budget (min) | method | machine | certified |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|\n",
+         each run replaces the rows of the instances it ran, except that a fresh run less dense \
+         than the committed packing leaves that packing and its row as they were). Each \
+         instance is packed by the pipeline of `ellipack pack`: the multi-start of \
+         `ellipsoid-packer` (the paper's lattice start; the 16 tightest cuts of the dense \
+         lattice, every item turned by up to 0.01 rad; then perturbations of the best packing at \
+         amplitudes 1, 1/2 and 1/4 of the paper's, every 8th start a further lattice start, and \
+         a new chain from fresh lattice starts after 300 starts without a relative gain of \
+         1e-5), every local minimisation certified with PW85 and exact containment and repaired, \
+         for the wall time, with the local method and on the machine given in its row \
+         (`lagrangian`: the paper's augmented Lagrangian with the container among the \
+         variables; `compression-lagrangian`: compression of the container first, then the \
+         augmented Lagrangian from its packing; `cargo xtask paper-tables --method`). Each row \
+         ran with the code of its commit (the repository's HEAD when it ran; for rows run \
+         before the table had the column, the commit that landed the packing): rows of commits before 343b876 began from lattice \
+         starts of a Kronecker sequence instead of the tightest cuts, unturned, and those before \
+         5c399ac ran a single chain. The paper's figures are the best of a 48-hour multi-start \
+         on an Intel i7-3770 (Birgin, Lobato, Martínez, Section 6; `≈` where the paper gives a \
+         radius only). The packings are in `validation/paper-packings/<instance>/` (`ellipack \
+         verify` re-checks them, `ellipack pack --instance <instance> --resume --out <that \
+         folder>` continues them; `cargo xtask paper-tables --resume` does so for a row, whose \
+         budget, time to best and local minimisations then count every run of it; `cargo xtask \
+         paper-tables --report-only` writes this page again from the committed rows).\n\n\
+         | instance | paper density (48 h) | paper: time to best (local minimisations) | ours | ours / paper | time to best (s) | local minimisations | wall budget (min) | method | machine | certified | commit |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|\n",
     );
     for r in rows {
         let paper = r.instance.reference_density();
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.5} | {} | {:.1} | {} | {:.0} | {} | {} | {} |",
+            "| {} | {} | {} | {:.5} | {} | {:.1} | {} | {:.0} | {} | {} | {} | {} |",
             r.instance.name,
             paper.map_or("—".into(), |d| format!("{d:.5}")),
             paper_to_best(r.instance.name).map_or("—".into(), |(t, k)| format!("{t} ({k})")),
@@ -567,25 +611,32 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
             r.method,
             r.machine,
             if r.certified { "yes" } else { "**no**" },
+            r.commit,
         );
     }
     out.push('\n');
+    let curve_of = |r: &Row| curves.iter().find(|c| c.instance.name == r.instance.name);
     let _ = writeln!(
         out,
         "## Density against time\n\n\
          ![Best certified density over the paper's against wall time](figures/{DENSITY_TIME_FIGURE}.png)\n\n\
-         The best certified density of the run that wrote each packing, over the paper's, after \
-         each local minimisation that raised it (from `history.csv` in the packing's folder; a \
-         resumed row's curve is its last run's). With a curve: {}. Without one: {} (their \
-         folders hold no history of a run, or one without a finished local minimisation).\n",
+         The best certified density of each instance's latest run, over the paper's, after \
+         each local minimisation that raised it (`validation/paper-runs/<instance>.csv`, which \
+         every run writes; for a row whose latest run is older than that folder, `history.csv` \
+         in the packing's folder; a resumed run's curve starts at its own zero). The latest run \
+         wrote the row's packing for: {}. It ended less dense than the committed packing, \
+         which an earlier run wrote, for: {} (`(latest run)` in the legend: the curve shows the \
+         code of the latest run with its own budget, the row an earlier run). No curve: {} (no \
+         history of a run, or one without a finished local minimisation).\n",
         names_of(
             rows.iter()
-                .filter(|r| curves.iter().any(|c| c.instance.name == r.instance.name))
+                .filter(|r| curve_of(r).is_some_and(|c| c.wrote_row))
         ),
         names_of(
             rows.iter()
-                .filter(|r| !curves.iter().any(|c| c.instance.name == r.instance.name))
+                .filter(|r| curve_of(r).is_some_and(|c| !c.wrote_row))
         ),
+        names_of(rows.iter().filter(|r| curve_of(r).is_none())),
     );
     for r in rows {
         let _ = writeln!(
@@ -625,6 +676,27 @@ mod tests {
             Ok(MethodName::CompressionLagrangian)
         );
         assert!(method_named("simulated-annealing").is_err());
+    }
+
+    /// A run ended at its row when its history's best (nine decimals) is the row's density.
+    #[test]
+    fn a_run_less_dense_than_its_row_did_not_write_it() {
+        assert!(ended_at_the_row(0.896103638, 0.8961036381));
+        assert!(ended_at_the_row(0.896103639, 0.896103638));
+        assert!(!ended_at_the_row(0.896103630, 0.896103638));
+        assert!(!ended_at_the_row(0.885636508, 0.886255838));
+    }
+
+    /// Rows of instances not run are carried over from the committed table: reading it and
+    /// writing it again must lose no column, the commit and the method included.
+    #[test]
+    fn the_committed_table_reads_back_to_the_same_text() {
+        let table = Path::new(env!("CARGO_MANIFEST_DIR")).join("../validation/paper_tables.csv");
+        let text = std::fs::read_to_string(&table).expect("the committed table");
+        let rows = earlier_rows(&table);
+        assert_eq!(rows.len(), INSTANCES.len());
+        assert!(rows.iter().all(|r| !r.commit.is_empty()));
+        assert_eq!(csv(&rows), text);
     }
 
     /// A fresh run keeps the committed packing when it is at least as dense and verifies, and
