@@ -365,7 +365,7 @@ fn density_time_figure(curves: &[Curve]) -> Figure {
             y_label: "best certified density / paper's".into(),
             series,
             hlines: vec![(1.0, "paper (48 h)".into())],
-            legend: Corner::LowerRight,
+            legend: Corner::UpperLeft,
             ..Panel::default()
         }
     };
