@@ -185,7 +185,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         .certificate
         .min_mu2
         .map_or("—".into(), |m| format!("{m:.9}"));
-    if scene.container_size.is_some() {
+    if scene.fixed_container().is_some() {
         // A fixed container is filled, never dilated: there is no repair to report.
         println!(
             "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
@@ -219,7 +219,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             outcome.seconds_to_best
         );
     }
-    if outcome.start_kept && scene.container_size.is_some() {
+    if outcome.start_kept && scene.fixed_container().is_some() {
         println!("the start is already a packing in the fixed container: wrote the start");
     } else if outcome.start_kept {
         println!(

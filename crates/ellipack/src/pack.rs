@@ -10,10 +10,12 @@ use crate::packing::{
     CertificateCounts, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
     PackingError, Summary,
 };
-use crate::scene::Scene;
+use crate::scene::{RandomGoal, Scene};
+use ellipsoid_packer::compression::compression_to;
 use ellipsoid_packer::local::{LocalMethod, LocalSettings};
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
+use ellipsoid_packer::random::{RandomPacking, RandomSettings, Target, random_packing};
 use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::Body;
 use implicit_packing::containment::{
@@ -343,24 +345,16 @@ fn run_n<const N: usize>(
     options: &RunOptions,
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
+    if let Some(goal) = scene.random_goal() {
+        return run_random::<N>(scene, axes, goal, options, observer);
+    }
     let kind = model_container(scene.container);
     let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
     let fixed = scene.fixed_container().map(|c| model_dimensions(&c, kind));
     let x0 = match &options.resume_from {
         Some(packing) => {
             if let Some(expected) = &fixed {
-                let found = model_dimensions(packing.container(), kind);
-                let same = found.len() == expected.len()
-                    && found
-                        .iter()
-                        .zip(expected)
-                        .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
-                if !same {
-                    return Err(PackError::FixedSizeMismatch {
-                        found,
-                        expected: expected.clone(),
-                    });
-                }
+                check_fixed_size(packing, expected, kind)?;
             }
             if packing.container().kind() != scene.container {
                 return Err(PackError::Mismatch(format!(
@@ -387,20 +381,7 @@ fn run_n<const N: usize>(
         0 => std::thread::available_parallelism().map_or(1, usize::from),
         n => n,
     };
-    // The scene's solver settings, mapped once onto the packer's.
-    let mut local = LocalSettings::default();
-    local.feasibility_tolerance = scene.solver.feasibility_tolerance;
-    local.optimality_tolerance = scene.solver.optimality_tolerance;
-    local.inner_solver = match scene.solver.inner_solver {
-        crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
-        crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
-        crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
-    };
-    local.method = match scene.solver.method {
-        crate::scene::MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,
-        crate::scene::MethodName::Compression => LocalMethod::Compression,
-        crate::scene::MethodName::CompressionLagrangian => LocalMethod::CompressionThenLagrangian,
-    };
+    let mut local = local_settings(scene);
     local.fixed_container = fixed.is_some();
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
@@ -450,22 +431,7 @@ fn run_n<const N: usize>(
     let result = match multistart(axes, kind, &x0, &settings, &mut shifted) {
         Ok(result) => result,
         Err(ellipsoid_packer::Error::NotReached(u)) => {
-            let packing = packing_of::<N>(&mut problem, &u.x, scene.container)?;
-            let objective = problem.evaluate(&u.x, None)?.objective;
-            let mut summary = Summary::new(
-                &packing,
-                objective,
-                u.wall_time.as_secs_f64(),
-                u.local_minimisations as u64,
-                certificate_of(&u.certificate),
-            );
-            summary.not_reached = true;
-            return Err(PackError::NotReached(Box::new(Unfinished {
-                packing,
-                summary,
-                infeasibility: u.infeasibility,
-                interrupted: u.interrupted,
-            })));
+            return Err(not_reached(&mut problem, &u, scene.container));
         }
         Err(e) => return Err(e.into()),
     };
@@ -506,6 +472,177 @@ fn run_n<const N: usize>(
         restarts: result.restarts,
         start_density: result.start_density,
         start_kept: result.start_kept,
+    })
+}
+
+/// Refuses a packing to resume from whose container is not the scene's fixed container
+/// `expected` (its variables, to 1e-12 relative).
+fn check_fixed_size(
+    packing: &Packing,
+    expected: &[f64],
+    kind: ModelContainer,
+) -> Result<(), PackError> {
+    let found = model_dimensions(packing.container(), kind);
+    let same = found.len() == expected.len()
+        && found
+            .iter()
+            .zip(expected)
+            .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
+    if same {
+        Ok(())
+    } else {
+        Err(PackError::FixedSizeMismatch {
+            found,
+            expected: expected.to_vec(),
+        })
+    }
+}
+
+/// The scene's solver settings, mapped once onto the packer's settings of one local
+/// minimisation.
+fn local_settings(scene: &Scene) -> LocalSettings {
+    let mut local = LocalSettings::default();
+    local.feasibility_tolerance = scene.solver.feasibility_tolerance;
+    local.optimality_tolerance = scene.solver.optimality_tolerance;
+    local.inner_solver = match scene.solver.inner_solver {
+        crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
+        crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
+        crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
+    };
+    local.method = match scene.solver.method {
+        crate::scene::MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,
+        crate::scene::MethodName::Compression => LocalMethod::Compression,
+        crate::scene::MethodName::CompressionLagrangian => LocalMethod::CompressionThenLagrangian,
+    };
+    local
+}
+
+/// The error of a fixed-container run that found no packing, with its least overlapping
+/// configuration as the files hold it.
+fn not_reached<const N: usize>(
+    problem: &mut Model<N>,
+    u: &ellipsoid_packer::fixed::Unfinished,
+    kind: ContainerKind,
+) -> PackError {
+    let mut unfinished = || -> Result<PackError, PackError> {
+        let packing = packing_of::<N>(problem, &u.x, kind)?;
+        let objective = problem.evaluate(&u.x, None)?.objective;
+        let mut summary = Summary::new(
+            &packing,
+            objective,
+            u.wall_time.as_secs_f64(),
+            u.local_minimisations as u64,
+            certificate_of(&u.certificate),
+        );
+        summary.not_reached = true;
+        Ok(PackError::NotReached(Box::new(Unfinished {
+            packing,
+            summary,
+            infeasibility: u.infeasibility,
+            interrupted: u.interrupted,
+        })))
+    };
+    unfinished().unwrap_or_else(|e| e)
+}
+
+/// A random packing of the scene's items ([`ellipsoid_packer::random`]): a random start, then
+/// compression to the scene's packing fraction or until jammed, within the time limit. A
+/// resumed jammed run compresses its packing further; a resumed run at a fraction is its
+/// packing, checked.
+fn run_random<const N: usize>(
+    scene: &Scene,
+    axes: &[[f64; N]],
+    goal: RandomGoal,
+    options: &RunOptions,
+    observer: &mut dyn Observer,
+) -> Result<RunOutcome, PackError> {
+    let began = Instant::now();
+    let kind = model_container(scene.container);
+    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
+    let (target, container) = match &goal {
+        RandomGoal::Fraction(c) => (Target::Fraction, c),
+        RandomGoal::Jammed(c) => (Target::Jammed, c),
+    };
+    let dims = model_dimensions(container, kind);
+    let mut local = local_settings(scene);
+    local.method = LocalMethod::Compression;
+    let seed = options.seed.unwrap_or(scene.seed);
+    let settings = RandomSettings::new(target, seed).with_local(local.clone());
+    let time_limit = options.time_limit.unwrap_or(scene.solver.time_limit);
+    let shared: &dyn Observer = &*observer;
+    let mut observe = |p: &ellipsoid_packer::multistart::SolverProgress<'_>| {
+        shared.iteration(p);
+        shared.should_stop() || began.elapsed() >= time_limit
+    };
+    let made = match &options.resume_from {
+        None => random_packing(&mut problem, &dims, &settings, &mut observe),
+        Some(packing) => {
+            if target == Target::Fraction {
+                check_fixed_size(packing, &dims, kind)?;
+            }
+            let x0 = variables_of::<N>(packing, axes, kind)?;
+            let start = problem.certify(&x0)?;
+            if !start.is_feasible() {
+                return Err(PackError::StartNotCertified(start_defects(&start)));
+            }
+            let aim = (target == Target::Fraction)
+                .then(|| problem.evaluate(&x0, None))
+                .transpose()?;
+            compression_to(
+                &mut problem,
+                &x0,
+                &local,
+                aim.map(|e| e.objective),
+                &mut observe,
+            )
+            .map(|packing| RandomPacking {
+                start_density: packing.density,
+                packing,
+            })
+        }
+    };
+    let made = match made {
+        Ok(made) => made,
+        Err(ellipsoid_packer::Error::NotReached(u)) => {
+            return Err(not_reached(&mut problem, &u, scene.container));
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let interrupted = observer.should_stop();
+    let elapsed = began.elapsed();
+    observer.finished(&MultiStartProgress {
+        local_minimisations: 1,
+        best_density: made.packing.density,
+        last_density: made.packing.density,
+        elapsed,
+    });
+    let jammed = target == Target::Jammed;
+    let written = written_packing::<N>(&mut problem, &made.packing.x, scene.container, jammed)?;
+    let packing = written.packing;
+    let mut summary = Summary::new(
+        &packing,
+        written.objective,
+        elapsed.as_secs_f64(),
+        1,
+        written.certificate,
+    );
+    let repair_factor = made.packing.repair_factor * written.dilation;
+    summary.repair = jammed.then_some(crate::packing::Repair {
+        dilation: repair_factor,
+        density_before: made.packing.density_before_repair,
+    });
+    summary.start_kept = false;
+    Ok(RunOutcome {
+        packing,
+        summary,
+        density_before_repair: made.packing.density_before_repair,
+        repair_factor,
+        seconds_to_best: elapsed.as_secs_f64(),
+        interrupted,
+        failed_starts: 0,
+        restarts: 0,
+        start_density: Some(made.start_density),
+        start_kept: false,
     })
 }
 

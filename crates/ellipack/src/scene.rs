@@ -212,6 +212,42 @@ impl MethodName {
     }
 }
 
+/// The name, in a scene file, of how a run starts (`solver.start`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StartName {
+    /// Dense lattice starts, then the multi-start (`"lattice"`): the densest packing found.
+    #[default]
+    Lattice,
+    /// A random packing (`"random"`): items at random positions and orientations, then
+    /// compressed to the container's packing fraction or until jammed
+    /// ([`ellipsoid_packer::random`]).
+    Random,
+}
+
+impl StartName {
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            StartName::Lattice => "lattice",
+            StartName::Random => "random",
+        }
+    }
+}
+
+/// What a random packing ([`StartName::Random`]) compresses to, with its container.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RandomGoal {
+    /// The fixed container of the scene, at its packing fraction.
+    Fraction(Container),
+    /// Until jammed, in a container of this shape (its size is the run's).
+    Jammed(Container),
+}
+
+/// The packing fraction of the container a jammed scene's shape is given at
+/// ([`Scene::random_goal`]); any size would do, the run's start sets its own.
+const JAMMED_SHAPE_FRACTION: f64 = 0.5;
+
 /// A group of identical items.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeGroup {
@@ -251,6 +287,8 @@ pub struct SolverSettings {
     pub perturbation_levels: u32,
     /// Every this many later starts, one is a new dense lattice start (0: never).
     pub fresh_lattice_every: u64,
+    /// How the run starts: dense lattices and the multi-start, or a random packing.
+    pub start: StartName,
     /// With `from_best`: after this many starts in a row without improving the current
     /// chain's best packing by more than 1e-5 relative, a round of fresh lattice starts
     /// begins a new chain (0: never).
@@ -284,6 +322,7 @@ impl SolverSettings {
             from_best: true,
             perturbation_levels: 3,
             fresh_lattice_every: 8,
+            start: StartName::Lattice,
             restart_after: DEFAULT_RESTART_AFTER,
         }
     }
@@ -335,6 +374,10 @@ pub enum ContainerSize {
     /// `packing_fraction`, in (0, 1): the circle or ball, the square or cube, or the disc- or
     /// sphere-shaped ellipse or ellipsoid that the items fill to this fraction.
     PackingFraction(f64),
+    /// `packing_fraction = "jammed"`: a random packing compressed until jammed, in a container
+    /// of the shape `PackingFraction` gives (a circle or ball, a square or cube, …) whose size
+    /// the run finds.
+    Jammed,
 }
 
 impl ContainerSize {
@@ -345,7 +388,7 @@ impl ContainerSize {
             ContainerSize::SemiAxes(_) => "semi_axes",
             ContainerSize::HalfSides(_) => "half_sides",
             ContainerSize::Lengths(_) => "lengths",
-            ContainerSize::PackingFraction(_) => "packing_fraction",
+            ContainerSize::PackingFraction(_) | ContainerSize::Jammed => "packing_fraction",
         }
     }
 }
@@ -431,7 +474,38 @@ struct RawContainer {
     semi_axes: Option<Spanned<Vec<f64>>>,
     half_sides: Option<Spanned<Vec<f64>>>,
     lengths: Option<Spanned<Vec<f64>>>,
-    packing_fraction: Option<Spanned<f64>>,
+    packing_fraction: Option<Spanned<RawFraction>>,
+}
+
+/// A packing fraction as written: a number, or a word (`"jammed"`).
+enum RawFraction {
+    Number(f64),
+    Word(String),
+}
+
+impl<'de> Deserialize<'de> for RawFraction {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = RawFraction;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number in (0, 1) or \"jammed\"")
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<RawFraction, E> {
+                Ok(RawFraction::Number(v))
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<RawFraction, E> {
+                Ok(RawFraction::Number(v as f64))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<RawFraction, E> {
+                Ok(RawFraction::Number(v as f64))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<RawFraction, E> {
+                Ok(RawFraction::Word(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -451,6 +525,7 @@ struct RawSolver {
     local_minimisations: Option<Spanned<i64>>,
     inner_solver: Option<InnerSolverName>,
     method: Option<MethodName>,
+    start: Option<Spanned<StartName>>,
     perturbation: Option<Spanned<f64>>,
     lattice_starts: Option<Spanned<i64>>,
     from_best: Option<bool>,
@@ -574,7 +649,14 @@ impl Scene {
                 format!("{n} {noun}{axes} in a {kind} of lengths ({})", list(v))
             }
             Some(ContainerSize::PackingFraction(f)) => {
-                format!("{n} {noun}{axes} in a {kind} at packing fraction {f}")
+                let random = match self.solver.start {
+                    StartName::Random => "random ",
+                    StartName::Lattice => "",
+                };
+                format!("{n} {noun}{axes}, {random}in a {kind} at packing fraction {f}")
+            }
+            Some(ContainerSize::Jammed) => {
+                format!("{n} {noun}{axes}, random and jammed in a {kind}")
             }
         }
     }
@@ -599,11 +681,40 @@ impl Scene {
         let size = self.container_size.as_ref()?;
         let n = self.dimension.get();
         let dims: Vec<f64> = match size {
+            ContainerSize::Jammed => return None,
             ContainerSize::Radius(r) => vec![*r; n],
             ContainerSize::SemiAxes(v)
             | ContainerSize::HalfSides(v)
             | ContainerSize::Lengths(v) => v.clone(),
-            ContainerSize::PackingFraction(f) => {
+            ContainerSize::PackingFraction(f) => self.container_at_fraction(*f),
+        };
+        Some(Container::unchecked(self.container, &vec![0.0; n], &dims))
+    }
+
+    /// What a random packing compresses to (`solver.start = "random"`, or
+    /// `packing_fraction = "jammed"`); `None` for a scene of the lattice starts.
+    pub fn random_goal(&self) -> Option<RandomGoal> {
+        if self.solver.start != StartName::Random {
+            return None;
+        }
+        if self.container_size == Some(ContainerSize::Jammed) {
+            let n = self.dimension.get();
+            let dims = self.container_at_fraction(JAMMED_SHAPE_FRACTION);
+            return Some(RandomGoal::Jammed(Container::unchecked(
+                self.container,
+                &vec![0.0; n],
+                &dims,
+            )));
+        }
+        self.fixed_container().map(RandomGoal::Fraction)
+    }
+
+    /// The dimensions of the container of the scene's kind that the items fill to fraction
+    /// `f`: a circle or ball, a square or cube, a disc- or sphere-shaped ellipse or ellipsoid.
+    fn container_at_fraction(&self, f: f64) -> Vec<f64> {
+        let n = self.dimension.get();
+        {
+            {
                 let measure = self.item_measure() / f;
                 let unit = match (self.container, self.dimension) {
                     // (2h)ᴺ for a square or a cube of half side h.
@@ -615,8 +726,7 @@ impl Scene {
                 };
                 vec![(measure / unit).powf(1.0 / n as f64); n]
             }
-        };
-        Some(Container::unchecked(self.container, &vec![0.0; n], &dims))
+        }
     }
 
     /// The scene as TOML that [`Scene::from_toml_str`] reads back to an equal scene (every
@@ -663,6 +773,9 @@ impl Scene {
             Some(ContainerSize::PackingFraction(f)) => {
                 line(&mut out, "packing_fraction", toml_float(*f));
             }
+            Some(ContainerSize::Jammed) => {
+                line(&mut out, "packing_fraction", toml_string("jammed"));
+            }
         }
         for g in &self.shapes {
             out.push_str("\n[[shapes]]\n");
@@ -693,6 +806,7 @@ impl Scene {
         }
         line(&mut out, "inner_solver", toml_string(s.inner_solver.name()));
         line(&mut out, "method", toml_string(s.method.name()));
+        line(&mut out, "start", toml_string(s.start.name()));
         line(&mut out, "perturbation", toml_float(s.perturbation));
         line(&mut out, "lattice_starts", s.lattice_starts.to_string());
         line(&mut out, "from_best", s.from_best.to_string());
@@ -872,7 +986,34 @@ impl Validator<'_> {
             }
         };
         let shapes = self.shapes(raw.shapes, dimension)?;
-        let solver = self.solver(raw.solver, dimension)?;
+        let start = raw
+            .solver
+            .as_ref()
+            .and_then(|s| s.start.as_ref())
+            .map(|s| (s.span(), *s.get_ref()));
+        let mut solver = self.solver(raw.solver, dimension)?;
+        match (start, &container_size) {
+            (Some((span, StartName::Lattice)), Some(ContainerSize::Jammed)) => {
+                return Err(self.error(
+                    span,
+                    "solver.start",
+                    "packing_fraction = \"jammed\" is a random packing: write start = \
+                     \"random\" or leave start out"
+                        .to_string(),
+                ));
+            }
+            (Some((span, StartName::Random)), None) => {
+                return Err(self.error(
+                    span,
+                    "solver.start",
+                    "a random packing needs its container: give [container] packing_fraction \
+                     = 0.6 (or \"jammed\") or the container's size"
+                        .to_string(),
+                ));
+            }
+            (_, Some(ContainerSize::Jammed)) => solver.start = StartName::Random,
+            _ => {}
+        }
         let output = self.output(raw.output)?;
         Ok(Scene {
             name: raw.name,
@@ -1003,10 +1144,24 @@ impl Validator<'_> {
             "half_sides" => ContainerSize::HalfSides(given(&raw.half_sides)?),
             "lengths" => ContainerSize::Lengths(given(&raw.lengths)?),
             _ => {
-                let f = raw
-                    .packing_fraction
-                    .as_ref()
-                    .map_or(f64::NAN, |f| *f.get_ref());
+                let f = match raw.packing_fraction.as_ref().map(Spanned::get_ref) {
+                    Some(RawFraction::Number(f)) => *f,
+                    Some(RawFraction::Word(w)) if w == "jammed" => {
+                        return Ok(Some(ContainerSize::Jammed));
+                    }
+                    Some(RawFraction::Word(w)) => {
+                        return Err(self.error(
+                            span,
+                            &full_key,
+                            format!(
+                                "must be a number in (0, 1) or \"jammed\" (a random packing \
+                                 compressed until jammed), not {}",
+                                crate::table::short_text(&format!("{w:?}"))
+                            ),
+                        ));
+                    }
+                    None => f64::NAN,
+                };
                 if !(f > 0.0 && f < 1.0) {
                     return Err(self.error(
                         span,
@@ -1142,6 +1297,9 @@ impl Validator<'_> {
         }
         if let Some(method) = raw.method {
             s.method = method;
+        }
+        if let Some(start) = &raw.start {
+            s.start = *start.get_ref();
         }
         if let Some(p) = &raw.perturbation {
             let v = *p.get_ref();

@@ -104,6 +104,31 @@ pub fn compression<const N: usize>(
     settings: &LocalSettings,
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<LocalResult, Error> {
+    compression_to(problem, x0, settings, None, observe)
+}
+
+/// How far below its target a compression with one ([`compression_to`]) aims each step:
+/// a step that keeps [`KEPT_FRACTION`] of a step aimed at `target·(1 − TARGET_OVERSHOOT)`
+/// crosses the target once the container is within 9·`TARGET_OVERSHOOT` of it, and the
+/// smallest such step (`TARGET_OVERSHOOT / N` linear) stays above [`LAST_STEP`].
+pub const TARGET_OVERSHOOT: f64 = 1e-3;
+
+/// [`compression`] that stops as soon as the container's area or volume is at most `target`
+/// (`None`: compression to the end, a jammed packing). Each step is cut so that it aims no
+/// further than `target·(1 − TARGET_OVERSHOOT)`; the packing returned may therefore be a
+/// little denser than the target, and a caller wanting the target exactly dilates it (a
+/// dilation by s ≥ 1 keeps a packing one: μ² grows by s², PW85 theory eq. (7)). Whether the
+/// target was reached is `result.objective <= target`.
+///
+/// # Errors
+/// As [`compression`].
+pub fn compression_to<const N: usize>(
+    problem: &mut Model<N>,
+    x0: &[f64],
+    settings: &LocalSettings,
+    target: Option<f64>,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+) -> Result<LocalResult, Error> {
     check_start(problem, x0)?;
     problem.evaluate(x0, None)?;
     let mut placer = Placer::new(settings, observe);
@@ -111,7 +136,13 @@ pub fn compression<const N: usize>(
     let mut schedule = Schedule::new();
     while let Some(step) = schedule.step()
         && !placer.interrupted
+        && target.is_none_or(|t| best.objective > t)
     {
+        // The linear shrink that takes the container to the aim below the target.
+        let step = target.map_or(step, |t| {
+            let aim = t * (1.0 - TARGET_OVERSHOOT);
+            step.min(1.0 - (aim / best.objective).powf(1.0 / N as f64))
+        });
         let trial = problem.dilated(&best.x, 1.0 - step);
         // The dilation that leaves KEPT_FRACTION of the step: (1 − δ)·s = 1 − κδ.
         let enough = (1.0 - KEPT_FRACTION * step) / (1.0 - step);

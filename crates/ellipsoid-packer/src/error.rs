@@ -53,6 +53,20 @@ pub enum Error {
         .0.certificate.min_mu2.map_or(String::new(), |m| format!(", smallest μ² {m:.6}"))
     )]
     NotReached(Box<crate::fixed::Unfinished>),
+    /// The random start ([`crate::random::sequential_addition`]) found no place for an item:
+    /// the container is too small for the items (or the start fraction too high).
+    #[error(
+        "the random start found no place for item {item} in {attempts} attempts, after \
+         placing {placed} items: the container is too small for the items"
+    )]
+    RandomStart {
+        /// The item (0-based, in the problem's order) that found no place.
+        item: usize,
+        /// Items placed before it.
+        placed: usize,
+        /// Attempts made for it.
+        attempts: usize,
+    },
     /// A thread of the run panicked (a bug: please report it with the scene).
     #[error("a start of the multi-start panicked")]
     StartPanicked,

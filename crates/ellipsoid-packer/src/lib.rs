@@ -15,6 +15,8 @@
 //!   and cancellation.
 //! - [`fixed`] — the multi-start in a container of given size: no minimisation, only
 //!   placement, ending at the first certified packing.
+//! - [`random`] — random packings: random sequential addition, then compression to a packing
+//!   fraction or until jammed.
 //!
 //! ```
 //! use ellipsoid_packer::{local::{LocalSettings, local_minimisation}, starts::lattice_start};
@@ -49,6 +51,7 @@ mod error;
 pub mod fixed;
 pub mod local;
 pub mod multistart;
+pub mod random;
 pub mod starts;
 pub mod tiling;
 

@@ -190,6 +190,44 @@ impl<const N: usize> Body<N> {
     }
 }
 
+impl<const N: usize> Body<N> {
+    /// A body in either dimension from its orientation: `[θ]`, the angle of eq. 1, in 2D; a
+    /// quaternion `[w, x, y, z]` (as [`Body::from_quaternion`]) in 3D. For code generic over
+    /// the dimension (random orientations, items read from a file).
+    ///
+    /// # Errors
+    /// Those of [`Body::ellipse`] and [`Body::from_quaternion`]; [`Error::LengthMismatch`]
+    /// when `orientation` does not have 1 (2D) or 4 (3D) values.
+    pub fn oriented(
+        centre: [f64; N],
+        semi_axes: [f64; N],
+        orientation: &[f64],
+    ) -> Result<Self, Error> {
+        Self::checked(centre, semi_axes, || {
+            let rotation: Vec<[f64; 3]> = match (N, orientation) {
+                (2, &[theta]) => {
+                    check_angles(None, &[theta])?;
+                    rotation_2d(theta)
+                        .iter()
+                        .map(|r| [r[0], r[1], 0.0])
+                        .collect()
+                }
+                (3, &[w, x, y, z]) => rotation_from_quaternion([w, x, y, z])?.to_vec(),
+                _ => {
+                    return Err(Error::LengthMismatch {
+                        what: "orientation",
+                        expected: if N == 2 { 1 } else { 4 },
+                        found: orientation.len(),
+                    });
+                }
+            };
+            Ok(std::array::from_fn(|r| {
+                std::array::from_fn(|c| rotation[r][c])
+            }))
+        })
+    }
+}
+
 impl Body<2> {
     /// An ellipse with centre `c`, semi-axes `(a, b)` along the columns of `Q(θ)` (eq. 1).
     pub fn ellipse(centre: [f64; 2], semi_axes: [f64; 2], theta: f64) -> Result<Self, Error> {

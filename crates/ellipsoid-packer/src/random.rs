@@ -1,0 +1,628 @@
+//! Random packings: random sequential addition at a low packing fraction, then compression to
+//! a chosen packing fraction or until jammed.
+//!
+//! **The start** ([`sequential_addition`]) puts the items, largest first, one at a time at a
+//! uniformly random position of the container (a uniformly random point of the periodic cell)
+//! with a uniformly random orientation — an angle uniform in [0, π) in 2D, a rotation uniform
+//! on SO(3) in 3D (a uniform unit quaternion, Shoemake's construction) — and keeps it when it
+//! lies inside the container and PW85 says it overlaps no item placed before (μ² ≥ 1 against
+//! every item, and in a periodic cell against every image, itself included). A grid of
+//! buckets whose edge is the largest enclosing diameter finds the items within reach, so an
+//! attempt costs O(1) and the start O(m) at a fraction well below saturation (about 0.38 for
+//! spheres, 0.55 for discs). The start is certified by construction.
+//!
+//! **The compression** ([`compression_to`]) shrinks the container (its shape kept) through
+//! placements in fixed containers, each driving the model's overlap measure (the paper's eqs.
+//! (21)–(26)) to zero, and keeps each step whose packing certifies. With a target fraction it
+//! stops at the first packing at least that dense, dilated back to the target container
+//! exactly; without one it ends where no step can be certified any more: a jammed packing of
+//! this protocol, which keeps the disorder of its start (no lattice is ever imposed).
+//!
+//! # References
+//! - B. Widom, *Random sequential addition of hard spheres to a volume*, J. Chem. Phys. 44
+//!   (1966): the start.
+//! - K. Shoemake, *Uniform random rotations*, Graphics Gems III (1992): the quaternion.
+//! - C. S. O'Hern, L. E. Silbert, A. J. Liu, S. R. Nagel, *Jamming at zero temperature and
+//!   zero applied stress*, Phys. Rev. E 68, 011306 (2003): jamming by compression and
+//!   minimisation of an overlap energy from random states.
+//! - A. Donev et al., *Improving the density of jammed disordered packings using ellipsoids*,
+//!   Science 303, 990 (2004).
+
+use crate::Error;
+use crate::compression::compression_to;
+use crate::fixed::Unfinished;
+use crate::local::{LocalMethod, LocalResult, LocalSettings, certified_start, infeasibility};
+use crate::starts::SplitMix64;
+use auglag::Progress;
+use implicit_packing::containment::{Container, containment_residual};
+use implicit_packing::model::Model;
+use implicit_packing::periodic::{to_cartesian, to_fractional, widths};
+use implicit_packing::shape::Body;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// The packing fraction of the random start in 2D unless the settings say otherwise: well
+/// below the saturation of random sequential addition of discs (0.547), so that most attempts
+/// succeed.
+pub const START_FRACTION_2D: f64 = 0.35;
+/// The same in 3D (saturation of spheres 0.384, higher for moderately elongated ellipsoids).
+pub const START_FRACTION_3D: f64 = 0.2;
+/// Attempts per item before the start is tried again in a container twice as large.
+pub const ATTEMPTS_PER_ITEM: usize = 10_000;
+/// Times the start is tried in a larger container (twice the area or volume each time)
+/// before the run gives up.
+pub const START_RETRIES: usize = 4;
+
+/// How dense the random packing is to be.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// Exactly this packing fraction, in the given container (the run's container).
+    Fraction,
+    /// As dense as compression gets while no step can be certified any more.
+    Jammed,
+}
+
+/// Settings of a random packing.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct RandomSettings {
+    /// The fraction to reach, or jammed.
+    pub target: Target,
+    /// Packing fraction of the random start (`None`: [`START_FRACTION_2D`] or
+    /// [`START_FRACTION_3D`]; a target below it is the start itself).
+    pub start_fraction: Option<f64>,
+    /// The seed: the same seed gives the same start and the same packing.
+    pub seed: u64,
+    /// Attempts per item of the random start.
+    pub attempts_per_item: usize,
+    /// Settings of the compression's placements.
+    pub local: LocalSettings,
+}
+
+crate::with_setters!(RandomSettings:
+    /// Sets [`RandomSettings::target`].
+    with_target => target: Target,
+    /// Sets [`RandomSettings::start_fraction`].
+    with_start_fraction => start_fraction: Option<f64>,
+    /// Sets [`RandomSettings::seed`].
+    with_seed => seed: u64,
+    /// Sets [`RandomSettings::attempts_per_item`].
+    with_attempts_per_item => attempts_per_item: usize,
+    /// Sets [`RandomSettings::local`].
+    with_local => local: LocalSettings,
+);
+
+impl RandomSettings {
+    /// A random packing to `target` from seed `seed`, with the compression's default settings.
+    pub fn new(target: Target, seed: u64) -> Self {
+        Self {
+            target,
+            start_fraction: None,
+            seed,
+            attempts_per_item: ATTEMPTS_PER_ITEM,
+            local: LocalSettings::default().with_method(LocalMethod::Compression),
+        }
+    }
+}
+
+/// A random packing and how it was made.
+#[derive(Clone, Debug)]
+pub struct RandomPacking {
+    /// The certified packing (its variables, density, certificate, the compression's report).
+    pub packing: LocalResult,
+    /// Packing fraction of the random start.
+    pub start_density: f64,
+}
+
+/// A random packing of the problem's items (see the module documentation). `container` gives
+/// the container's variables: with [`Target::Fraction`] the container to fill, whose
+/// fraction is the target; with [`Target::Jammed`] only its shape matters (its aspect ratios,
+/// a periodic cell's angles). `observe` sees the compression's progress; returning `true`
+/// stops the run with the densest packing so far.
+///
+/// # Errors
+/// [`Error::RandomStart`] when no random start could be made; [`Error::NotReached`] when a
+/// target fraction was not reached (compression jammed first, or the observer stopped it),
+/// with the densest packing reached, compressed into the target container, as its least
+/// overlapping point; errors of the model for an invalid container.
+pub fn random_packing<const N: usize>(
+    problem: &mut Model<N>,
+    container: &[f64],
+    settings: &RandomSettings,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+) -> Result<RandomPacking, Error> {
+    let began = Instant::now();
+    let items = crate::local::item_measure(problem);
+    let target_measure = Container::<N>::from_dimensions(problem.container_kind(), container)?
+        .measure()
+        .0;
+    let start_fraction = settings.start_fraction.unwrap_or(if N == 2 {
+        START_FRACTION_2D
+    } else {
+        START_FRACTION_3D
+    });
+    let wanted = items / target_measure;
+    let mut start_scale = match settings.target {
+        Target::Fraction if wanted <= start_fraction => 1.0,
+        _ => (wanted / start_fraction).powf(1.0 / N as f64),
+    };
+    let mut retries = 0;
+    let x0 = loop {
+        let dims: Vec<f64> = container.iter().map(|d| d * start_scale).collect();
+        match sequential_addition(problem, &dims, settings.seed, settings.attempts_per_item) {
+            Ok(x) => break x,
+            Err(e @ Error::RandomStart { .. }) if retries == START_RETRIES => return Err(e),
+            Err(Error::RandomStart { .. }) => {
+                retries += 1;
+                start_scale *= 2f64.powf(1.0 / N as f64);
+            }
+            Err(e) => return Err(e),
+        }
+    };
+    let start = certified_start(problem, &x0)?.map_err(|c| Error::NotCertifiable {
+        max_dilation: 1.0,
+        overlapping: c.overlapping.len(),
+        outside: c.outside.len(),
+    })?;
+    let start_density = start.density;
+    let aim = match settings.target {
+        Target::Fraction => Some(target_measure),
+        Target::Jammed => None,
+    };
+    let mut interrupted = false;
+    let mut watch = |p: &Progress<'_>| {
+        interrupted |= observe(p);
+        interrupted
+    };
+    let compressed = compression_to(problem, &x0, &settings.local, aim, &mut watch)?;
+    let Some(target) = aim else {
+        return Ok(RandomPacking {
+            packing: compressed,
+            start_density,
+        });
+    };
+    // Dilated back to the target container exactly: every length times s ≥ 1.
+    let s = (target / compressed.objective)
+        .powf(1.0 / N as f64)
+        .max(1.0);
+    let body_variables = problem.len() * Model::<N>::vars_per_body();
+    let mut x = problem.dilated(&compressed.x, s);
+    x[body_variables..].copy_from_slice(container);
+    match certified_start(problem, &x)? {
+        Ok(mut packing) if compressed.objective <= target => {
+            packing.report = compressed.report;
+            Ok(RandomPacking {
+                packing,
+                start_density,
+            })
+        }
+        reached => {
+            let certificate = match reached {
+                Ok(p) => p.certificate,
+                Err(c) => c,
+            };
+            Err(Error::NotReached(Box::new(Unfinished {
+                infeasibility: infeasibility(problem, &x)?,
+                x,
+                certificate,
+                density: wanted,
+                local_minimisations: 1,
+                wall_time: began.elapsed(),
+                interrupted,
+            })))
+        }
+    }
+}
+
+/// A random start: the problem's items by random sequential addition into the container of
+/// variables `container` (see the module documentation), as the model's variables.
+///
+/// # Errors
+/// [`Error::RandomStart`] when an item found no place in `attempts_per_item` attempts;
+/// errors of the model for an invalid container.
+pub fn sequential_addition<const N: usize>(
+    problem: &Model<N>,
+    container: &[f64],
+    seed: u64,
+    attempts_per_item: usize,
+) -> Result<Vec<f64>, Error> {
+    let shape = Container::<N>::from_dimensions(problem.container_kind(), container)?;
+    let axes = problem.semi_axes();
+    let reach = axes
+        .iter()
+        .map(|l| l.iter().fold(0.0_f64, |a, &b| a.max(b)))
+        .fold(0.0_f64, f64::max);
+    let mut order: Vec<usize> = (0..axes.len()).collect();
+    let radius = |i: usize| axes[i].iter().fold(0.0_f64, |a, &b| a.max(b));
+    order.sort_by(|&a, &b| radius(b).total_cmp(&radius(a)).then(a.cmp(&b)));
+    let mut grid = Buckets::new(&shape, 2.0 * reach);
+    let mut placed: Vec<Option<Body<N>>> = vec![None; axes.len()];
+    let mut rng = SplitMix64::stream(seed, u64::MAX);
+    for (count, &i) in order.iter().enumerate() {
+        let mut attempt = 0;
+        let body = loop {
+            if attempt == attempts_per_item {
+                return Err(Error::RandomStart {
+                    item: i,
+                    placed: count,
+                    attempts: attempts_per_item,
+                });
+            }
+            attempt += 1;
+            let centre = random_point(&shape, &mut rng);
+            let body = Body::oriented(centre, axes[i], &random_orientation::<N>(&mut rng))?;
+            let inside = matches!(shape, Container::Periodic { .. })
+                || containment_residual(&body, &shape) <= 0.0;
+            if inside && !grid.overlaps(&body, &placed)? {
+                break body;
+            }
+        };
+        grid.insert(i, &body);
+        placed[i] = Some(body);
+    }
+    let bodies: Vec<Body<N>> = placed.into_iter().flatten().collect();
+    Ok(problem.pack_variables(&bodies, container)?)
+}
+
+/// A point uniform in the container: by rejection from the bounding box of a ball or an
+/// ellipsoid (which accepts π/4 of the draws in 2D and π/6 in 3D), directly in a box or a
+/// periodic cell.
+fn random_point<const N: usize>(container: &Container<N>, rng: &mut SplitMix64) -> [f64; N] {
+    let mut symmetric =
+        |h: &[f64; N]| -> [f64; N] { std::array::from_fn(|k| h[k] * (2.0 * rng.uniform() - 1.0)) };
+    match *container {
+        Container::Box { half_sides } => symmetric(&half_sides),
+        Container::Periodic { cell } => {
+            let s: [f64; N] = std::array::from_fn(|_| rng.uniform());
+            to_cartesian(&cell, &s)
+        }
+        Container::Ball { radius } => loop {
+            let p = symmetric(&[radius; N]);
+            if p.iter().map(|v| v * v).sum::<f64>() < radius * radius {
+                return p;
+            }
+        },
+        Container::Ellipsoid { semi_axes } => loop {
+            let p = symmetric(&semi_axes);
+            if (0..N).map(|k| (p[k] / semi_axes[k]).powi(2)).sum::<f64>() < 1.0 {
+                return p;
+            }
+        },
+    }
+}
+
+/// A uniformly random orientation in [`Body::oriented`]'s form: an angle uniform in [0, π)
+/// (an ellipse is symmetric under a half turn) in 2D, a unit quaternion uniform on S³ (so a
+/// rotation uniform on SO(3)) in 3D.
+fn random_orientation<const N: usize>(rng: &mut SplitMix64) -> Vec<f64> {
+    if N == 2 {
+        return vec![std::f64::consts::PI * rng.uniform()];
+    }
+    let (u1, u2, u3) = (rng.uniform(), rng.uniform(), rng.uniform());
+    let tau = std::f64::consts::TAU;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    vec![
+        b * (tau * u3).cos(),
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+    ]
+}
+
+/// Placed items by bucket: cells of edge at least the largest enclosing diameter, so that
+/// items within reach of each other lie in the same or adjacent buckets. In a periodic cell the
+/// buckets divide the fractional coordinates, `n_k = ⌊w_k / edge⌋` of them along axis k (`w_k`
+/// the cell's width across its lattice planes): a Cartesian distance d has |Δs_k|·w_k ≤ d, so
+/// the same argument holds with indices taken modulo `n_k`.
+struct Buckets<const N: usize> {
+    edge: f64,
+    /// A periodic cell, its widths and its buckets per axis.
+    periodic: Option<([[f64; N]; N], [f64; N], [i64; N])>,
+    items: HashMap<[i64; N], Vec<u32>>,
+}
+
+impl<const N: usize> Buckets<N> {
+    fn new(container: &Container<N>, edge: f64) -> Self {
+        let periodic = match *container {
+            Container::Periodic { cell } => {
+                let w = widths(&cell);
+                let counts = std::array::from_fn(|k| ((w[k] / edge).floor() as i64).max(1));
+                Some((cell, w, counts))
+            }
+            _ => None,
+        };
+        Self {
+            edge,
+            periodic,
+            items: HashMap::new(),
+        }
+    }
+
+    fn key(&self, centre: &[f64; N]) -> [i64; N] {
+        match &self.periodic {
+            None => std::array::from_fn(|k| (centre[k] / self.edge).floor() as i64),
+            Some((cell, _, counts)) => {
+                let s = to_fractional(cell, centre);
+                std::array::from_fn(|k| {
+                    let f = s[k] - s[k].floor();
+                    ((f * counts[k] as f64) as i64).clamp(0, counts[k] - 1)
+                })
+            }
+        }
+    }
+
+    fn insert(&mut self, item: usize, body: &Body<N>) {
+        let key = self.key(&body.centre());
+        self.items.entry(key).or_default().push(item as u32);
+    }
+
+    /// The keys of the bucket of `key` and its neighbours, each once.
+    fn around(&self, key: [i64; N]) -> Vec<[i64; N]> {
+        let mut keys: Vec<[i64; N]> = Vec::with_capacity(3usize.pow(N as u32));
+        for code in 0..3usize.pow(N as u32) {
+            let mut k = key;
+            let mut c = code;
+            for (axis, v) in k.iter_mut().enumerate() {
+                *v += (c % 3) as i64 - 1;
+                c /= 3;
+                if let Some((_, _, counts)) = &self.periodic {
+                    *v = v.rem_euclid(counts[axis]);
+                }
+            }
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        keys
+    }
+
+    /// Whether `body` overlaps a placed item (in a periodic cell: any image of one, or an
+    /// image of itself), by PW85: μ² < 1.
+    fn overlaps(&self, body: &Body<N>, placed: &[Option<Body<N>>]) -> Result<bool, Error> {
+        if self.overlaps_own_images(body)? {
+            return Ok(true);
+        }
+        for key in self.around(self.key(&body.centre())) {
+            for &j in self.items.get(&key).map_or(&[][..], Vec::as_slice) {
+                if let Some(other) = &placed[j as usize]
+                    && self.pair_overlaps(body, other)?
+                {
+                    return Ok(true);
+                }
+            }
+        }
+        Ok(false)
+    }
+
+    /// PW85 on `a` and every image of `b` within reach (the body itself in a container).
+    fn pair_overlaps(&self, a: &Body<N>, b: &Body<N>) -> Result<bool, Error> {
+        let reach = a.bounding_radius() + b.bounding_radius();
+        let Some((cell, w, _)) = &self.periodic else {
+            return overlap_at(a, b, b.centre(), reach);
+        };
+        let (sa, sb) = (
+            to_fractional(cell, &a.centre()),
+            to_fractional(cell, &b.centre()),
+        );
+        let ds: [f64; N] = std::array::from_fn(|k| {
+            let d = sb[k] - sa[k];
+            d - d.round()
+        });
+        // |Δs_k + n_k|·w_k ≤ reach with |Δs_k| ≤ 1/2 bounds |n_k| by 1/2 + reach / w_k.
+        let bound: [i64; N] = std::array::from_fn(|k| (0.5 + reach / w[k]).floor() as i64);
+        let mut hit = false;
+        for_each_shift(&bound, |n| {
+            if hit {
+                return Ok(());
+            }
+            let s: [f64; N] = std::array::from_fn(|k| ds[k] + n[k] as f64);
+            let d = to_cartesian(cell, &s);
+            let at = std::array::from_fn(|k| a.centre()[k] + d[k]);
+            hit = overlap_at(a, b, at, reach)?;
+            Ok(())
+        })?;
+        Ok(hit)
+    }
+
+    /// In a periodic cell, PW85 on the body and its own images within reach.
+    fn overlaps_own_images(&self, body: &Body<N>) -> Result<bool, Error> {
+        let Some((cell, w, _)) = &self.periodic else {
+            return Ok(false);
+        };
+        let reach = 2.0 * body.bounding_radius();
+        let bound: [i64; N] = std::array::from_fn(|k| (reach / w[k]).floor() as i64);
+        let mut hit = false;
+        for_each_shift(&bound, |n| {
+            if hit || n.iter().all(|&v| v == 0) {
+                return Ok(());
+            }
+            let d = to_cartesian(cell, &n.map(|v| v as f64));
+            let at = std::array::from_fn(|k| body.centre()[k] + d[k]);
+            hit = overlap_at(body, body, at, reach)?;
+            Ok(())
+        })?;
+        Ok(hit)
+    }
+}
+
+/// Whether `a` overlaps `b` moved to `at`: enclosing balls first, then PW85 (μ² < 1).
+fn overlap_at<const N: usize>(
+    a: &Body<N>,
+    b: &Body<N>,
+    at: [f64; N],
+    reach: f64,
+) -> Result<bool, Error> {
+    let c = a.centre();
+    let d2: f64 = (0..N).map(|k| (at[k] - c[k]).powi(2)).sum();
+    if d2 >= reach * reach {
+        return Ok(false);
+    }
+    let moved = b.with_centre(at)?;
+    let contact = implicit_packing::certificate::contact(a, &moved).map_err(|source| {
+        implicit_packing::Error::Certification {
+            pair: (0, 0),
+            source,
+        }
+    })?;
+    Ok(contact.mu2 < 1.0)
+}
+
+/// Calls `f` for every integer vector n with |n_k| ≤ bound_k.
+fn for_each_shift<const N: usize>(
+    bound: &[i64; N],
+    mut f: impl FnMut([i64; N]) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let mut n = bound.map(|b| -b);
+    loop {
+        f(n)?;
+        let mut k = 0;
+        loop {
+            if k == N {
+                return Ok(());
+            }
+            n[k] += 1;
+            if n[k] <= bound[k] {
+                break;
+            }
+            n[k] = -bound[k];
+            k += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use implicit_packing::containment::ContainerShape;
+
+    fn fraction<const N: usize>(p: &mut Model<N>, x: &[f64]) -> f64 {
+        crate::local::item_measure(p) / p.evaluate(x, None).unwrap().objective
+    }
+
+    #[test]
+    fn random_starts_are_certified_in_every_container_kind() {
+        for kind in [
+            ContainerShape::Ball,
+            ContainerShape::Ellipsoid,
+            ContainerShape::Box,
+            ContainerShape::Periodic,
+        ] {
+            let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 60], kind).unwrap();
+            let dims: Vec<f64> = match kind {
+                ContainerShape::Ball => vec![6.0],
+                ContainerShape::Periodic => vec![9.0, 9.0, 9.0, 0.0, 0.0, 0.0],
+                _ => vec![7.0, 5.5, 5.0],
+            };
+            let x = sequential_addition(&p, &dims, 7, ATTEMPTS_PER_ITEM).unwrap();
+            assert!(p.certify(&x).unwrap().is_feasible(), "{kind:?}");
+            assert_eq!(&x[60 * 6..], &dims[..]);
+            let mut q = Model::<2>::new(vec![[2.0, 1.0]; 40], kind).unwrap();
+            let dims2: Vec<f64> = match kind {
+                ContainerShape::Ball => vec![18.0],
+                ContainerShape::Periodic => vec![30.0, 28.0, 3.0],
+                _ => vec![17.0, 14.0],
+            };
+            let y = sequential_addition(&q, &dims2, 7, ATTEMPTS_PER_ITEM).unwrap();
+            assert!(q.certify(&y).unwrap().is_feasible(), "{kind:?} 2D");
+            assert!(fraction(&mut q, &y) > 0.0);
+        }
+    }
+
+    #[test]
+    fn the_same_seed_gives_the_same_start_and_another_seed_another() {
+        let p = Model::<2>::new(vec![[1.0, 1.0]; 16], ContainerShape::Periodic).unwrap();
+        let dims = [12.0, 12.0, 0.0];
+        let a = sequential_addition(&p, &dims, 3, ATTEMPTS_PER_ITEM).unwrap();
+        let b = sequential_addition(&p, &dims, 3, ATTEMPTS_PER_ITEM).unwrap();
+        let c = sequential_addition(&p, &dims, 4, ATTEMPTS_PER_ITEM).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
+
+    #[test]
+    fn a_container_too_small_for_the_items_is_a_typed_error() {
+        let p = Model::<2>::new(vec![[1.0, 1.0]; 10], ContainerShape::Ball).unwrap();
+        // Ten unit discs do not fit in a disc of radius 2.
+        let r = sequential_addition(&p, &[2.0], 1, 200);
+        assert!(
+            matches!(r, Err(Error::RandomStart { attempts: 200, .. })),
+            "{r:?}"
+        );
+    }
+
+    /// An item longer than a thin periodic cell is wide overlaps its own image; the start
+    /// never keeps such a placement.
+    #[test]
+    fn items_never_overlap_their_own_images() {
+        let mut p = Model::<2>::new(vec![[3.0, 0.5]; 4], ContainerShape::Periodic).unwrap();
+        let dims = [4.0, 40.0, 0.0];
+        let x = sequential_addition(&p, &dims, 11, ATTEMPTS_PER_ITEM).unwrap();
+        assert!(p.certify(&x).unwrap().is_feasible());
+    }
+
+    #[test]
+    fn a_target_fraction_is_reached_exactly_in_a_periodic_cell() {
+        let m = 40;
+        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; m], ContainerShape::Periodic).unwrap();
+        let volume = crate::local::item_measure(&p);
+        let side = (volume / 0.5).cbrt();
+        let dims = [side, side, side, 0.0, 0.0, 0.0];
+        let settings = RandomSettings::new(Target::Fraction, 5);
+        let r = random_packing(&mut p, &dims, &settings, &mut |_| false).unwrap();
+        assert!(r.packing.certificate.is_feasible());
+        assert_eq!(&r.packing.x[m * 6..], &dims[..]);
+        assert!(
+            (r.packing.density - 0.5).abs() < 1e-12,
+            "{}",
+            r.packing.density
+        );
+        assert!(r.start_density < 0.21);
+        assert!(p.certify(&r.packing.x).unwrap().is_feasible());
+    }
+
+    #[test]
+    fn a_fixed_ball_is_filled_at_its_fraction_from_a_random_start() {
+        let m = 30;
+        let mut p = Model::<2>::new(vec![[1.5, 1.0]; m], ContainerShape::Ball).unwrap();
+        let area = crate::local::item_measure(&p);
+        let radius = (area / 0.6 / std::f64::consts::PI).sqrt();
+        let settings = RandomSettings::new(Target::Fraction, 2);
+        let r = random_packing(&mut p, &[radius], &settings, &mut |_| false).unwrap();
+        assert!(p.certify(&r.packing.x).unwrap().is_feasible());
+        assert_eq!(*r.packing.x.last().unwrap(), radius);
+        assert!((r.packing.density - 0.6).abs() < 1e-12);
+    }
+
+    /// Jammed discs of two sizes (ratio 1.4, half and half) in a periodic square: denser than
+    /// the start and than random close packing's lower reaches, and less dense than the
+    /// hexagonal crystal (0.9069).
+    #[test]
+    fn bidisperse_discs_jam_between_random_and_crystal() {
+        let mut axes = vec![[0.5, 0.5]; 24];
+        axes.extend(vec![[0.7, 0.7]; 24]);
+        let mut p = Model::<2>::new(axes, ContainerShape::Periodic).unwrap();
+        let settings = RandomSettings::new(Target::Jammed, 9);
+        let r = random_packing(&mut p, &[1.0, 1.0, 0.0], &settings, &mut |_| false).unwrap();
+        assert!(p.certify(&r.packing.x).unwrap().is_feasible());
+        let d = r.packing.density;
+        eprintln!("jammed bidisperse discs: {d} from {}", r.start_density);
+        assert!(d > 0.78 && d < 0.9069, "jammed at {d}");
+        let cell = &r.packing.x[48 * 3..];
+        assert_eq!(cell[2], 0.0, "the square stays a square");
+        assert!((cell[0] - cell[1]).abs() < 1e-12 * cell[0]);
+    }
+
+    #[test]
+    fn the_observer_stops_a_target_run_short_of_its_fraction() {
+        let mut p = Model::<2>::new(vec![[1.0, 1.0]; 20], ContainerShape::Box).unwrap();
+        let half = (crate::local::item_measure(&p) / 0.8).sqrt() / 2.0;
+        let settings = RandomSettings::new(Target::Fraction, 1);
+        let r = random_packing(&mut p, &[half, half], &settings, &mut |_| true);
+        let Err(Error::NotReached(u)) = r else {
+            panic!("an interrupted run reached its fraction: {r:?}");
+        };
+        assert!(u.interrupted);
+        assert_eq!(&u.x[60..], &[half, half]);
+        assert!((u.density - 0.8).abs() < 1e-12);
+    }
+}
