@@ -14,6 +14,7 @@ use ellipack::render::{RenderOptions, write_pictures};
 use ellipack::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::error::Error;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -133,6 +134,11 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let cell = Cell::enclosing(&outcome.packing);
     write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
+    let structure = ellipack::analysis::analyse(&outcome.packing, &structure::Settings::default());
+    match &structure {
+        Ok(s) => ellipack::analysis::write_structure(staged, s)?,
+        Err(e) => eprintln!("note: the structure was not measured: {e}"),
+    }
     if scene.output.pictures {
         let options = RenderOptions {
             width: scene.output.image_width,
@@ -324,6 +330,90 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
 const PACK_FORMATS: [Format; 3] = [Format::Lammps, Format::Gsd, Format::Obj];
 
 /// `ellipack convert`: the files of `formats` for the packing in `folder`.
+/// The options of `ellipack analyse`.
+pub struct AnalyseArgs {
+    pub folder: PathBuf,
+    pub gap: f64,
+    pub bond_cutoff: Option<f64>,
+    pub rdf_range: Option<f64>,
+    pub rdf_bins: usize,
+}
+
+/// `ellipack analyse`: the structure of a packing folder, written into it and summarised.
+pub fn analyse(args: &AnalyseArgs) -> Result<ExitCode, Box<dyn Error>> {
+    let summary_path = args.folder.join(SUMMARY_FILE);
+    let text = std::fs::read_to_string(&summary_path).map_err(|source| PackingError::Read {
+        path: summary_path.clone(),
+        source,
+    })?;
+    let summary_name = summary_path.display().to_string();
+    let stated = read_stated_summary(&text, &summary_name)?;
+    let (packing, _) = read_table_into(
+        &args.folder.join(CSV_FILE),
+        stated.container,
+        stated.items,
+        &summary_name,
+    )?;
+    let settings = structure::Settings::default()
+        .with_contact_gap(args.gap)
+        .with_bond_cutoff(args.bond_cutoff)
+        .with_rdf_range(args.rdf_range)
+        .with_rdf_bins(args.rdf_bins);
+    let s = ellipack::analysis::analyse(&packing, &settings)?;
+    ellipack::analysis::write_structure(&args.folder, &s)?;
+    let mut out = std::io::stdout().lock();
+    let lines = structure_lines(&s);
+    for line in lines {
+        if writeln!(out, "{line}").is_err() {
+            // The reader has gone (`ellipack analyse out | head -1`): nothing more to say.
+            return Ok(ExitCode::SUCCESS);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The structure of a packing in a few lines, for the terminal.
+fn structure_lines(s: &structure::Structure) -> Vec<String> {
+    let mut lines = vec![format!(
+        "{} items, density {:.5}, mean equivalent diameter {:.6}",
+        s.items, s.density, s.mean_equivalent_diameter
+    )];
+    let axes: Vec<String> = s
+        .nematic
+        .iter()
+        .map(|n| format!("axis {}: S = {:.4}", n.axis + 1, n.order))
+        .collect();
+    lines.push(format!("nematic order: {}", axes.join(", ")));
+    lines.push(match &s.bond_order {
+        structure::BondOrder::Steinhardt {
+            cutoff,
+            mean_bonds,
+            q4,
+            q6,
+            q4_local,
+            q6_local,
+        } => format!(
+            "Steinhardt (bonds < {cutoff:.4}, {mean_bonds:.2} per item): Q4 = {q4:.4}, Q6 = \
+             {q6:.4}; mean local q4 = {q4_local:.4}, q6 = {q6_local:.4}"
+        ),
+        structure::BondOrder::Hexatic {
+            cutoff,
+            mean_bonds,
+            psi6,
+            psi6_local,
+        } => format!(
+            "hexatic (bonds < {cutoff:.4}, {mean_bonds:.2} per item): |<psi6>| = {psi6:.4}, \
+             mean |psi6| = {psi6_local:.4}"
+        ),
+    });
+    let c = &s.contacts;
+    lines.push(format!(
+        "contacts (mu < 1 + {:.1e}): {} pairs, Z = {:.3}; {} rattlers, Z without them = {:.3}",
+        c.gap, c.pairs, c.mean_contacts, c.rattlers, c.mean_contacts_without_rattlers
+    ));
+    lines
+}
+
 pub fn convert(folder: &Path, formats: &[Format]) -> Result<ExitCode, Box<dyn Error>> {
     let packing = ellipack::export::convert(folder, formats)?;
     let names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();

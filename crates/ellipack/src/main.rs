@@ -117,6 +117,32 @@ enum Command {
         )]
         formats: Vec<Format>,
     },
+    /// Measure the structure of a packing folder (packing.csv and summary.json): density,
+    /// nematic order S and director of each body axis, Steinhardt Q4 and Q6 (3D) or the
+    /// hexatic psi6 (2D), contacts from the PW85 contact function (mu < 1 + gap), the contact
+    /// number Z and its distribution, rattlers, and g(r). Writes structure.json and rdf.csv
+    /// into the folder (what `pack` writes with every packing) and prints a summary.
+    ///
+    /// Exit status: 0 the files were written; 1 the folder could not be read or the settings
+    /// were refused.
+    Analyse {
+        /// The folder with packing.csv and summary.json.
+        folder: PathBuf,
+        /// Relative gap of a contact: two items touch when mu < 1 + gap.
+        #[arg(long, default_value_t = structure::DEFAULT_CONTACT_GAP)]
+        gap: f64,
+        /// Bond cutoff of Q4, Q6 and psi6, a distance of centres (default: 1.4 mean equivalent
+        /// diameters).
+        #[arg(long)]
+        bond_cutoff: Option<f64>,
+        /// Largest r of g(r) (default: 5 mean equivalent diameters, at most half the smallest
+        /// width of a periodic cell).
+        #[arg(long)]
+        rdf_range: Option<f64>,
+        /// Bins of g(r).
+        #[arg(long, default_value_t = structure::DEFAULT_RDF_BINS)]
+        rdf_bins: usize,
+    },
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
     /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids or
@@ -228,6 +254,19 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             center,
         })?,
         Command::Convert { folder, formats } => commands::convert(&folder, &formats)?,
+        Command::Analyse {
+            folder,
+            gap,
+            bond_cutoff,
+            rdf_range,
+            rdf_bins,
+        } => commands::analyse(&commands::AnalyseArgs {
+            folder,
+            gap,
+            bond_cutoff,
+            rdf_range,
+            rdf_bins,
+        })?,
         Command::Instances => {
             print!("{}", ellipack::instances::listing());
             ExitCode::SUCCESS
@@ -251,6 +290,7 @@ fn run_table(command: Command) -> Result<ExitCode, Error> {
         | Command::Verify { .. }
         | Command::Merge { .. }
         | Command::Convert { .. }
+        | Command::Analyse { .. }
         | Command::Instances => Ok(ExitCode::SUCCESS),
     }
 }

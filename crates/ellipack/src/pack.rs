@@ -28,6 +28,9 @@ use std::time::{Duration, Instant};
 /// Why a run or a check failed.
 #[derive(Debug, thiserror::Error)]
 pub enum PackError {
+    /// The structure of a packing could not be measured.
+    #[error("structure: {0}")]
+    Structure(#[from] structure::Error),
     /// The model refused the problem.
     #[error("{0}")]
     Model(#[from] implicit_packing::Error),
@@ -793,6 +796,30 @@ fn verify_n<const N: usize>(
         overlapping_pairs,
         outside,
     })
+}
+
+/// The bodies and the container of a packing, as the model and the certificate see them.
+///
+/// # Errors
+/// [`PackError`] when the items do not form valid bodies (a zero semi-axis, NaN).
+pub fn bodies_of<const N: usize>(
+    packing: &Packing,
+) -> Result<(Vec<Body<N>>, SizedContainer<N>), PackError> {
+    let axes: Vec<[f64; N]> = match packing.items() {
+        Items::Ellipses(v) => v
+            .iter()
+            .map(|e| std::array::from_fn(|k| e.semi_axes.get(k).copied().unwrap_or(f64::NAN)))
+            .collect(),
+        Items::Ellipsoids(v) => v
+            .iter()
+            .map(|e| std::array::from_fn(|k| e.semi_axes.get(k).copied().unwrap_or(f64::NAN)))
+            .collect(),
+    };
+    let kind = model_container(packing.container().kind());
+    let mut problem = Model::<N>::new(axes.clone(), kind)?;
+    let x = variables_of::<N>(packing, &axes, kind)?;
+    let container = problem.container_at(&x)?;
+    Ok((problem.bodies_at(&x)?.to_vec(), container))
 }
 
 /// The summary's certificate: the counts and the smallest μ² of the one certificate.

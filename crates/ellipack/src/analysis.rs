@@ -1,0 +1,103 @@
+//! The structure of a packing ([`structure`]: density, nematic order, bond order, contacts,
+//! g(r)) as the files hold it: `structure.json` and `rdf.csv`, written beside every packing
+//! and by `ellipack analyse` for any packing folder.
+
+use crate::error::Error;
+use crate::pack::{PackError, bodies_of};
+use crate::packing::{Items, Packing};
+use serde_json::json;
+use std::path::Path;
+use structure::{BondOrder, Settings, Structure};
+
+/// The structure's file.
+pub const STRUCTURE_FILE: &str = "structure.json";
+/// g(r), one row per bin: `r,g`.
+pub const RDF_FILE: &str = "rdf.csv";
+
+/// The structure of `packing` ([`structure::analyse`] on its items and container).
+///
+/// # Errors
+/// [`PackError`] when the items do not form valid bodies, or the settings are refused
+/// ([`structure::Error`]).
+pub fn analyse(packing: &Packing, settings: &Settings) -> Result<Structure, PackError> {
+    match packing.items() {
+        Items::Ellipses(_) => {
+            let (bodies, container) = bodies_of::<2>(packing)?;
+            Ok(structure::analyse(&bodies, &container, settings)?)
+        }
+        Items::Ellipsoids(_) => {
+            let (bodies, container) = bodies_of::<3>(packing)?;
+            Ok(structure::analyse(&bodies, &container, settings)?)
+        }
+    }
+}
+
+/// The text of [`STRUCTURE_FILE`]: every figure of [`Structure`] but g(r), with the settings
+/// that made it.
+pub fn structure_json(s: &Structure) -> String {
+    let bond_order = match &s.bond_order {
+        BondOrder::Steinhardt {
+            cutoff,
+            mean_bonds,
+            q4,
+            q6,
+            q4_local,
+            q6_local,
+        } => json!({
+            "kind": "steinhardt", "cutoff": cutoff, "mean_bonds": mean_bonds,
+            "q4": q4, "q6": q6, "q4_local_mean": q4_local, "q6_local_mean": q6_local,
+        }),
+        BondOrder::Hexatic {
+            cutoff,
+            mean_bonds,
+            psi6,
+            psi6_local,
+        } => json!({
+            "kind": "hexatic", "cutoff": cutoff, "mean_bonds": mean_bonds,
+            "psi6": psi6, "psi6_local_mean": psi6_local,
+        }),
+    };
+    let nematic: Vec<_> = s
+        .nematic
+        .iter()
+        .map(|n| json!({"axis": n.axis, "order": n.order, "director": n.director}))
+        .collect();
+    let c = &s.contacts;
+    let value = json!({
+        "items": s.items,
+        "density": s.density,
+        "mean_equivalent_diameter": s.mean_equivalent_diameter,
+        "nematic": nematic,
+        "bond_order": bond_order,
+        "contacts": {
+            "gap": c.gap,
+            "pairs": c.pairs,
+            "mean_contacts": c.mean_contacts,
+            "distribution": c.distribution,
+            "rattlers": c.rattlers,
+            "mean_contacts_without_rattlers": c.mean_contacts_without_rattlers,
+        },
+    });
+    let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+/// The text of [`RDF_FILE`].
+pub fn rdf_csv(s: &Structure) -> String {
+    let mut out = String::from("r,g\n");
+    for (r, g) in s.rdf.r.iter().zip(&s.rdf.g) {
+        out.push_str(&format!("{r:.9e},{g:.9e}\n"));
+    }
+    out
+}
+
+/// Writes [`STRUCTURE_FILE`] and [`RDF_FILE`] into `dir`, each atomically.
+///
+/// # Errors
+/// [`Error`] naming the file that could not be written.
+pub fn write_structure(dir: &Path, s: &Structure) -> Result<(), Error> {
+    crate::output::write_atomically(&dir.join(STRUCTURE_FILE), structure_json(s).as_bytes())?;
+    crate::output::write_atomically(&dir.join(RDF_FILE), rdf_csv(s).as_bytes())?;
+    Ok(())
+}
