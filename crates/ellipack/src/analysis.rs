@@ -9,10 +9,7 @@ use serde_json::json;
 use std::path::Path;
 use structure::{BondOrder, Settings, Structure};
 
-/// The structure's file.
-pub const STRUCTURE_FILE: &str = "structure.json";
-/// g(r), one row per bin: `r,g`.
-pub const RDF_FILE: &str = "rdf.csv";
+pub use crate::folder::{RDF_FILE, STRUCTURE_FILE};
 
 /// The structure of `packing` ([`structure::analyse`] on its items and container).
 ///

@@ -30,6 +30,10 @@ use std::path::{Path, PathBuf};
 
 /// The file name of the per-run history table.
 pub const HISTORY_FILE: &str = "history.csv";
+/// The structure of the packing ([`crate::analysis`]).
+pub const STRUCTURE_FILE: &str = "structure.json";
+/// Its g(r), one row per bin: `r,g`.
+pub const RDF_FILE: &str = "rdf.csv";
 /// The file name of the SVG picture (drawn by `render` with the `pictures` feature).
 pub const SVG_FILE: &str = "packing.svg";
 /// The file name of the PNG picture (drawn by `render` with the `pictures` feature).
@@ -37,9 +41,11 @@ pub const PNG_FILE: &str = "packing.png";
 
 /// Every file `ellipack pack` writes into an output folder. Anything else there belongs to the
 /// user and is kept.
-pub const RUN_FILES: [&str; 9] = [
+pub const RUN_FILES: [&str; 11] = [
     CSV_FILE,
     SUMMARY_FILE,
+    STRUCTURE_FILE,
+    RDF_FILE,
     XYZ_FILE,
     LAMMPS_FILE,
     GSD_FILE,

@@ -22,6 +22,8 @@
 //! # packing_fraction = 0.6            # any kind: a circle or ball, a square or cube, a disc-
 //! #                                   # or sphere-shaped ellipse or ellipsoid, sized so that
 //! #                                   # the items fill this fraction of it
+//! # packing_fraction = "jammed"       # a random packing compressed until jammed, in a
+//! #                                   # container of that shape (a cube cell if periodic)
 //!
 //! [[shapes]]                          # one table per group of identical items
 //! count = 20
@@ -39,6 +41,9 @@
 //! # local_minimisations = 50          # cap on multi-start local minimisations (default: none)
 //! inner_solver = "projected-lbfgs"    # or "spg", "truncated-newton"
 //! method = "lagrangian"               # or "compression", "compression-lagrangian" (large m)
+//! start = "lattice"                   # or "random": items at random positions and
+//!                                     # orientations, compressed to the container's fraction
+//!                                     # (needs a container size; "jammed" implies it)
 //! perturbation = 0.025                # multi-start perturbation, relative (paper: 2.5 % in 2D,
 //!                                     # 10 % in 3D: the default follows the dimension)
 //! lattice_starts = 16                 # dense lattice starts before the perturbations
@@ -78,6 +83,12 @@
 //!     "bad.toml: line 3, column 8: `container.kind`: a ball is a 3D container; \
 //!      with dimension = 2 use circle, ellipse, rectangle or periodic");
 //! ```
+//!
+//! A random packing (`start = "random"`, or `packing_fraction = "jammed"`) begins with random
+//! sequential addition at a low fraction (0.35 in 2D, 0.2 in 3D) and compresses the
+//! container, its shape kept, through certified placements
+//! ([`ellipsoid_packer::random`]): to exactly the scene's fraction, or until no step can be
+//! certified. It is one sample of a random packing, not a multi-start; the seed repeats it.
 //!
 //! Unknown keys, values of the wrong type and impossible values (a semi-axis ≤ 0, a count of
 //! 0, no shapes, a container of the other dimension, a container size that does not fit the

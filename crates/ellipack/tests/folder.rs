@@ -87,7 +87,9 @@ fn a_new_run_drops_stale_files_and_keeps_the_users() {
             "packing.csv",
             "packing.data",
             "packing.gsd",
+            "rdf.csv",
             "scene.toml",
+            "structure.json",
             "summary.json"
         ]
     );
@@ -177,6 +179,8 @@ fn temporary_files_of_killed_runs_are_removed() {
             "packing.csv",
             "packing.data",
             "packing.gsd",
+            "rdf.csv",
+            "structure.json",
             "summary.json"
         ]
     );

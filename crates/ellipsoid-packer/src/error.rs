@@ -67,6 +67,16 @@ pub enum Error {
         /// Attempts made for it.
         attempts: usize,
     },
+    /// A size or aspect distribution gave no draw within its bounds
+    /// ([`crate::random::MAX_REJECTIONS`] draws in a row).
+    #[error(
+        "shape group {group}: its distribution gave no value within its bounds in {} draws",
+        crate::random::MAX_REJECTIONS
+    )]
+    Distribution {
+        /// The group (0-based).
+        group: u64,
+    },
     /// A thread of the run panicked (a bug: please report it with the scene).
     #[error("a start of the multi-start panicked")]
     StartPanicked,

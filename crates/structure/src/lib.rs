@@ -29,6 +29,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
+// Index loops over m and k read like the sums they compute.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bond_order;
 pub mod contacts;
@@ -196,7 +198,7 @@ pub fn analyse<const N: usize>(
         Container::Periodic { cell } => Some(cell),
         _ => None,
     };
-    let bonds = neighbours::Bonds::within(&centres, cell, bond.max(range).max(reach))?;
+    let bonds = neighbours::Bonds::within(&centres, cell, bond.max(reach))?;
     let measure = container.measure().0;
     let item_measure: f64 = bodies.iter().map(body_measure).sum();
     Ok(Structure {
@@ -206,7 +208,7 @@ pub fn analyse<const N: usize>(
         nematic: nematic::nematic_order(bodies),
         bond_order: bond_order::bond_order(&bonds, bond),
         contacts: contacts::contacts(bodies, &bonds, settings.contact_gap)?,
-        rdf: rdf::rdf(&bonds, measure, range, settings.rdf_bins),
+        rdf: rdf::rdf(&centres, cell, measure, range, settings.rdf_bins)?,
     })
 }
 

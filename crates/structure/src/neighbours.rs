@@ -37,34 +37,13 @@ impl<const N: usize> Bonds<N> {
         cell: Option<&[[f64; N]; N]>,
         cutoff: f64,
     ) -> Result<Self, Error> {
-        let m = centres.len();
-        let mut bonds = Bonds {
-            cutoff,
-            of_item: vec![Vec::new(); m],
-        };
-        let (points, owner) = match cell {
-            None => (centres.to_vec(), (0..m).collect()),
-            Some(cell) => images(centres, cell, cutoff)?,
-        };
-        let grid = cell_grid::Grid::<N>::build(&points, cutoff)?;
-        let of_item = &mut bonds.of_item;
-        grid.for_each_pair_within(&points, |a, b, _| {
-            let d: [f64; N] = std::array::from_fn(|k| points[b][k] - points[a][k]);
-            match (a < m, b < m) {
-                (true, true) => {
-                    of_item[a].push((b, d));
-                    of_item[b].push((a, d.map(|v| -v)));
-                }
-                (true, false) => of_item[a].push((owner[b], d)),
-                (false, true) => of_item[b].push((owner[a], d.map(|v| -v))),
-                (false, false) => {}
-            }
-        })?;
+        let mut of_item = vec![Vec::new(); centres.len()];
+        for_each_bond(centres, cell, cutoff, |i, j, d| of_item[i].push((j, d)))?;
         // The grid's order depends on its cells: sort, so that sums are reproducible.
-        for list in &mut bonds.of_item {
+        for list in &mut of_item {
             list.sort_by(|x, y| x.0.cmp(&y.0).then_with(|| compare(&x.1, &y.1)));
         }
-        Ok(bonds)
+        Ok(Bonds { cutoff, of_item })
     }
 
     /// Undirected bonds, each once: `(i, j, c_j − c_i)` with `i < j`, or `i == j` (an item
@@ -78,6 +57,39 @@ impl<const N: usize> Bonds<N> {
                 .map(move |(j, d)| (i, *j, *d))
         })
     }
+}
+
+/// Calls `f(i, j, d)` for every directed bond shorter than `cutoff`: j (an image of it) is at
+/// `c_i + d`. Each bond comes twice, once from each end; nothing is stored, so a long cutoff
+/// (g(r) over several diameters) costs time but no memory per bond.
+///
+/// # Errors
+/// As [`Bonds::within`].
+pub fn for_each_bond<const N: usize>(
+    centres: &[[f64; N]],
+    cell: Option<&[[f64; N]; N]>,
+    cutoff: f64,
+    mut f: impl FnMut(usize, usize, [f64; N]),
+) -> Result<(), Error> {
+    let m = centres.len();
+    let (points, owner) = match cell {
+        None => (centres.to_vec(), (0..m).collect()),
+        Some(cell) => images(centres, cell, cutoff)?,
+    };
+    let grid = cell_grid::Grid::<N>::build(&points, cutoff)?;
+    grid.for_each_pair_within(&points, |a, b, _| {
+        let d: [f64; N] = std::array::from_fn(|k| points[b][k] - points[a][k]);
+        match (a < m, b < m) {
+            (true, true) => {
+                f(a, b, d);
+                f(b, a, d.map(|v| -v));
+            }
+            (true, false) => f(a, owner[b], d),
+            (false, true) => f(b, owner[a], d.map(|v| -v)),
+            (false, false) => {}
+        }
+    })?;
+    Ok(())
 }
 
 fn compare<const N: usize>(a: &[f64; N], b: &[f64; N]) -> std::cmp::Ordering {
