@@ -40,19 +40,16 @@ impl InstanceShapes {
     /// The groups of a scene holding these items (one group per distinct shape).
     pub fn groups(&self) -> Vec<ShapeGroup> {
         match *self {
-            InstanceShapes::Identical { count, semi_axes } => vec![ShapeGroup {
-                count,
-                semi_axes: semi_axes.to_vec(),
-            }],
+            InstanceShapes::Identical { count, semi_axes } => {
+                vec![ShapeGroup::identical(count, semi_axes.to_vec())]
+            }
             InstanceShapes::DistinctEllipses { steps } => {
                 // (5 + α) / 5 is the double nearest to 1 + 0.2α; 1.0 + 0.2 * α is not always.
                 let length = |k: u32| f64::from(5 + k) / 5.0;
                 (0..=steps)
                     .flat_map(|a| {
-                        (a..=steps).map(move |b| ShapeGroup {
-                            count: 1,
-                            semi_axes: vec![length(a), length(b)],
-                        })
+                        (a..=steps)
+                            .map(move |b| ShapeGroup::identical(1, vec![length(a), length(b)]))
                     })
                     .collect()
             }

@@ -569,8 +569,11 @@ fn run_random<const N: usize>(
     let dims = model_dimensions(container, kind);
     let mut local = local_settings(scene);
     local.method = LocalMethod::Compression;
+    local.fixed_orientations = scene.item_fixed_orientations();
     let seed = options.seed.unwrap_or(scene.seed);
-    let settings = RandomSettings::new(target, seed).with_local(local.clone());
+    let settings = RandomSettings::new(target, seed)
+        .with_local(local.clone())
+        .with_orientations(scene.item_orientations());
     let time_limit = options.time_limit.unwrap_or(scene.solver.time_limit);
     let shared: &dyn Observer = &*observer;
     let mut observe = |p: &ellipsoid_packer::multistart::SolverProgress<'_>| {

@@ -97,6 +97,7 @@
 
 use crate::packing::{Container, ContainerKind};
 use crate::table::short;
+pub use ellipsoid_packer::random::{Distribution, Orientation};
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -259,13 +260,55 @@ pub enum RandomGoal {
 /// ([`Scene::random_goal`]); any size would do, the run's start sets its own.
 const JAMMED_SHAPE_FRACTION: f64 = 0.5;
 
-/// A group of identical items.
+/// A group of items: identical, drawn from size and aspect distributions, or read from an
+/// item file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeGroup {
     /// How many (≥ 1).
     pub count: usize,
-    /// Their semi-axes: as many as the dimension, each positive and finite.
+    /// Their semi-axes (with distributions: the semi-axes of a factor 1; from a file: the
+    /// first row's): as many as the dimension, each positive and finite.
     pub semi_axes: Vec<f64>,
+    /// The distribution of the factor scaling every semi-axis of an item (`size`).
+    pub size: Option<Distribution>,
+    /// The distribution of the stretch of the first semi-axis against the others at constant
+    /// area or volume (`aspect`; [`ellipsoid_packer::random::stretched`]).
+    pub aspect: Option<Distribution>,
+    /// How the items are oriented in a random start (`orientation`; `None`: isotropic).
+    pub orientation: Option<Orientation>,
+    /// Whether the items keep their start orientation through the compression of a random
+    /// packing (`orientation.fixed`).
+    pub fixed_orientation: bool,
+    /// The items of an item file (`file`), when the group comes from one.
+    pub file: Option<ItemFile>,
+}
+
+impl ShapeGroup {
+    /// `count` identical items.
+    pub fn identical(count: usize, semi_axes: Vec<f64>) -> Self {
+        ShapeGroup {
+            count,
+            semi_axes,
+            size: None,
+            aspect: None,
+            orientation: None,
+            fixed_orientation: false,
+            file: None,
+        }
+    }
+}
+
+/// The items of a group read from a CSV file: a header naming the columns `a`, `b` (and `c`
+/// in 3D), optionally `theta` (2D) or `qw`, `qx`, `qy`, `qz` (3D) for the orientation in a
+/// random start; other columns are ignored, so a `packing.csv` serves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ItemFile {
+    /// The file, as the scene names it (relative to the scene's folder).
+    pub path: PathBuf,
+    /// Each row's semi-axes.
+    pub semi_axes: Vec<Vec<f64>>,
+    /// Each row's orientation, when the file gives them.
+    pub orientations: Option<Vec<Vec<f64>>>,
 }
 
 /// Settings of the solver and the multi-start.
@@ -435,7 +478,7 @@ struct RawScene {
     dimension: Spanned<i64>,
     seed: Option<Spanned<RawSeed>>,
     container: RawContainer,
-    shapes: Option<Spanned<Vec<RawShapes>>>,
+    shapes: Option<Spanned<Vec<Spanned<RawShapes>>>>,
     solver: Option<RawSolver>,
     output: Option<RawOutput>,
 }
@@ -522,8 +565,29 @@ impl<'de> Deserialize<'de> for RawFraction {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawShapes {
-    count: Spanned<i64>,
-    semi_axes: Spanned<Vec<f64>>,
+    count: Option<Spanned<i64>>,
+    semi_axes: Option<Spanned<Vec<f64>>>,
+    size: Option<Spanned<RawDistribution>>,
+    aspect: Option<Spanned<RawDistribution>>,
+    orientation: Option<Spanned<RawOrientation>>,
+    file: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDistribution {
+    distribution: String,
+    sigma: Option<f64>,
+    min: Option<f64>,
+    max: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawOrientation {
+    axis: Option<Vec<f64>>,
+    concentration: Option<f64>,
+    fixed: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -565,8 +629,17 @@ impl Scene {
     /// that are not positive and finite or not `dimension` of them, tolerances, time limit or
     /// perturbation out of range.
     pub fn from_toml_str(text: &str, source_name: &str) -> Result<Scene, SceneError> {
+        Scene::parse(text, source_name, false)
+    }
+
+    fn parse(text: &str, source_name: &str, from_file: bool) -> Result<Scene, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(text, source_name, &e))?;
-        Validator { text, source_name }.scene(raw)
+        Validator {
+            text,
+            source_name,
+            from_file,
+        }
+        .scene(raw)
     }
 
     /// Reads and validates a scene file.
@@ -583,7 +656,7 @@ impl Scene {
             key: "<file>".to_string(),
             message: e.to_string(),
         })?;
-        Scene::from_toml_str(&text, &name)
+        Scene::parse(&text, &name, true)
     }
 
     /// The built-in scene, [`DEFAULT_SCENE`].
@@ -609,11 +682,61 @@ impl Scene {
     }
 
     fn expand<T: Copy>(&self, convert: impl Fn(&[f64]) -> T) -> Vec<T> {
+        self.item_semi_axes().iter().map(|l| convert(l)).collect()
+    }
+
+    /// The semi-axes of every item, groups in order: a group's distributions are drawn once,
+    /// from stream `g` (the group's index) of the scene's seed, so the same scene always holds
+    /// the same items.
+    pub fn item_semi_axes(&self) -> Vec<Vec<f64>> {
         let mut out = Vec::with_capacity(self.item_count());
-        for g in &self.shapes {
-            out.extend(std::iter::repeat_n(convert(&g.semi_axes), g.count));
+        for (g, group) in self.shapes.iter().enumerate() {
+            if let Some(file) = &group.file {
+                out.extend(file.semi_axes.iter().cloned());
+            } else if group.size.is_none() && group.aspect.is_none() {
+                out.extend(std::iter::repeat_n(group.semi_axes.clone(), group.count));
+            } else {
+                out.extend(drawn(group, self.seed, g).unwrap_or_else(|_| {
+                    // Validation drew every group once: this cannot fail.
+                    vec![group.semi_axes.clone(); group.count]
+                }));
+            }
         }
         out
+    }
+
+    /// How every item is oriented in a random start, groups in order.
+    pub fn item_orientations(&self) -> Vec<Orientation> {
+        let mut out = Vec::with_capacity(self.item_count());
+        for group in &self.shapes {
+            match (&group.file, &group.orientation) {
+                (
+                    Some(ItemFile {
+                        orientations: Some(given),
+                        ..
+                    }),
+                    _,
+                ) => out.extend(given.iter().map(|o| Orientation::Given(o.clone()))),
+                (_, Some(o)) => out.extend(std::iter::repeat_n(o.clone(), group.count)),
+                _ => out.extend(std::iter::repeat_n(Orientation::Isotropic, group.count)),
+            }
+        }
+        out
+    }
+
+    /// Whether each item keeps its start orientation through a random packing's compression.
+    pub fn item_fixed_orientations(&self) -> Vec<bool> {
+        self.shapes
+            .iter()
+            .flat_map(|g| std::iter::repeat_n(g.fixed_orientation, g.count))
+            .collect()
+    }
+
+    /// Whether the items are not all alike within their groups (distributions or files).
+    pub fn is_polydisperse(&self) -> bool {
+        self.shapes
+            .iter()
+            .any(|g| g.size.is_some() || g.aspect.is_some() || g.file.is_some())
     }
 
     /// A one-line description: the name if given, else e.g. "30 ellipses (2, 1) in a
@@ -629,7 +752,9 @@ impl Scene {
             (Dimension::Three, false) => "ellipsoids",
             (Dimension::Three, true) => "ellipsoid",
         };
-        let axes = if self.shapes.len() == 1 {
+        let axes = if self.is_polydisperse() {
+            " of distributed sizes and shapes".to_string()
+        } else if self.shapes.len() == 1 {
             let list: Vec<String> = self.shapes[0]
                 .semi_axes
                 .iter()
@@ -678,9 +803,9 @@ impl Scene {
             Dimension::Two => std::f64::consts::PI,
             Dimension::Three => 4.0 * std::f64::consts::PI / 3.0,
         };
-        self.shapes
+        self.item_semi_axes()
             .iter()
-            .map(|g| g.count as f64 * unit * g.semi_axes.iter().product::<f64>())
+            .map(|l| unit * l.iter().product::<f64>())
             .sum()
     }
 
@@ -790,9 +915,43 @@ impl Scene {
         }
         for g in &self.shapes {
             out.push_str("\n[[shapes]]\n");
-            line(&mut out, "count", g.count.to_string());
-            let axes: Vec<String> = g.semi_axes.iter().map(|l| toml_float(*l)).collect();
-            line(&mut out, "semi_axes", format!("[{}]", axes.join(", ")));
+            if let Some(file) = &g.file {
+                line(
+                    &mut out,
+                    "file",
+                    toml_string(&file.path.display().to_string()),
+                );
+            } else {
+                line(&mut out, "count", g.count.to_string());
+                let axes: Vec<String> = g.semi_axes.iter().map(|l| toml_float(*l)).collect();
+                line(&mut out, "semi_axes", format!("[{}]", axes.join(", ")));
+            }
+            for (key, d) in [("size", &g.size), ("aspect", &g.aspect)] {
+                if let Some(d) = d {
+                    line(&mut out, key, distribution_toml(d));
+                }
+            }
+            let mut parts = Vec::new();
+            if let Some(Orientation::Aligned {
+                axis,
+                concentration,
+            }) = &g.orientation
+            {
+                let n = self.dimension.get();
+                let axis: Vec<String> = axis[..n].iter().map(|v| toml_float(*v)).collect();
+                parts.push(format!("axis = [{}]", axis.join(", ")));
+                parts.push(format!("concentration = {}", toml_float(*concentration)));
+            }
+            if g.fixed_orientation {
+                parts.push("fixed = true".to_string());
+            }
+            if !parts.is_empty() {
+                line(
+                    &mut out,
+                    "orientation",
+                    format!("{{ {} }}", parts.join(", ")),
+                );
+            }
         }
         let s = &self.solver;
         out.push_str("\n[solver]\n");
@@ -867,6 +1026,8 @@ fn toml_float(x: f64) -> String {
 struct Validator<'a> {
     text: &'a str,
     source_name: &'a str,
+    /// Whether `source_name` is the scene's path (item files are relative to its folder).
+    from_file: bool,
 }
 
 impl Validator<'_> {
@@ -996,7 +1157,14 @@ impl Validator<'_> {
                 })?
             }
         };
-        let shapes = self.shapes(raw.shapes, dimension)?;
+        let orientation_at: Option<(usize, std::ops::Range<usize>)> =
+            raw.shapes.as_ref().and_then(|list| {
+                list.get_ref()
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, g)| g.get_ref().orientation.as_ref().map(|o| (i, o.span())))
+            });
+        let shapes = self.shapes(raw.shapes, dimension, seed)?;
         let start = raw
             .solver
             .as_ref()
@@ -1024,6 +1192,15 @@ impl Validator<'_> {
             }
             (_, Some(ContainerSize::Jammed)) => solver.start = StartName::Random,
             _ => {}
+        }
+        if let (Some((i, span)), StartName::Lattice) = (orientation_at, solver.start) {
+            return Err(self.error(
+                span,
+                &format!("shapes[{i}].orientation"),
+                "orientations are drawn in random starts: give [solver] start = \"random\" \
+                 (or packing_fraction = \"jammed\")"
+                    .to_string(),
+            ));
         }
         let output = self.output(raw.output)?;
         Ok(Scene {
@@ -1191,8 +1368,9 @@ impl Validator<'_> {
 
     fn shapes(
         &self,
-        raw: Option<Spanned<Vec<RawShapes>>>,
+        raw: Option<Spanned<Vec<Spanned<RawShapes>>>>,
         dimension: Dimension,
+        seed: u64,
     ) -> Result<Vec<ShapeGroup>, SceneError> {
         let empty = "the scene has nothing to pack: add a [[shapes]] table with `count` and \
                      `semi_axes`";
@@ -1204,63 +1382,270 @@ impl Validator<'_> {
         }
         let mut total = 0usize;
         let mut groups = Vec::new();
-        for (i, g) in raw.into_inner().into_iter().enumerate() {
-            let count = *g.count.get_ref();
+        for (i, spanned) in raw.into_inner().into_iter().enumerate() {
+            let span = spanned.span();
+            let g = spanned.into_inner();
+            let group = match &g.file {
+                Some(file) => self.file_group(i, &g, file, dimension)?,
+                None => self.drawn_group(i, &g, span, dimension)?,
+            };
             let key = format!("shapes[{i}].count");
-            if count < 1 {
-                return Err(self.error(
-                    g.count.span(),
-                    &key,
-                    format!("must be at least 1, not {count}"),
-                ));
-            }
-            // `count` is positive; beyond usize it is beyond MAX_ITEMS too.
-            let count = usize::try_from(count).unwrap_or(usize::MAX);
-            total = total.saturating_add(count);
+            total = total.saturating_add(group.count);
             if total > MAX_ITEMS {
+                let span = g
+                    .count
+                    .as_ref()
+                    .map_or(g.file.as_ref().map_or(0..0, Spanned::span), Spanned::span);
                 return Err(self.error(
-                    g.count.span(),
+                    span,
                     &key,
                     format!("the scene would hold {total} items, more than {MAX_ITEMS}"),
                 ));
             }
-            let key = format!("shapes[{i}].semi_axes");
-            let axes = g.semi_axes.get_ref();
-            if axes.len() != dimension.get() {
-                return Err(self.error(
-                    g.semi_axes.span(),
-                    &key,
-                    format!(
-                        "{} values for dimension = {}: give {} semi-axes",
-                        axes.len(),
-                        dimension.get(),
-                        dimension.get()
-                    ),
-                ));
+            if let Err(e) = drawn(&group, seed, i) {
+                let span = g
+                    .size
+                    .as_ref()
+                    .or(g.aspect.as_ref())
+                    .map_or(0..0, Spanned::span);
+                return Err(self.error(span, &format!("shapes[{i}]"), e.to_string()));
             }
-            if let Some((k, l)) = axes
-                .iter()
-                .enumerate()
-                .find(|(_, l)| !(SEMI_AXIS_RANGE.0..=SEMI_AXIS_RANGE.1).contains(*l))
-            {
-                return Err(self.error(
-                    g.semi_axes.span(),
-                    &key,
-                    format!(
-                        "semi-axis {} is {}; every semi-axis must be positive, in [{}, {}]",
-                        k + 1,
-                        short(*l),
-                        short(SEMI_AXIS_RANGE.0),
-                        short(SEMI_AXIS_RANGE.1)
-                    ),
-                ));
-            }
-            groups.push(ShapeGroup {
-                count,
-                semi_axes: axes.clone(),
-            });
+            groups.push(group);
         }
         Ok(groups)
+    }
+
+    /// A group of `count` items of `semi_axes`, with their distributions and orientation.
+    fn drawn_group(
+        &self,
+        i: usize,
+        g: &RawShapes,
+        span: std::ops::Range<usize>,
+        dimension: Dimension,
+    ) -> Result<ShapeGroup, SceneError> {
+        let missing = |field: &str| {
+            self.error(
+                span.clone(),
+                &format!("shapes[{i}].{field}"),
+                format!(
+                    "missing field `{field}`: each group needs count and semi_axes, or file = \
+                     \"items.csv\""
+                ),
+            )
+        };
+        let count_value = g.count.as_ref().ok_or_else(|| missing("count"))?;
+        let raw_axes = g.semi_axes.as_ref().ok_or_else(|| missing("semi_axes"))?;
+        let count = *count_value.get_ref();
+        if count < 1 {
+            return Err(self.error(
+                count_value.span(),
+                &format!("shapes[{i}].count"),
+                format!("must be at least 1, not {count}"),
+            ));
+        }
+        // `count` is positive; beyond usize it is beyond MAX_ITEMS too.
+        let count = usize::try_from(count).unwrap_or(usize::MAX);
+        let axes = raw_axes.get_ref();
+        let semi_axes = self.semi_axes(
+            axes,
+            raw_axes.span(),
+            &format!("shapes[{i}].semi_axes"),
+            dimension,
+        )?;
+        let mut group = ShapeGroup::identical(count, semi_axes);
+        group.size = self.distribution(g.size.as_ref(), &format!("shapes[{i}].size"))?;
+        group.aspect = self.distribution(g.aspect.as_ref(), &format!("shapes[{i}].aspect"))?;
+        (group.orientation, group.fixed_orientation) =
+            self.orientation(g.orientation.as_ref(), i, dimension)?;
+        Ok(group)
+    }
+
+    /// The semi-axes of one item, checked: as many as the dimension, each in range.
+    fn semi_axes(
+        &self,
+        axes: &[f64],
+        span: std::ops::Range<usize>,
+        key: &str,
+        dimension: Dimension,
+    ) -> Result<Vec<f64>, SceneError> {
+        if axes.len() != dimension.get() {
+            return Err(self.error(
+                span,
+                key,
+                format!(
+                    "{} values for dimension = {}: give {} semi-axes",
+                    axes.len(),
+                    dimension.get(),
+                    dimension.get()
+                ),
+            ));
+        }
+        if let Some((k, l)) = axes
+            .iter()
+            .enumerate()
+            .find(|(_, l)| !(SEMI_AXIS_RANGE.0..=SEMI_AXIS_RANGE.1).contains(*l))
+        {
+            return Err(self.error(
+                span,
+                key,
+                format!(
+                    "semi-axis {} is {}; every semi-axis must be positive, in [{}, {}]",
+                    k + 1,
+                    short(*l),
+                    short(SEMI_AXIS_RANGE.0),
+                    short(SEMI_AXIS_RANGE.1)
+                ),
+            ));
+        }
+        Ok(axes.to_vec())
+    }
+
+    /// A `size` or `aspect` table: `distribution` (`"lognormal"`, `"normal"`, `"uniform"`),
+    /// `sigma` (lognormal, normal), `min` and `max` (cut-offs; required for uniform).
+    fn distribution(
+        &self,
+        raw: Option<&Spanned<RawDistribution>>,
+        key: &str,
+    ) -> Result<Option<Distribution>, SceneError> {
+        let Some(raw) = raw else { return Ok(None) };
+        let (span, d) = (raw.span(), raw.get_ref());
+        let refuse = |message: String| self.error(span.clone(), key, message);
+        let needs = |value: Option<f64>, what: &str| {
+            value.ok_or_else(|| refuse(format!("a {} distribution needs {what}", d.distribution)))
+        };
+        let bounds = (d.min.unwrap_or(1e-3), d.max.unwrap_or(1e3));
+        let distribution = match d.distribution.as_str() {
+            "lognormal" => Distribution::LogNormal {
+                sigma: needs(d.sigma, "sigma (of ln s)")?,
+                min: bounds.0,
+                max: bounds.1,
+            },
+            "normal" => Distribution::Normal {
+                sigma: needs(d.sigma, "sigma")?,
+                min: bounds.0,
+                max: bounds.1,
+            },
+            "uniform" => {
+                if d.sigma.is_some() {
+                    return Err(refuse(
+                        "a uniform distribution has no sigma: give min and max".into(),
+                    ));
+                }
+                Distribution::Uniform {
+                    min: needs(d.min, "min")?,
+                    max: needs(d.max, "max")?,
+                }
+            }
+            other => {
+                return Err(refuse(format!(
+                    "distribution must be \"lognormal\", \"normal\" or \"uniform\", not {}",
+                    crate::table::short_text(&format!("{other:?}"))
+                )));
+            }
+        };
+        match distribution.defect() {
+            Some(defect) => Err(refuse(defect)),
+            None => Ok(Some(distribution)),
+        }
+    }
+
+    /// An `orientation` table: `axis` (the dimension's components) and `concentration` ≥ 0,
+    /// both or neither, and `fixed`.
+    fn orientation(
+        &self,
+        raw: Option<&Spanned<RawOrientation>>,
+        i: usize,
+        dimension: Dimension,
+    ) -> Result<(Option<Orientation>, bool), SceneError> {
+        let Some(raw) = raw else {
+            return Ok((None, false));
+        };
+        let (span, o) = (raw.span(), raw.get_ref());
+        let key = format!("shapes[{i}].orientation");
+        let fixed = o.fixed.unwrap_or(false);
+        let (axis, concentration) = match (&o.axis, o.concentration) {
+            (Some(axis), Some(c)) => (axis, c),
+            (None, None) => return Ok((None, fixed)),
+            _ => {
+                return Err(self.error(
+                    span,
+                    &key,
+                    "give both axis and concentration (aligned), or neither (isotropic)".into(),
+                ));
+            }
+        };
+        let n = dimension.get();
+        let norm = axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if axis.len() != n || !(norm > 0.0 && norm.is_finite()) {
+            return Err(self.error(
+                span,
+                &key,
+                format!("axis must be {n} finite values, not all zero"),
+            ));
+        }
+        if !(concentration >= 0.0 && concentration.is_finite()) {
+            return Err(self.error(
+                span,
+                &key,
+                format!(
+                    "concentration must be zero (isotropic) or positive and finite, not {}",
+                    short(concentration)
+                ),
+            ));
+        }
+        let axis = std::array::from_fn(|k| axis.get(k).copied().unwrap_or(0.0));
+        Ok((
+            Some(Orientation::Aligned {
+                axis,
+                concentration,
+            }),
+            fixed,
+        ))
+    }
+
+    /// A group read from an item file (relative to the scene's folder).
+    fn file_group(
+        &self,
+        i: usize,
+        g: &RawShapes,
+        file: &Spanned<String>,
+        dimension: Dimension,
+    ) -> Result<ShapeGroup, SceneError> {
+        let key = format!("shapes[{i}].file");
+        let given = [
+            ("count", g.count.as_ref().map(Spanned::span)),
+            ("semi_axes", g.semi_axes.as_ref().map(Spanned::span)),
+            ("size", g.size.as_ref().map(Spanned::span)),
+            ("aspect", g.aspect.as_ref().map(Spanned::span)),
+        ];
+        if let Some((other, Some(span))) = given.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(self.error(
+                span,
+                &format!("shapes[{i}].{other}"),
+                format!("a group read from a file has no {other}: the file's rows give the items"),
+            ));
+        }
+        let path = PathBuf::from(file.get_ref());
+        let full = match Path::new(self.source_name).parent() {
+            Some(dir) if path.is_relative() && self.from_file => dir.join(&path),
+            _ => path.clone(),
+        };
+        let text = std::fs::read_to_string(&full)
+            .map_err(|e| self.error(file.span(), &key, format!("{}: {e}", full.display())))?;
+        let items = read_item_file(&text, &full.display().to_string(), dimension)?;
+        let count = items.semi_axes.len();
+        let mut group = ShapeGroup::identical(count, items.semi_axes[0].clone());
+        (group.orientation, group.fixed_orientation) =
+            self.orientation(g.orientation.as_ref(), i, dimension)?;
+        if group.orientation.is_some() && items.orientations.is_some() {
+            return Err(self.error(
+                file.span(),
+                &format!("shapes[{i}].orientation"),
+                "the file gives each item's orientation: leave axis and concentration out".into(),
+            ));
+        }
+        group.file = Some(ItemFile { path, ..items });
+        Ok(group)
     }
 
     fn solver(
@@ -1379,6 +1764,183 @@ impl Validator<'_> {
         }
         Ok(o)
     }
+}
+
+/// The semi-axes of a group's items drawn from its distributions
+/// ([`ellipsoid_packer::random::draw_semi_axes`], stream `g` of `seed`).
+fn drawn(
+    group: &ShapeGroup,
+    seed: u64,
+    g: usize,
+) -> Result<Vec<Vec<f64>>, ellipsoid_packer::Error> {
+    if group.size.is_none() && group.aspect.is_none() {
+        return Ok(vec![group.semi_axes.clone(); group.count]);
+    }
+    let (size, aspect) = (group.size.as_ref(), group.aspect.as_ref());
+    let g = g as u64;
+    Ok(match group.semi_axes.as_slice() {
+        &[a, b] => {
+            ellipsoid_packer::random::draw_semi_axes(&[a, b], group.count, size, aspect, seed, g)?
+                .into_iter()
+                .map(|l| l.to_vec())
+                .collect()
+        }
+        &[a, b, c] => ellipsoid_packer::random::draw_semi_axes(
+            &[a, b, c],
+            group.count,
+            size,
+            aspect,
+            seed,
+            g,
+        )?
+        .into_iter()
+        .map(|l| l.to_vec())
+        .collect(),
+        _ => vec![group.semi_axes.clone(); group.count],
+    })
+}
+
+/// The TOML inline table of a distribution.
+fn distribution_toml(d: &Distribution) -> String {
+    match *d {
+        Distribution::LogNormal { sigma, min, max } | Distribution::Normal { sigma, min, max } => {
+            let name = if matches!(d, Distribution::LogNormal { .. }) {
+                "lognormal"
+            } else {
+                "normal"
+            };
+            format!(
+                "{{ distribution = \"{name}\", sigma = {}, min = {}, max = {} }}",
+                toml_float(sigma),
+                toml_float(min),
+                toml_float(max)
+            )
+        }
+        Distribution::Uniform { min, max } => format!(
+            "{{ distribution = \"uniform\", min = {}, max = {} }}",
+            toml_float(min),
+            toml_float(max)
+        ),
+    }
+}
+
+/// An item file's rows ([`ItemFile`]); errors name the file, the line and the column.
+fn read_item_file(text: &str, name: &str, dimension: Dimension) -> Result<ItemFile, SceneError> {
+    let at = |line: usize, key: &str, message: String| SceneError {
+        source_name: name.to_string(),
+        line,
+        column: 1,
+        key: key.to_string(),
+        message,
+    };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(at(
+            1,
+            "<header>",
+            "the file is empty: give a header and one row per item".into(),
+        ));
+    };
+    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+    let find = |c: &str| columns.iter().position(|h| *h == c);
+    let axis_names: &[&str] = if dimension == Dimension::Two {
+        &["a", "b"]
+    } else {
+        &["a", "b", "c"]
+    };
+    let orientation_names: &[&str] = if dimension == Dimension::Two {
+        &["theta"]
+    } else {
+        &["qw", "qx", "qy", "qz"]
+    };
+    let mut axis_columns = Vec::new();
+    for c in axis_names {
+        axis_columns.push(find(c).ok_or_else(|| {
+            at(
+                1,
+                "<header>",
+                format!(
+                    "no column `{c}`: the header must name {}",
+                    axis_names.join(", ")
+                ),
+            )
+        })?);
+    }
+    let orientation_columns: Option<Vec<usize>> =
+        orientation_names.iter().map(|c| find(c)).collect();
+    let mut semi_axes = Vec::new();
+    let mut orientations = Vec::new();
+    for (index, line) in lines {
+        let number = index + 1;
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let value = |k: usize, name: &str| -> Result<f64, SceneError> {
+            let field = fields.get(k).copied().unwrap_or("");
+            field
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    at(
+                        number,
+                        name,
+                        format!(
+                            "{} is not a finite number",
+                            crate::table::short_text(&format!("{field:?}"))
+                        ),
+                    )
+                })
+        };
+        let mut l = Vec::with_capacity(axis_columns.len());
+        for (&k, name) in axis_columns.iter().zip(axis_names) {
+            let v = value(k, name)?;
+            if !(SEMI_AXIS_RANGE.0..=SEMI_AXIS_RANGE.1).contains(&v) {
+                return Err(at(
+                    number,
+                    name,
+                    format!(
+                        "the semi-axis is {}; every semi-axis must be positive, in [{}, {}]",
+                        short(v),
+                        short(SEMI_AXIS_RANGE.0),
+                        short(SEMI_AXIS_RANGE.1)
+                    ),
+                ));
+            }
+            l.push(v);
+        }
+        semi_axes.push(l);
+        if let Some(cols) = &orientation_columns {
+            let o = cols
+                .iter()
+                .zip(orientation_names)
+                .map(|(&k, name)| value(k, name))
+                .collect::<Result<Vec<f64>, _>>()?;
+            if o.len() == 4 {
+                let norm2: f64 = o.iter().map(|v| v * v).sum();
+                if (norm2 - 1.0).abs() > implicit_packing::shape::QUATERNION_TOLERANCE {
+                    return Err(at(
+                        number,
+                        "qw",
+                        format!("the quaternion's squared norm is {norm2}, not 1"),
+                    ));
+                }
+            }
+            orientations.push(o);
+        }
+        if semi_axes.len() > MAX_ITEMS {
+            return Err(at(number, "<rows>", format!("more than {MAX_ITEMS} items")));
+        }
+    }
+    if semi_axes.is_empty() {
+        return Err(at(1, "<rows>", "the file has a header but no items".into()));
+    }
+    Ok(ItemFile {
+        path: PathBuf::from(name),
+        semi_axes,
+        orientations: orientation_columns.map(|_| orientations),
+    })
 }
 
 /// 1-based line and column (in characters) of a byte offset.

@@ -28,7 +28,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "random start of {m} at {start}: {:.2} s",
         t.elapsed().as_secs_f64()
     );
-    let settings = LocalSettings::default().with_method(LocalMethod::Compression);
+    let t = Instant::now();
+    let c = p.certify(&x0)?;
+    println!(
+        "certificate: {:.3} s ({} pairs)",
+        t.elapsed().as_secs_f64(),
+        c.pairs_checked
+    );
+    let t = Instant::now();
+    p.evaluate(&x0, None)?;
+    println!("one evaluation: {:.3} s", t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let y = p.dilated(&x0, 0.98);
+    let inf = ellipsoid_packer::local::infeasibility(&mut p, &y)?;
+    println!(
+        "infeasibility after a 2 % shrink {inf:.3e}: {:.3} s",
+        t.elapsed().as_secs_f64()
+    );
+    let largest: f64 = std::env::var("LARGEST").map_or(0.02, |v| v.parse().unwrap_or(0.02));
+    let settings = LocalSettings::default()
+        .with_method(LocalMethod::Compression)
+        .with_largest_compression_step(largest);
     let t = Instant::now();
     let mut last = Instant::now();
     let r = compression_to(
@@ -38,11 +58,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         target.map(|f| volume / f),
         &mut |progress| {
             if let auglag::Event::Outer { infeasibility, .. } = progress.event {
-                if last.elapsed().as_secs_f64() > 5.0 {
+                if last.elapsed().as_secs_f64() > 1.0 {
                     println!(
-                        "  {:.1} s: {} inner iterations, infeasibility {infeasibility:.3e}",
+                        "  {:.1} s: outer {} inner {} evaluations {}, infeasibility {infeasibility:.3e}",
                         t.elapsed().as_secs_f64(),
-                        progress.total_inner_iterations
+                        progress.outer_iteration,
+                        progress.total_inner_iterations,
+                        progress.evaluations
                     );
                     last = Instant::now();
                 }

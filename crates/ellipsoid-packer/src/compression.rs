@@ -133,7 +133,7 @@ pub fn compression_to<const N: usize>(
     problem.evaluate(x0, None)?;
     let mut placer = Placer::new(settings, observe);
     let mut best = first_packing(problem, x0, &mut placer)?;
-    let mut schedule = Schedule::new();
+    let mut schedule = Schedule::new(settings.largest_compression_step);
     while let Some(step) = schedule.step()
         && !placer.interrupted
         && target.is_none_or(|t| best.objective > t)
@@ -178,6 +178,8 @@ pub fn compression_to<const N: usize>(
 /// The relative shrinks δ of the compression's steps.
 struct Schedule {
     step: f64,
+    /// The largest δ.
+    largest: f64,
     /// Whether the last step failed or gained little: the next kept step does not grow δ.
     held: bool,
     /// Steps given up in a row.
@@ -185,9 +187,10 @@ struct Schedule {
 }
 
 impl Schedule {
-    fn new() -> Self {
+    fn new(largest: f64) -> Self {
         Self {
-            step: FIRST_STEP,
+            step: FIRST_STEP.min(largest),
+            largest,
             held: false,
             failures: 0,
         }
@@ -208,7 +211,7 @@ impl Schedule {
         if !progress {
             self.step *= 0.5;
         } else if !self.held {
-            self.step = (1.5 * self.step).min(FIRST_STEP);
+            self.step = (1.5 * self.step).min(self.largest);
         }
         self.held = !progress;
     }
@@ -225,6 +228,7 @@ impl Schedule {
 /// whether the observer stopped one (which ends the run).
 struct Placer<'a> {
     options: auglag::Options,
+    fixed_orientations: Vec<bool>,
     observe: &'a mut dyn FnMut(&Progress<'_>) -> bool,
     interrupted: bool,
     total: Report,
@@ -250,6 +254,7 @@ impl<'a> Placer<'a> {
             );
         Self {
             options: solver_options(&limits, tolerance),
+            fixed_orientations: settings.fixed_orientations.clone(),
             observe,
             interrupted: false,
             total: crate::local::empty_report(),
@@ -268,7 +273,8 @@ impl<'a> Placer<'a> {
         enough: Option<f64>,
     ) -> Option<Placed> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
-        let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container));
+        let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container))
+            .with_frozen_orientations(&self.fixed_orientations, x);
         let mut stall = Stall::new(self.options.max_inner_iterations);
         let mut early = None;
         let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
@@ -551,7 +557,7 @@ mod tests {
 
     #[test]
     fn the_schedule_grows_after_two_gains_and_ends_when_jammed() {
-        let mut schedule = Schedule::new();
+        let mut schedule = Schedule::new(FIRST_STEP);
         assert_eq!(schedule.step(), Some(FIRST_STEP));
         schedule.failed();
         assert_eq!(schedule.step(), Some(FIRST_STEP / 2.0));
@@ -569,7 +575,7 @@ mod tests {
         assert_eq!(schedule.step(), Some(FIRST_STEP / 2.0));
         // JAMMED_AFTER failures in a row end it while δ is still above LAST_STEP; a kept step
         // in between starts the count again.
-        let mut schedule = Schedule::new();
+        let mut schedule = Schedule::new(FIRST_STEP);
         schedule.failed();
         schedule.kept(true);
         for _ in 1..JAMMED_AFTER {
@@ -580,7 +586,7 @@ mod tests {
         assert!(schedule.step >= LAST_STEP);
         assert_eq!(schedule.step(), None);
         // And δ below LAST_STEP ends it too.
-        let mut schedule = Schedule::new();
+        let mut schedule = Schedule::new(FIRST_STEP);
         while schedule.step().is_some() {
             schedule.kept(false);
         }

@@ -63,6 +63,13 @@ pub struct LocalSettings {
     /// How the container is made small: the paper's augmented Lagrangian, compression, or
     /// both in turn.
     pub method: LocalMethod,
+    /// The largest relative shrink δ of one compression step
+    /// ([`compression::FIRST_STEP`](crate::compression::FIRST_STEP) unless set: steps grow
+    /// to it while they gain).
+    pub largest_compression_step: f64,
+    /// Items whose orientation compression keeps (their angle variables fixed at the start
+    /// of each placement), by item; empty or shorter: the others turn freely.
+    pub fixed_orientations: Vec<bool>,
 }
 
 /// How one local minimisation makes the container small.
@@ -108,6 +115,10 @@ crate::with_setters!(LocalSettings:
     with_fixed_container => fixed_container: bool,
     /// Sets [`LocalSettings::method`].
     with_method => method: LocalMethod,
+    /// Sets [`LocalSettings::largest_compression_step`].
+    with_largest_compression_step => largest_compression_step: f64,
+    /// Sets [`LocalSettings::fixed_orientations`].
+    with_fixed_orientations => fixed_orientations: Vec<bool>,
 );
 
 impl Default for LocalSettings {
@@ -122,6 +133,8 @@ impl Default for LocalSettings {
             polish_tolerance: Some(1e-10),
             fixed_container: false,
             method: LocalMethod::AugmentedLagrangian,
+            largest_compression_step: crate::compression::FIRST_STEP,
+            fixed_orientations: Vec::new(),
         }
     }
 }
@@ -617,6 +630,8 @@ pub(crate) struct Adapter<'a, const N: usize> {
     centre_bound: f64,
     /// Feasibility mode: the container variables' fixed values; the objective is then 0.
     fixed: Option<Vec<f64>>,
+    /// Angle variables held at these values: `(variable, value)`.
+    frozen: Vec<(usize, f64)>,
 }
 
 /// A point with the overlap and containment values and the three gradients there.
@@ -646,7 +661,22 @@ impl<'a, const N: usize> Adapter<'a, N> {
             lower,
             centre_bound,
             fixed,
+            frozen: Vec::new(),
         }
+    }
+
+    /// The same with the angle variables of the items marked in `items` held at their values
+    /// in `x`: those items keep their orientation.
+    pub(crate) fn with_frozen_orientations(mut self, items: &[bool], x: &[f64]) -> Self {
+        let stride = Model::<N>::vars_per_body();
+        self.frozen = items
+            .iter()
+            .enumerate()
+            .filter(|(_, frozen)| **frozen)
+            .flat_map(|(i, _)| (i * stride + N..(i + 1) * stride).map(|k| (k, x[k])))
+            .filter(|(k, _)| *k < x.len())
+            .collect();
+        self
     }
 
     /// The factor of the objective in the Lagrangian: 0 in feasibility mode, where the
@@ -695,6 +725,10 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         for k in (0..start).filter(|k| k % stride < N) {
             lower[k] = -self.centre_bound;
             upper[k] = self.centre_bound;
+        }
+        for &(k, v) in &self.frozen {
+            lower[k] = v;
+            upper[k] = v;
         }
     }
 
