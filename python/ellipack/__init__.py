@@ -51,6 +51,7 @@ __all__ = [
     "packing_from_arrays",
     "read_packing",
     "verify",
+    "analyse",
 ]
 
 
@@ -484,9 +485,41 @@ def _progress(progress) -> Tuple[Optional[Callable[[dict], Any]], Callable[[], N
     raise TypeError(f"progress: a callable, True, False or None, not {type(progress).__name__}")
 
 
+def _items_group(scene: Any, items: Any, folder: str) -> dict:
+    """The scene dict with one more shape group, read from ``items`` written as CSV."""
+    if not isinstance(scene, dict):
+        raise TypeError("items: give the scene as a dict (items add a shape group to it)")
+    dim = scene.get("dimension")
+    if dim not in (2, 3):
+        raise ValueError("items: the scene dict needs dimension = 2 or 3")
+    rows = _f64("items", items)
+    if rows.ndim != 2:
+        raise ValueError(f"items must have shape (m, {dim}) or (m, {dim + (1 if dim == 2 else 4)})")
+    axes = ["a", "b"] if dim == 2 else ["a", "b", "c"]
+    turned = ["theta"] if dim == 2 else ["qw", "qx", "qy", "qz"]
+    if rows.shape[1] == dim:
+        header = axes
+    elif rows.shape[1] == dim + len(turned):
+        header = axes + turned
+    else:
+        raise ValueError(
+            f"items must have {dim} columns (semi-axes) or {dim + len(turned)} (semi-axes and "
+            f"{', '.join(turned)}), not {rows.shape[1]}"
+        )
+    if not np.all(np.isfinite(rows)):
+        row = int(np.argwhere(~np.isfinite(rows))[0][0])
+        raise ValueError(f"items: row {row} has a value that is not finite")
+    path = os.path.join(folder, "items.csv")
+    np.savetxt(path, rows, delimiter=",", header=",".join(header), comments="", fmt="%.17g")
+    out = dict(scene)
+    out["shapes"] = list(scene.get("shapes", [])) + [{"file": path}]
+    return out
+
+
 def pack(
     scene: Union[dict, str, "os.PathLike[str]", None] = None,
     *,
+    items: Optional[npt.ArrayLike] = None,
     time_limit: Optional[float] = None,
     seed: Optional[int] = None,
     threads: Optional[int] = None,
@@ -502,6 +535,11 @@ def pack(
     in it raise ValueError naming the line and the key. ``time_limit`` (seconds), ``seed`` and
     ``threads`` (0: every core) override the scene's solver settings.
 
+    ``items``: an array of shape (m, dim) of semi-axes, one row per item (a measured particle
+    size distribution), or (m, dim + 1) in 2D with the angle, (m, dim + 4) in 3D with the
+    quaternion (w, x, y, z) each item starts from in a random packing: one more shape group
+    of the scene, which must then be a dict.
+
     ``progress``: called with a dict (``local_minimisations``, ``best_density``,
     ``last_density``, ``elapsed``) after every local minimisation, on the calling thread;
     None (the default) shows a tqdm bar when tqdm is installed; False shows nothing.
@@ -512,6 +550,17 @@ def pack(
     not raised. Any other exception from a signal handler or from ``progress`` stops the run
     and is raised.
     """
+    if items is not None:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="ellipack-items-") as folder:
+            return pack(
+                _items_group(scene, items, folder),
+                time_limit=time_limit,
+                seed=seed,
+                threads=threads,
+                progress=progress,
+            )
     text, path = _scene_source(scene)
     if time_limit is not None:
         time_limit = float(time_limit)
@@ -547,3 +596,31 @@ def packing_from_arrays(
     return _ellipack._packing_from_arrays(
         json.dumps(container, default=lambda v: v.tolist()), c.tolist(), a.tolist(), o.tolist()
     )
+
+
+def analyse(
+    packing: Packing,
+    *,
+    gap: float = 1e-3,
+    bond_cutoff: Optional[float] = None,
+    rdf_range: Optional[float] = None,
+    rdf_bins: int = 200,
+) -> dict:
+    """The structure of a packing, as ``ellipack analyse`` writes it to structure.json: a dict
+    with ``density``, ``nematic`` (per body axis: ``order`` S and ``director``),
+    ``bond_order`` (Steinhardt ``q4``, ``q6`` and their mean local values in 3D; ``psi6`` in
+    2D), ``contacts`` (``mean_contacts`` Z, ``distribution``, ``rattlers``, ...), and ``rdf``
+    with arrays ``r`` and ``g``.
+
+    ``gap``: two items touch when PW85's mu < 1 + gap; ``bond_cutoff``: the bonds of the
+    bond-order parameters (default 1.4 mean equivalent diameters); ``rdf_range``, ``rdf_bins``:
+    g(r) up to that distance (default 5 mean equivalent diameters, at most half the smallest
+    width of a periodic cell) in that many bins.
+    """
+    text, r, g = _ellipack._analyse(
+        packing, float(gap), None if bond_cutoff is None else float(bond_cutoff),
+        None if rdf_range is None else float(rdf_range), _count("rdf_bins", rdf_bins, 10**7),
+    )
+    out = json.loads(text)
+    out["rdf"] = {"r": np.asarray(r), "g": np.asarray(g)}
+    return out

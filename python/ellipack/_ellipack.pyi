@@ -84,3 +84,10 @@ def _packing_from_arrays(
     semi_axes: Sequence[Sequence[float]],
     orientations: Sequence[Sequence[float]],
 ) -> Packing: ...
+def _analyse(
+    packing: Packing,
+    gap: float,
+    bond_cutoff: Optional[float],
+    rdf_range: Optional[float],
+    rdf_bins: int,
+) -> Tuple[str, List[float], List[float]]: ...

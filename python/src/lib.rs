@@ -19,6 +19,7 @@ fn _ellipack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(packer::_packing_from_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(packer::read_packing, m)?)?;
     m.add_function(wrap_pyfunction!(packer::verify, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::_analyse, m)?)?;
     m.add_class::<packer::PyPacking>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -494,3 +494,31 @@ pub fn verify<'py>(
     d.set_item("min_mu2", v.certificate.min_mu2)?;
     Ok(d)
 }
+
+/// `_analyse(packing, gap, bond_cutoff, rdf_range, rdf_bins)`: the structure of a packing
+/// ([`ellipack::analysis`]) as the text of structure.json, and g(r) as two lists.
+#[pyfunction]
+#[pyo3(signature = (packing, gap, bond_cutoff, rdf_range, rdf_bins))]
+pub fn _analyse(
+    py: Python<'_>,
+    packing: &Bound<'_, PyPacking>,
+    gap: f64,
+    bond_cutoff: Option<f64>,
+    rdf_range: Option<f64>,
+    rdf_bins: usize,
+) -> PyResult<(String, Vec<f64>, Vec<f64>)> {
+    let p = packing.get();
+    let settings = structure::Settings::default()
+        .with_contact_gap(gap)
+        .with_bond_cutoff(bond_cutoff)
+        .with_rdf_range(rdf_range)
+        .with_rdf_bins(rdf_bins);
+    let s = py
+        .detach(|| ellipack::analysis::analyse(&p.packing, &settings))
+        .map_err(value_error)?;
+    Ok((
+        ellipack::analysis::structure_json(&s),
+        s.rdf.r.clone(),
+        s.rdf.g.clone(),
+    ))
+}

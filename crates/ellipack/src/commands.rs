@@ -145,6 +145,9 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             label: scene.name.clone(),
         };
         write_pictures(staged, &outcome.packing, &options)?;
+        if let Ok(s) = &structure {
+            ellipack::structure_plots::write_structure_pictures(staged, &outcome.packing, s)?;
+        }
     }
     if let Published::InPlace(why) = staging.commit()? {
         eprintln!(
@@ -361,6 +364,7 @@ pub fn analyse(args: &AnalyseArgs) -> Result<ExitCode, Box<dyn Error>> {
         .with_rdf_bins(args.rdf_bins);
     let s = ellipack::analysis::analyse(&packing, &settings)?;
     ellipack::analysis::write_structure(&args.folder, &s)?;
+    ellipack::structure_plots::write_structure_pictures(&args.folder, &packing, &s)?;
     let mut out = std::io::stdout().lock();
     let lines = structure_lines(&s);
     for line in lines {

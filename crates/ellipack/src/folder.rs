@@ -34,6 +34,10 @@ pub const HISTORY_FILE: &str = "history.csv";
 pub const STRUCTURE_FILE: &str = "structure.json";
 /// Its g(r), one row per bin: `r,g`.
 pub const RDF_FILE: &str = "rdf.csv";
+/// The picture of g(r).
+pub const RDF_PICTURE: &str = "rdf.svg";
+/// The picture of the orientation distribution.
+pub const ORIENTATIONS_PICTURE: &str = "orientations.svg";
 /// The file name of the SVG picture (drawn by `render` with the `pictures` feature).
 pub const SVG_FILE: &str = "packing.svg";
 /// The file name of the PNG picture (drawn by `render` with the `pictures` feature).
@@ -41,11 +45,13 @@ pub const PNG_FILE: &str = "packing.png";
 
 /// Every file `ellipack pack` writes into an output folder. Anything else there belongs to the
 /// user and is kept.
-pub const RUN_FILES: [&str; 11] = [
+pub const RUN_FILES: [&str; 13] = [
     CSV_FILE,
     SUMMARY_FILE,
     STRUCTURE_FILE,
     RDF_FILE,
+    RDF_PICTURE,
+    ORIENTATIONS_PICTURE,
     XYZ_FILE,
     LAMMPS_FILE,
     GSD_FILE,

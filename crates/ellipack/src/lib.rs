@@ -24,6 +24,8 @@ pub mod pairs;
 #[cfg(feature = "pictures")]
 pub mod render;
 pub mod scene;
+#[cfg(feature = "pictures")]
+pub mod structure_plots;
 pub mod table;
 pub mod terminal;
 

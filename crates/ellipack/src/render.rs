@@ -24,7 +24,7 @@ pub use crate::folder::{PNG_FILE, SVG_FILE};
 /// The font of every label (DejaVu Sans, embedded: plotters has no system font loader in this
 /// build, and text without a registered font panics).
 const FONT_BYTES: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// What to draw besides the packing.
 #[derive(Clone, Debug, PartialEq)]
@@ -186,7 +186,7 @@ fn rename(e: RenderError, path: &Path) -> RenderError {
     }
 }
 
-fn register_font() -> Result<(), RenderError> {
+pub(crate) fn register_font() -> Result<(), RenderError> {
     static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()

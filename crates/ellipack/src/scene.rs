@@ -32,6 +32,22 @@
 //! [[shapes]]                          # several groups: mixed shapes
 //! count = 10
 //! semi_axes = [1.0, 1.0]
+//! # Polydisperse groups, drawn once from the seed (stream = the group's index):
+//! # size = { distribution = "lognormal", sigma = 0.25, min = 0.5, max = 2.0 }
+//! #                                   # every semi-axis × s; "lognormal" (median 1, sigma of
+//! #                                   # ln s), "normal" (mean 1, sigma) or "uniform" (min,
+//! #                                   # max); min and max cut off (default 1e-3 and 1e3)
+//! # aspect = { distribution = "uniform", min = 1.0, max = 2.0 }
+//! #                                   # first semi-axis over the others × t, area or volume
+//! #                                   # kept
+//! # orientation = { axis = [1.0, 0.0], concentration = 20.0, fixed = true }
+//! #                                   # random starts only: the first axis about `axis`
+//! #                                   # (von Mises–Fisher in 3D, of 2θ in 2D; default
+//! #                                   # isotropic); fixed: kept through the compression
+//!
+//! # [[shapes]]                        # a group from an item file (relative to the scene):
+//! # file = "items.csv"                # header a, b (, c) and optionally theta (2D) or
+//! #                                   # qw, qx, qy, qz (3D); other columns ignored
 //!
 //! [solver]                            # optional; the defaults are shown
 //! feasibility_tolerance = 1e-4        # ε_feas, as in the paper's Section 6
@@ -92,8 +108,10 @@
 //!
 //! Unknown keys, values of the wrong type and impossible values (a semi-axis ≤ 0, a count of
 //! 0, no shapes, a container of the other dimension, a container size that does not fit the
-//! kind or is not positive, a packing fraction outside (0, 1), two sizes) are errors whose message names the file,
-//! the line, the column and the key, as `shapes[1].count` (groups counted from 0).
+//! kind or is not positive, a packing fraction outside (0, 1), two sizes, a distribution whose
+//! cut-offs keep almost nothing, an orientation in a scene of lattice starts) are errors whose
+//! message names the file, the line, the column and the key, as `shapes[1].count` (groups
+//! counted from 0); an item file's errors name that file, its line and its column.
 
 use crate::packing::{Container, ContainerKind};
 use crate::table::short;

@@ -145,6 +145,10 @@ fn analyse_writes_the_structure_of_any_folder_and_refuses_bad_settings() {
     assert_eq!(structure(&out)["bond_order"]["cutoff"].as_f64(), Some(1.7));
     let rdf = std::fs::read_to_string(out.join("rdf.csv")).unwrap();
     assert!(rdf.starts_with("r,g\n") && rdf.lines().count() == 201);
+    for picture in ["rdf.svg", "orientations.svg"] {
+        let svg = std::fs::read_to_string(out.join(picture)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("48"), "{picture}");
+    }
     let bad = ellipack()
         .args(["analyse", "--gap=-1"])
         .arg(&out)
