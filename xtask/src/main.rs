@@ -67,6 +67,10 @@ enum Command {
     /// validation/scale.csv, docs/figures/scale.{svg,png} and a table in docs/packing.md.
     /// Two threads inside the model: `cargo run --release -p xtask --features rayon -- scale`.
     Scale(xtask::scale::Options),
+    /// The random packings of validation/random/*.toml through the `ellipack pack` pipeline
+    /// (two threads by default): packing fraction, wall time, peak memory, Q6 (2D: psi6),
+    /// nematic order, contacts. Writes validation/random.csv and the table in docs/random.md.
+    Random(xtask::random_study::Options),
     /// Ellipsoids (1, 0.75, 0.5) in a periodic box, one thread: ellipack beside hoomd-rs
     /// (hard-particle Monte Carlo with `QuickCompress`), density against wall time, and the
     /// cost of both overlap tests. Writes validation/periodic_peer*.csv, the figure
@@ -115,6 +119,9 @@ struct PeerArgs {
     /// The peer's largest trial rotation (radians).
     #[arg(long, default_value_t = xtask::periodic_peer::PeerMoves::default().rotate)]
     peer_rotate: f64,
+    /// Also run our random jammed packing of the same items (recorded as `random`).
+    #[arg(long)]
+    random: bool,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy)]
@@ -152,6 +159,10 @@ fn main() -> ExitCode {
         }
         Command::PeriodicPeer(args) => periodic_peer(args),
         Command::Scale(options) => match xtask::scale::run_all(&workspace_root(), &options) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => failed(e),
+        },
+        Command::Random(options) => match xtask::random_study::run(&workspace_root(), &options) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => failed(e),
         },
@@ -243,6 +254,7 @@ fn periodic_peer(args: PeerArgs) -> ExitCode {
             translate: args.peer_translate,
             rotate: args.peer_rotate,
         },
+        random: args.random,
     };
     with_problems(
         xtask::periodic_peer::run(&workspace_root(), &options),

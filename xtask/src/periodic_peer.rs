@@ -58,6 +58,27 @@ threads = 1
 pictures = false
 "#;
 
+/// The scene of our random run: the same items, random and jammed in a cubic cell
+/// (`ellipsoid_packer::random`).
+pub const RANDOM_SCENE: &str = r#"name = "{count} ellipsoids (1, 0.75, 0.5), random and jammed in a periodic cube"
+dimension = 3
+seed = 1
+
+[container]
+kind = "periodic"
+packing_fraction = "jammed"
+
+[[shapes]]
+count = {count}
+semi_axes = [1.0, 0.75, 0.5]
+
+[solver]
+threads = 1
+
+[output]
+pictures = false
+"#;
+
 /// Who packs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Who {
@@ -116,6 +137,8 @@ pub struct Options {
     pub seed: u64,
     /// The peer's trial-move sizes.
     pub peer_moves: PeerMoves,
+    /// Also our random jammed packing ([`RANDOM_SCENE`]), recorded as `random`.
+    pub random: bool,
 }
 
 impl Options {
@@ -493,6 +516,15 @@ pub fn disagreements(pairs: &[RandomPair], a: &[bool], b: &[bool]) -> Result<(us
 /// # Errors
 /// [`Error::Pack`] when the scene does not parse or the packer refuses it.
 pub fn run_ours(scene_text: &str, seconds: f64) -> Result<(Vec<Point>, RunRow), Error> {
+    run_ours_as("ours", scene_text, seconds)
+}
+
+/// [`run_ours`] with its points and row recorded under `who`.
+pub fn run_ours_as(
+    who: &str,
+    scene_text: &str,
+    seconds: f64,
+) -> Result<(Vec<Point>, RunRow), Error> {
     let scene =
         Scene::from_toml_str(scene_text, "periodic-peer scene").map_err(|e| Error::Pack {
             context: "our scene".into(),
@@ -518,7 +550,7 @@ pub fn run_ours(scene_text: &str, seconds: f64) -> Result<(Vec<Point>, RunRow), 
                     p.best_density
                 );
                 points.push(Point {
-                    who: "ours".into(),
+                    who: who.into(),
                     n,
                     seconds: p.elapsed.as_secs_f64(),
                     packing_fraction: p.best_density,
@@ -546,7 +578,7 @@ pub fn run_ours(scene_text: &str, seconds: f64) -> Result<(Vec<Point>, RunRow), 
             (p.seconds, p.packing_fraction)
         });
     let row = RunRow {
-        who: "ours".into(),
+        who: who.into(),
         n,
         budget_seconds: seconds,
         final_fraction,
@@ -673,6 +705,17 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
                     runs.push(row);
                 }
                 Err(e) => problems.push(format!("ours, N = {n}: {e}")),
+            }
+            if options.random {
+                eprintln!("random: ellipack, {n} ellipsoids jammed from a random start");
+                let scene = RANDOM_SCENE.replace("{count}", &n.to_string());
+                match run_ours_as("random", &scene, seconds) {
+                    Ok((p, row)) => {
+                        points.extend(p);
+                        runs.push(row);
+                    }
+                    Err(e) => problems.push(format!("random, N = {n}: {e}")),
+                }
             }
         }
     }
@@ -1047,10 +1090,10 @@ fn read_overlap(path: &Path) -> Result<Option<OverlapRow>, Error> {
 }
 
 fn label(who: &str) -> &'static str {
-    if who == "peer" {
-        "hoomd-rs"
-    } else {
-        "ellipack"
+    match who {
+        "peer" => "hoomd-rs",
+        "random" => "ellipack, random jammed",
+        _ => "ellipack",
     }
 }
 
@@ -1126,7 +1169,10 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
          configuration is recorded; the checks are not counted in its wall time. **ellipack** \
          runs `ellipack::pack::run` on one thread with the scene of \
          `xtask/src/periodic_peer.rs` and records the best certified density after each local \
-         minimisation.\n\n",
+         minimisation: the densest periodic packing, its cell's lattice vectors among the \
+         variables. **ellipack, random jammed** (`--random`) packs the same items from a \
+         random start in a cube compressed until jammed (`RANDOM_SCENE`, \
+         [random.md](random.md)): a disordered packing, as the peer's.\n\n",
     );
     s.push_str("| who | N | budget (s) |");
     for m in MARKS {
@@ -1179,9 +1225,15 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
     let mut ratios = String::new();
     for peer in runs.iter().filter(|r| r.who == "peer") {
         if let Some(ours) = runs.iter().find(|r| r.who == "ours" && r.n == peer.n) {
+            let random = runs
+                .iter()
+                .find(|r| r.who == "random" && r.n == peer.n)
+                .map_or("—".into(), |r| {
+                    format!("{:.4} in {:.1} s", r.final_fraction, r.final_seconds)
+                });
             let _ = writeln!(
                 ratios,
-                "| {} | {:.4} in {:.1} s | {:.4} | {} |",
+                "| {} | {:.4} in {:.1} s | {:.4} | {} | {random} |",
                 peer.n,
                 peer.final_fraction,
                 peer.final_seconds,
@@ -1193,8 +1245,8 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
     }
     if !ratios.is_empty() {
         s.push_str(
-            "| N | hoomd-rs final | ellipack final | ellipack reached hoomd-rs's final at |\n\
-             |---:|---:|---:|---:|\n",
+            "| N | hoomd-rs final | ellipack final | ellipack reached hoomd-rs's final at | \
+             ellipack, random jammed |\n|---:|---:|---:|---:|---:|\n",
         );
         s.push_str(&ratios);
         s.push('\n');

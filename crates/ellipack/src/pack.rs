@@ -11,11 +11,11 @@ use crate::packing::{
     PackingError, Summary,
 };
 use crate::scene::{RandomGoal, Scene};
-use ellipsoid_packer::compression::compression_to;
+use ellipsoid_packer::compression::compression_seen;
 use ellipsoid_packer::local::{LocalMethod, LocalSettings};
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
-use ellipsoid_packer::random::{RandomPacking, RandomSettings, Target, random_packing};
+use ellipsoid_packer::random::{RandomPacking, RandomSettings, Target, random_packing_seen};
 use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::Body;
 use implicit_packing::containment::{
@@ -551,7 +551,8 @@ fn not_reached<const N: usize>(
 /// A random packing of the scene's items ([`ellipsoid_packer::random`]): a random start, then
 /// compression to the scene's packing fraction or until jammed, within the time limit. A
 /// resumed jammed run compresses its packing further; a resumed run at a fraction is its
-/// packing, checked.
+/// packing, checked. The observer hears of every packing the compression kept (the history:
+/// one row per kept step, the written packing last), after the run.
 fn run_random<const N: usize>(
     scene: &Scene,
     axes: &[[f64; N]],
@@ -580,8 +581,11 @@ fn run_random<const N: usize>(
         shared.iteration(p);
         shared.should_stop() || began.elapsed() >= time_limit
     };
+    // The density of every packing the compression keeps, with its time: the run's history.
+    let mut steps: Vec<(Duration, f64)> = Vec::new();
+    let mut kept = |density: f64| steps.push((began.elapsed(), density));
     let made = match &options.resume_from {
-        None => random_packing(&mut problem, &dims, &settings, &mut observe),
+        None => random_packing_seen(&mut problem, &dims, &settings, &mut observe, &mut kept),
         Some(packing) => {
             if target == Target::Fraction {
                 check_fixed_size(packing, &dims, kind)?;
@@ -594,12 +598,13 @@ fn run_random<const N: usize>(
             let aim = (target == Target::Fraction)
                 .then(|| problem.evaluate(&x0, None))
                 .transpose()?;
-            compression_to(
+            compression_seen(
                 &mut problem,
                 &x0,
                 &local,
                 aim.map(|e| e.objective),
                 &mut observe,
+                &mut |p| kept(p.density),
             )
             .map(|packing| RandomPacking {
                 start_density: packing.density,
@@ -616,12 +621,17 @@ fn run_random<const N: usize>(
     };
     let interrupted = observer.should_stop();
     let elapsed = began.elapsed();
-    observer.finished(&MultiStartProgress {
-        local_minimisations: 1,
-        best_density: made.packing.density,
-        last_density: made.packing.density,
-        elapsed,
-    });
+    steps.push((elapsed, made.packing.density));
+    let mut best = 0.0_f64;
+    for (k, &(at, density)) in steps.iter().enumerate() {
+        best = best.max(density);
+        observer.finished(&MultiStartProgress {
+            local_minimisations: k + 1,
+            best_density: best,
+            last_density: density,
+            elapsed: at,
+        });
+    }
     let jammed = target == Target::Jammed;
     let written = written_packing::<N>(&mut problem, &made.packing.x, scene.container, jammed)?;
     let packing = written.packing;

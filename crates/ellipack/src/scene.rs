@@ -1796,14 +1796,14 @@ fn drawn(
     }
     let (size, aspect) = (group.size.as_ref(), group.aspect.as_ref());
     let g = g as u64;
-    Ok(match group.semi_axes.as_slice() {
-        &[a, b] => {
+    Ok(match *group.semi_axes.as_slice() {
+        [a, b] => {
             ellipsoid_packer::random::draw_semi_axes(&[a, b], group.count, size, aspect, seed, g)?
                 .into_iter()
                 .map(|l| l.to_vec())
                 .collect()
         }
-        &[a, b, c] => ellipsoid_packer::random::draw_semi_axes(
+        [a, b, c] => ellipsoid_packer::random::draw_semi_axes(
             &[a, b, c],
             group.count,
             size,

@@ -315,3 +315,19 @@ fn polydisperse_aligned_ellipses_jam_certified_and_fixed_ones_keep_their_order()
     assert!(orders[1] > 0.95, "{orders:?}");
     assert!(orders[1] > orders[0], "{orders:?}");
 }
+
+/// The scenes of docs/random.md's table parse and ask for random packings.
+#[test]
+fn the_study_scenes_are_random_packings() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../validation/random");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&folder).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let scene = Scene::from_file(&path).unwrap();
+            assert!(scene.random_goal().is_some(), "{}", path.display());
+            count += 1;
+        }
+    }
+    assert!(count >= 5, "{count} scenes");
+}

@@ -57,17 +57,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &settings,
         target.map(|f| volume / f),
         &mut |progress| {
-            if let auglag::Event::Outer { infeasibility, .. } = progress.event {
-                if last.elapsed().as_secs_f64() > 1.0 {
-                    println!(
-                        "  {:.1} s: outer {} inner {} evaluations {}, infeasibility {infeasibility:.3e}",
-                        t.elapsed().as_secs_f64(),
-                        progress.outer_iteration,
-                        progress.total_inner_iterations,
-                        progress.evaluations
-                    );
-                    last = Instant::now();
-                }
+            if let auglag::Event::Outer { infeasibility, .. } = progress.event
+                && last.elapsed().as_secs_f64() > 1.0
+            {
+                println!(
+                    "  {:.1} s: outer {} inner {} evaluations {}, infeasibility {infeasibility:.3e}",
+                    t.elapsed().as_secs_f64(),
+                    progress.outer_iteration,
+                    progress.total_inner_iterations,
+                    progress.evaluations
+                );
+                last = Instant::now();
             }
             false
         },

@@ -129,10 +129,27 @@ pub fn compression_to<const N: usize>(
     target: Option<f64>,
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<LocalResult, Error> {
+    compression_seen(problem, x0, settings, target, observe, &mut |_| {})
+}
+
+/// [`compression_to`] that also shows `kept` every packing it keeps, the first one (the
+/// start as a packing) included: the density reached step by step.
+///
+/// # Errors
+/// As [`compression`].
+pub fn compression_seen<const N: usize>(
+    problem: &mut Model<N>,
+    x0: &[f64],
+    settings: &LocalSettings,
+    target: Option<f64>,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+    kept: &mut dyn FnMut(&LocalResult),
+) -> Result<LocalResult, Error> {
     check_start(problem, x0)?;
     problem.evaluate(x0, None)?;
     let mut placer = Placer::new(settings, observe);
     let mut best = first_packing(problem, x0, &mut placer)?;
+    kept(&best);
     let mut schedule = Schedule::new(settings.largest_compression_step);
     while let Some(step) = schedule.step()
         && !placer.interrupted
@@ -152,12 +169,14 @@ pub fn compression_to<const N: usize>(
                 // against a jammed packing.
                 schedule.kept(p.density >= best.density * (1.0 + 0.1 * step));
                 best = p;
+                kept(&best);
             }
             // A step given up still leaves a packing, its point repaired: kept when denser,
             // while the schedule goes on as after any step given up.
             Some(Placed::Stalled(p)) if p.density > best.density => {
                 schedule.failed();
                 best = p;
+                kept(&best);
             }
             _ => schedule.failed(),
         }

@@ -29,7 +29,7 @@
 //!   Science 303, 990 (2004).
 
 use crate::Error;
-use crate::compression::compression_to;
+use crate::compression::compression_seen;
 use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, LocalResult, LocalSettings, certified_start, infeasibility};
 use crate::starts::SplitMix64;
@@ -137,6 +137,21 @@ pub fn random_packing<const N: usize>(
     settings: &RandomSettings,
     observe: &mut dyn FnMut(&Progress<'_>) -> bool,
 ) -> Result<RandomPacking, Error> {
+    random_packing_seen(problem, container, settings, observe, &mut |_| {})
+}
+
+/// [`random_packing`] that also shows `kept` the density of every packing the compression
+/// keeps, the random start's first.
+///
+/// # Errors
+/// As [`random_packing`].
+pub fn random_packing_seen<const N: usize>(
+    problem: &mut Model<N>,
+    container: &[f64],
+    settings: &RandomSettings,
+    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+    kept: &mut dyn FnMut(f64),
+) -> Result<RandomPacking, Error> {
     let began = Instant::now();
     let items = crate::local::item_measure(problem);
     let target_measure = Container::<N>::from_dimensions(problem.container_kind(), container)?
@@ -186,7 +201,9 @@ pub fn random_packing<const N: usize>(
         interrupted |= observe(p);
         interrupted
     };
-    let compressed = compression_to(problem, &x0, &settings.local, aim, &mut watch)?;
+    let compressed = compression_seen(problem, &x0, &settings.local, aim, &mut watch, &mut |p| {
+        kept(p.density)
+    })?;
     let Some(target) = aim else {
         return Ok(RandomPacking {
             packing: compressed,
