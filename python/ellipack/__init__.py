@@ -612,7 +612,8 @@ def analyse(
     2D), ``contacts`` (``mean_contacts`` Z, ``distribution``, ``rattlers``, ...), and ``rdf``
     with arrays ``r`` and ``g``.
 
-    ``gap``: two items touch when PW85's mu < 1 + gap; ``bond_cutoff``: the bonds of the
+    ``gap``: two items touch when PW85's mu < (1 + gap)·s, s the dilation by which the run
+    repaired its packing (1 for a packing it did not repair); ``bond_cutoff``: the bonds of the
     bond-order parameters (default 1.4 mean equivalent diameters); ``rdf_range``, ``rdf_bins``:
     g(r) up to that distance (default 5 mean equivalent diameters, at most half the smallest
     width of a periodic cell) in that many bins.

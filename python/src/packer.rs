@@ -508,6 +508,7 @@ pub fn _analyse(
     rdf_bins: usize,
 ) -> PyResult<(String, Vec<f64>, Vec<f64>)> {
     let p = packing.get();
+    let gap = ellipack::analysis::contact_gap(gap, p.summary.repair.as_ref().map(|r| r.dilation));
     let settings = structure::Settings::default()
         .with_contact_gap(gap)
         .with_bond_cutoff(bond_cutoff)

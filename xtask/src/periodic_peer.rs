@@ -58,26 +58,16 @@ threads = 1
 pictures = false
 "#;
 
-/// The scene of our random run: the same items, random and jammed in a cubic cell
-/// (`ellipsoid_packer::random`).
-pub const RANDOM_SCENE: &str = r#"name = "{count} ellipsoids (1, 0.75, 0.5), random and jammed in a periodic cube"
-dimension = 3
-seed = 1
-
-[container]
-kind = "periodic"
-packing_fraction = "jammed"
-
-[[shapes]]
-count = {count}
-semi_axes = [1.0, 0.75, 0.5]
-
-[solver]
-threads = 1
-
-[output]
-pictures = false
-"#;
+/// The scene of our random run ([`PERIODIC_SCENE`] with a cube compressed until jammed from a
+/// random start, `ellipsoid_packer::random`), `{count}` standing for the count.
+pub fn random_scene() -> String {
+    PERIODIC_SCENE
+        .replace(
+            "in a variable periodic cell",
+            "random and jammed in a periodic cube",
+        )
+        .replace("cell = \"variable\"", "packing_fraction = \"jammed\"")
+}
 
 /// Who packs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,7 +127,7 @@ pub struct Options {
     pub seed: u64,
     /// The peer's trial-move sizes.
     pub peer_moves: PeerMoves,
-    /// Also our random jammed packing ([`RANDOM_SCENE`]), recorded as `random`.
+    /// Also our random jammed packing ([`random_scene`]), recorded as `random`.
     pub random: bool,
 }
 
@@ -708,7 +698,7 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
             }
             if options.random {
                 eprintln!("random: ellipack, {n} ellipsoids jammed from a random start");
-                let scene = RANDOM_SCENE.replace("{count}", &n.to_string());
+                let scene = random_scene().replace("{count}", &n.to_string());
                 match run_ours_as("random", &scene, seconds) {
                     Ok((p, row)) => {
                         points.extend(p);
@@ -1171,7 +1161,7 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
          `xtask/src/periodic_peer.rs` and records the best certified density after each local \
          minimisation: the densest periodic packing, its cell's lattice vectors among the \
          variables. **ellipack, random jammed** (`--random`) packs the same items from a \
-         random start in a cube compressed until jammed (`RANDOM_SCENE`, \
+         random start in a cube compressed until jammed (`random_scene`, \
          [random.md](random.md)): a disordered packing, as the peer's.\n\n",
     );
     s.push_str("| who | N | budget (s) |");

@@ -14,6 +14,7 @@ use crate::error::Error;
 use crate::output::Outputs;
 use crate::periodic_peer::{commit, machine};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use crate::scale::peak_rss_mib;
 use ellipack::pack::{RunOptions, run as pack_run};
 use ellipack::scene::Scene;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
@@ -219,7 +220,12 @@ fn measure(name: &str, scene: &Scene, threads: usize) -> Result<(Row, Vec<(f64, 
         }),
     )
     .map_err(|e| study(format!("{name}: {e}")))?;
-    let s = ellipack::analysis::analyse(&outcome.packing, &structure::Settings::default())
+    let gap = ellipack::analysis::contact_gap(
+        structure::DEFAULT_CONTACT_GAP,
+        outcome.summary.repair.as_ref().map(|r| r.dilation),
+    );
+    let settings = structure::Settings::default().with_contact_gap(gap);
+    let s = ellipack::analysis::analyse(&outcome.packing, &settings)
         .map_err(|e| study(format!("{name}: {e}")))?;
     let bond_order = match s.bond_order {
         BondOrder::Steinhardt { q6, .. } => q6,
@@ -245,18 +251,6 @@ fn measure(name: &str, scene: &Scene, threads: usize) -> Result<(Row, Vec<(f64, 
         commit: commit(),
     };
     Ok((row, seen))
-}
-
-/// The peak resident memory of this process so far, MiB.
-fn peak_rss_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
 fn csv(rows: &[Row]) -> String {

@@ -133,7 +133,7 @@ fn threads() -> usize {
 }
 
 /// The process's peak resident set in MiB (`VmHWM` of `/proc/self/status`; NaN elsewhere).
-fn peak_rss_mib() -> f64 {
+pub(crate) fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {

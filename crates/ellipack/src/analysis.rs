@@ -11,6 +11,20 @@ use structure::{BondOrder, Settings, Structure};
 
 pub use crate::folder::{RDF_FILE, STRUCTURE_FILE};
 
+/// The contact gap of a packing that its run dilated by `repair` ≥ 1 to certify it (the
+/// summary's `repair.dilation`): `(1 + gap)·repair − 1`. Every pair the run left touching then
+/// has μ ≈ repair (μ scales with a dilation), which a fixed gap smaller than `repair − 1`
+/// would miss; `None` or 1: `gap` itself.
+pub fn contact_gap(gap: f64, repair: Option<f64>) -> f64 {
+    (1.0 + gap) * repair.unwrap_or(1.0).max(1.0) - 1.0
+}
+
+/// The repair dilation a summary states (`repair.dilation`), if any.
+pub fn stated_repair(summary_text: &str) -> Option<f64> {
+    let value: serde_json::Value = serde_json::from_str(summary_text).ok()?;
+    value.get("repair")?.get("dilation")?.as_f64()
+}
+
 /// The structure of `packing` ([`structure::analyse`] on its items and container).
 ///
 /// # Errors
@@ -97,4 +111,21 @@ pub fn write_structure(dir: &Path, s: &Structure) -> Result<(), Error> {
     crate::output::write_atomically(&dir.join(STRUCTURE_FILE), structure_json(s).as_bytes())?;
     crate::output::write_atomically(&dir.join(RDF_FILE), rdf_csv(s).as_bytes())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_contact_gap_grows_with_the_repair_the_summary_states() {
+        assert!((contact_gap(1e-3, None) - 1e-3).abs() < 1e-15);
+        assert!((contact_gap(1e-3, Some(1.002)) - 3.002e-3).abs() < 1e-15);
+        // A dilation below 1 is no repair.
+        assert_eq!(contact_gap(1e-3, Some(0.5)), contact_gap(1e-3, None));
+        let summary = r#"{"container": {"kind": "ball", "radius": 5}, "repair": {"dilation": 1.25, "density_before": 0.5}}"#;
+        assert_eq!(stated_repair(summary), Some(1.25));
+        assert_eq!(stated_repair(r#"{"container": {}}"#), None);
+        assert_eq!(stated_repair("not json"), None);
+    }
 }

@@ -134,7 +134,14 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let cell = Cell::enclosing(&outcome.packing);
     write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
-    let structure = ellipack::analysis::analyse(&outcome.packing, &structure::Settings::default());
+    let gap = ellipack::analysis::contact_gap(
+        structure::DEFAULT_CONTACT_GAP,
+        outcome.summary.repair.as_ref().map(|r| r.dilation),
+    );
+    let structure = ellipack::analysis::analyse(
+        &outcome.packing,
+        &structure::Settings::default().with_contact_gap(gap),
+    );
     match &structure {
         Ok(s) => ellipack::analysis::write_structure(staged, s)?,
         Err(e) => eprintln!("note: the structure was not measured: {e}"),
@@ -357,8 +364,9 @@ pub fn analyse(args: &AnalyseArgs) -> Result<ExitCode, Box<dyn Error>> {
         stated.items,
         &summary_name,
     )?;
+    let gap = ellipack::analysis::contact_gap(args.gap, ellipack::analysis::stated_repair(&text));
     let settings = structure::Settings::default()
-        .with_contact_gap(args.gap)
+        .with_contact_gap(gap)
         .with_bond_cutoff(args.bond_cutoff)
         .with_rdf_range(args.rdf_range)
         .with_rdf_bins(args.rdf_bins);

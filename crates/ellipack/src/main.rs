@@ -128,7 +128,9 @@ enum Command {
     Analyse {
         /// The folder with packing.csv and summary.json.
         folder: PathBuf,
-        /// Relative gap of a contact: two items touch when mu < 1 + gap.
+        /// Relative gap of a contact: two items touch when mu < (1 + gap)·s, s the repair
+        /// dilation summary.json states (1 if none): the run dilated every pair it left
+        /// touching to mu ≈ s.
         #[arg(long, default_value_t = structure::DEFAULT_CONTACT_GAP)]
         gap: f64,
         /// Bond cutoff of Q4, Q6 and psi6, a distance of centres (default: 1.4 mean equivalent

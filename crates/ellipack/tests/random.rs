@@ -15,6 +15,19 @@ fn pack(dir: &Path, scene: &str, out: &Path) -> Output {
     pack_into(&path, out)
 }
 
+/// Each scene text is refused with a message holding its expected part.
+fn refused(cases: &[(String, &str)]) {
+    for (text, expected) in cases {
+        let message = Scene::from_toml_str(text, "bad.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains(expected),
+            "{message}\nexpected: {expected}"
+        );
+    }
+}
+
 fn structure(out: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(out.join("structure.json")).unwrap()).unwrap()
 }
@@ -67,15 +80,7 @@ fn scenes_ask_for_random_packings_and_impossible_ones_are_refused() {
             "`container.cell`: a variable cell has no packing_fraction",
         ),
     ];
-    for (text, expected) in cases {
-        let message = Scene::from_toml_str(&text, "bad.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            message.contains(expected),
-            "{message}\nexpected: {expected}"
-        );
-    }
+    refused(&cases);
 }
 
 #[test]
@@ -230,15 +235,7 @@ fn impossible_distributions_orientations_and_item_files_are_refused_by_key_and_l
             "line 4, column 1: `shapes[0].semi_axes`: missing field `semi_axes`",
         ),
     ];
-    for (text, expected) in cases {
-        let message = Scene::from_toml_str(&text, "bad.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            message.contains(expected),
-            "{message}\nexpected: {expected}"
-        );
-    }
+    refused(&cases);
 }
 
 #[test]
