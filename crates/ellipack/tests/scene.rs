@@ -377,7 +377,7 @@ fn missing_and_empty_parts_are_named() {
     );
     assert_error(
         "dimension = 2\nshapes = [{count = 1}]\n[container]\nkind = \"circle\"\n",
-        "shapes.semi_axes",
+        "shapes[0].semi_axes",
         2,
         "missing field `semi_axes`",
     );
