@@ -11,7 +11,7 @@
 //! attempt costs O(1) and the start O(m) at a fraction well below saturation (about 0.38 for
 //! spheres, 0.55 for discs). The start is certified by construction.
 //!
-//! **The compression** ([`compression_to`]) shrinks the container (its shape kept) through
+//! **The compression** ([`compression_to`](crate::compression::compression_to)) shrinks the container (its shape kept) through
 //! placements in fixed containers, each driving the model's overlap measure (the paper's eqs.
 //! (21)–(26)) to zero, and keeps each step whose packing certifies. With a target fraction it
 //! stops at the first packing at least that dense, dilated back to the target container
