@@ -122,6 +122,10 @@ struct PeerArgs {
     /// Also run our random jammed packing of the same items (recorded as `random`).
     #[arg(long)]
     random: bool,
+    /// Run nothing: write the figure and the section of docs/periodic.md again from the
+    /// recorded rows.
+    #[arg(long)]
+    report_only: bool,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy)]
@@ -229,7 +233,7 @@ fn periodic_peer(args: PeerArgs) -> ExitCode {
         WhoArg::Ours => Who::Ours,
         WhoArg::Both => Who::Both,
     };
-    if who != Who::Ours && !cfg!(feature = "peer") {
+    if who != Who::Ours && !args.report_only && !cfg!(feature = "peer") {
         eprintln!("error: {PEER_DISABLED}");
         return ExitCode::FAILURE;
     }
@@ -255,6 +259,7 @@ fn periodic_peer(args: PeerArgs) -> ExitCode {
             rotate: args.peer_rotate,
         },
         random: args.random,
+        report_only: args.report_only,
     };
     with_problems(
         xtask::periodic_peer::run(&workspace_root(), &options),

@@ -129,6 +129,8 @@ pub struct Options {
     pub peer_moves: PeerMoves,
     /// Also our random jammed packing ([`random_scene`]), recorded as `random`.
     pub random: bool,
+    /// Run nothing: write the figure and the section again from the recorded rows.
+    pub report_only: bool,
 }
 
 impl Options {
@@ -651,6 +653,10 @@ pub fn run(root: &Path, options: &Options) -> Result<Vec<String>, Error> {
         context: "periodic-peer options".into(),
         message,
     };
+    if options.report_only {
+        write_all(root, Vec::new(), Vec::new(), None)?;
+        return Ok(Vec::new());
+    }
     if options.ns.is_empty() || options.ns.contains(&0) {
         return Err(bad(format!(
             "--n needs positive counts, got {:?}",
