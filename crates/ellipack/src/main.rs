@@ -42,6 +42,11 @@ enum Command {
     /// written to OUT/unfinished/ (packing.csv, summary.json marked not_reached), never as
     /// OUT's packing.
     ///
+    /// A random packing: packing_fraction = "jammed" in [container] (compressed from a random
+    /// start until jammed), or start = "random" in [solver] with a container size (filled at
+    /// exactly that fraction from a random start). Every folder also gets structure.json,
+    /// rdf.csv and, with pictures, rdf.svg and orientations.svg (see `ellipack analyse`).
+    ///
     /// Exit status: 0 a certified packing was written (the run finished, reached its time
     /// limit or was stopped by a signal); 1 an error, nothing written; 2 bad arguments; 4 a
     /// fixed container was not filled without overlap (see OUT/unfinished/).
