@@ -508,9 +508,7 @@ pub fn _analyse(
     rdf_bins: usize,
 ) -> PyResult<(String, Vec<f64>, Vec<f64>)> {
     let p = packing.get();
-    let gap = ellipack::analysis::contact_gap(gap, p.summary.repair.as_ref().map(|r| r.dilation));
-    let settings = structure::Settings::default()
-        .with_contact_gap(gap)
+    let settings = ellipack::analysis::settings(gap, p.summary.repair_dilation())
         .with_bond_cutoff(bond_cutoff)
         .with_rdf_range(rdf_range)
         .with_rdf_bins(rdf_bins);

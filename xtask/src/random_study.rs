@@ -220,11 +220,10 @@ fn measure(name: &str, scene: &Scene, threads: usize) -> Result<(Row, Vec<(f64, 
         }),
     )
     .map_err(|e| study(format!("{name}: {e}")))?;
-    let gap = ellipack::analysis::contact_gap(
+    let settings = ellipack::analysis::settings(
         structure::DEFAULT_CONTACT_GAP,
-        outcome.summary.repair.as_ref().map(|r| r.dilation),
+        outcome.summary.repair_dilation(),
     );
-    let settings = structure::Settings::default().with_contact_gap(gap);
     let s = ellipack::analysis::analyse(&outcome.packing, &settings)
         .map_err(|e| study(format!("{name}: {e}")))?;
     let bond_order = match s.bond_order {

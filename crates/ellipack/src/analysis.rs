@@ -19,6 +19,12 @@ pub fn contact_gap(gap: f64, repair: Option<f64>) -> f64 {
     (1.0 + gap) * repair.unwrap_or(1.0).max(1.0) - 1.0
 }
 
+/// The default settings of [`structure::Settings`] with the contact gap of a packing repaired
+/// by `repair` ([`contact_gap`]).
+pub fn settings(gap: f64, repair: Option<f64>) -> structure::Settings {
+    structure::Settings::default().with_contact_gap(contact_gap(gap, repair))
+}
+
 /// The repair dilation a summary states (`repair.dilation`), if any.
 pub fn stated_repair(summary_text: &str) -> Option<f64> {
     let value: serde_json::Value = serde_json::from_str(summary_text).ok()?;

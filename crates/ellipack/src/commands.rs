@@ -134,13 +134,12 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let cell = Cell::enclosing(&outcome.packing);
     write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
-    let gap = ellipack::analysis::contact_gap(
-        structure::DEFAULT_CONTACT_GAP,
-        outcome.summary.repair.as_ref().map(|r| r.dilation),
-    );
     let structure = ellipack::analysis::analyse(
         &outcome.packing,
-        &structure::Settings::default().with_contact_gap(gap),
+        &ellipack::analysis::settings(
+            structure::DEFAULT_CONTACT_GAP,
+            outcome.summary.repair_dilation(),
+        ),
     );
     match &structure {
         Ok(s) => ellipack::analysis::write_structure(staged, s)?,
@@ -339,7 +338,6 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
 /// is written with them, unless the scene turns it off).
 const PACK_FORMATS: [Format; 3] = [Format::Lammps, Format::Gsd, Format::Obj];
 
-/// `ellipack convert`: the files of `formats` for the packing in `folder`.
 /// The options of `ellipack analyse`.
 pub struct AnalyseArgs {
     pub folder: PathBuf,
@@ -364,9 +362,7 @@ pub fn analyse(args: &AnalyseArgs) -> Result<ExitCode, Box<dyn Error>> {
         stated.items,
         &summary_name,
     )?;
-    let gap = ellipack::analysis::contact_gap(args.gap, ellipack::analysis::stated_repair(&text));
-    let settings = structure::Settings::default()
-        .with_contact_gap(gap)
+    let settings = ellipack::analysis::settings(args.gap, ellipack::analysis::stated_repair(&text))
         .with_bond_cutoff(args.bond_cutoff)
         .with_rdf_range(args.rdf_range)
         .with_rdf_bins(args.rdf_bins);
@@ -426,6 +422,7 @@ fn structure_lines(s: &structure::Structure) -> Vec<String> {
     lines
 }
 
+/// `ellipack convert`: the files of `formats` for the packing in `folder`.
 pub fn convert(folder: &Path, formats: &[Format]) -> Result<ExitCode, Box<dyn Error>> {
     let packing = ellipack::export::convert(folder, formats)?;
     let names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();

@@ -355,31 +355,12 @@ fn run_n<const N: usize>(
     let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
     let fixed = scene.fixed_container().map(|c| model_dimensions(&c, kind));
     let x0 = match &options.resume_from {
-        Some(packing) => {
-            if let Some(expected) = &fixed {
-                check_fixed_size(packing, expected, kind)?;
-            }
-            if packing.container().kind() != scene.container {
-                return Err(PackError::Mismatch(format!(
-                    "the packing's container is {}, the scene's {}",
-                    packing.container().kind(),
-                    scene.container
-                )));
-            }
-            variables_of::<N>(packing, axes, kind)?
-        }
+        Some(packing) => resumed_start(&mut problem, packing, scene, fixed.as_deref(), axes)?,
         None => match &fixed {
             Some(dims) => fill_start(&mut problem, &LatticeStart::centred(), dims)?,
             None => lattice_start(&problem),
         },
     };
-    // A resumed run keeps its start as the packing to beat, so the start must be certified.
-    if options.resume_from.is_some() {
-        let certificate = problem.certify(&x0)?;
-        if !certificate.is_feasible() {
-            return Err(PackError::StartNotCertified(start_defects(&certificate)));
-        }
-    }
     let threads = match options.threads.unwrap_or(scene.solver.threads) {
         0 => std::thread::available_parallelism().map_or(1, usize::from),
         n => n,
@@ -476,6 +457,35 @@ fn run_n<const N: usize>(
         start_density: result.start_density,
         start_kept: result.start_kept,
     })
+}
+
+/// The variables of a packing to resume from, checked against the scene: its fixed container
+/// (`fixed`, the model's variables), its container kind, its items; and certified, since a
+/// resumed run keeps its start as the packing to beat.
+fn resumed_start<const N: usize>(
+    problem: &mut Model<N>,
+    packing: &Packing,
+    scene: &Scene,
+    fixed: Option<&[f64]>,
+    axes: &[[f64; N]],
+) -> Result<Vec<f64>, PackError> {
+    let kind = problem.container_kind();
+    if let Some(expected) = fixed {
+        check_fixed_size(packing, expected, kind)?;
+    }
+    if packing.container().kind() != scene.container {
+        return Err(PackError::Mismatch(format!(
+            "the packing's container is {}, the scene's {}",
+            packing.container().kind(),
+            scene.container
+        )));
+    }
+    let x0 = variables_of::<N>(packing, axes, kind)?;
+    let certificate = problem.certify(&x0)?;
+    if !certificate.is_feasible() {
+        return Err(PackError::StartNotCertified(start_defects(&certificate)));
+    }
+    Ok(x0)
 }
 
 /// Refuses a packing to resume from whose container is not the scene's fixed container
@@ -587,14 +597,8 @@ fn run_random<const N: usize>(
     let made = match &options.resume_from {
         None => random_packing_seen(&mut problem, &dims, &settings, &mut observe, &mut kept),
         Some(packing) => {
-            if target == Target::Fraction {
-                check_fixed_size(packing, &dims, kind)?;
-            }
-            let x0 = variables_of::<N>(packing, axes, kind)?;
-            let start = problem.certify(&x0)?;
-            if !start.is_feasible() {
-                return Err(PackError::StartNotCertified(start_defects(&start)));
-            }
+            let fixed = (target == Target::Fraction).then_some(dims.as_slice());
+            let x0 = resumed_start(&mut problem, packing, scene, fixed, axes)?;
             let aim = (target == Target::Fraction)
                 .then(|| problem.evaluate(&x0, None))
                 .transpose()?;

@@ -862,6 +862,11 @@ pub struct Repair {
 }
 
 impl Summary {
+    /// The dilation by which the run repaired its packing, when it did.
+    pub fn repair_dilation(&self) -> Option<f64> {
+        self.repair.as_ref().map(|r| r.dilation)
+    }
+
     /// The summary of `packing` (container, item count and density taken from it).
     pub fn new(
         packing: &Packing,

@@ -328,3 +328,45 @@ fn the_study_scenes_are_random_packings() {
     }
     assert!(count >= 5, "{count} scenes");
 }
+
+/// A jammed run resumed from its own folder compresses no worse; one whose scene asks for
+/// another container kind is refused with nothing written.
+#[test]
+fn a_jammed_run_resumes_from_its_packing_and_refuses_another_container() {
+    let dir = temp_dir("random-resume");
+    let out = dir.join("out");
+    succeeded(&pack(&dir, DISCS, &out), "discs");
+    let before = summary_json(&out)["density"].as_f64().unwrap();
+    let path = dir.join("scene.toml");
+    let resumed = ellipack()
+        .args(["pack"])
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    succeeded(&resumed, "resumed");
+    let after = summary_json(&out)["density"].as_f64().unwrap();
+    assert!(after >= before, "{after} < {before}");
+    std::fs::write(
+        &path,
+        DISCS.replace("kind = \"periodic\"", "kind = \"rectangle\""),
+    )
+    .unwrap();
+    let refused = ellipack()
+        .args(["pack"])
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(1), "{}", text(&refused.stderr));
+    assert!(
+        text(&refused.stderr).contains("container"),
+        "{}",
+        text(&refused.stderr)
+    );
+    assert_eq!(summary_json(&out)["density"].as_f64().unwrap(), after);
+}
