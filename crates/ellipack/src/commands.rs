@@ -12,6 +12,7 @@ use ellipack::packing::{
 };
 use ellipack::render::{RenderOptions, write_pictures};
 use ellipack::scene::Scene;
+use implicit_packing::certificate::shown_mu2;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::error::Error;
 use std::io::Write as _;
@@ -63,7 +64,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             })?
             .scene(),
         (None, None) => {
-            eprintln!(
+            ellipack::note!(
                 "no scene given: packing the built-in scene ({})",
                 Scene::default_scene().title()
             );
@@ -143,7 +144,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     );
     match &structure {
         Ok(s) => ellipack::analysis::write_structure(staged, s)?,
-        Err(e) => eprintln!("note: the structure was not measured: {e}"),
+        Err(e) => ellipack::note!("note: the structure was not measured: {e}"),
     }
     if scene.output.pictures {
         let options = RenderOptions {
@@ -156,7 +157,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         }
     }
     if let Published::InPlace(why) = staging.commit()? {
-        eprintln!(
+        ellipack::note!(
             "note: the files in {} were replaced one by one, not swapped in as a set ({})",
             out.display(),
             why.map_or_else(
@@ -166,8 +167,8 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         );
     }
     let s = &outcome.summary;
-    println!("{}", scene.title());
-    println!(
+    ellipack::say!("{}", scene.title());
+    ellipack::say!(
         "density {:.5} ({} {}), found after {:.1} s of {:.1} s, {} local minimisations{}",
         s.density,
         s.container.size_name(),
@@ -199,16 +200,17 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let min_mu2 = s
         .certificate
         .min_mu2
-        .map_or("—".into(), |m| format!("{m:.9}"));
+        .map_or("—".into(), |m| shown_mu2(m, 9));
     if scene.fixed_container().is_some() {
         // A fixed container is filled, never dilated: there is no repair to report.
-        println!(
+        ellipack::say!(
             "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
              the container is the scene's",
-            s.certificate.overlapping_pairs, s.certificate.containment_violations,
+            s.certificate.overlapping_pairs,
+            s.certificate.containment_violations,
         );
     } else {
-        println!(
+        ellipack::say!(
             "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
              repair dilation {:.2e} (density {:.5} before)",
             s.certificate.overlapping_pairs,
@@ -218,9 +220,10 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         );
     }
     if outcome.restarts > 0 {
-        println!(
+        ellipack::say!(
             "{} new chains from fresh lattice starts (after {} starts without improvement)",
-            outcome.restarts, scene.solver.restart_after
+            outcome.restarts,
+            scene.solver.restart_after
         );
     }
     let limit = options
@@ -228,16 +231,16 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         .unwrap_or(scene.solver.time_limit)
         .as_secs_f64();
     if outcome.start_kept && outcome.seconds_to_best >= limit {
-        println!(
+        ellipack::say!(
             "the time limit ({limit:.3e} s) is shorter than building and certifying the start \
              took ({:.3} s): give at least that for any local minimisation",
             outcome.seconds_to_best
         );
     }
     if outcome.start_kept && scene.fixed_container().is_some() {
-        println!("the start is already a packing in the fixed container: wrote the start");
+        ellipack::say!("the start is already a packing in the fixed container: wrote the start");
     } else if outcome.start_kept {
-        println!(
+        ellipack::say!(
             "no local minimisation found a denser certified packing than the start{}: wrote \
              the start",
             if args.resume {
@@ -248,13 +251,13 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         );
     }
     if outcome.failed_starts > 0 {
-        println!(
+        ellipack::say!(
             "{} starts were abandoned: their local minimisation ended at a point that could \
              not be certified",
             outcome.failed_starts
         );
     }
-    println!("wrote {}", out.display());
+    ellipack::say!("wrote {}", out.display());
     Ok(if s.certificate.is_certified() {
         ExitCode::SUCCESS
     } else {
@@ -281,8 +284,8 @@ fn not_reached(
     write_files(staged, &unfinished.packing, &unfinished.summary, false)?;
     ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     staging.commit()?;
-    println!("{}", scene.title());
-    eprintln!(
+    ellipack::say!("{}", scene.title());
+    ellipack::note!(
         "error: {}{}",
         PackError::NotReached(Box::new(unfinished.clone())),
         if unfinished.interrupted {
@@ -291,7 +294,7 @@ fn not_reached(
             ""
         }
     );
-    eprintln!(
+    ellipack::note!(
         "wrote the least overlapping configuration, which is not a packing, to {}; {} was not \
          written (a longer time limit or a lower packing fraction may reach one)",
         dir.display(),
@@ -303,8 +306,15 @@ fn not_reached(
 /// `ellipack merge`: the best certified packing of `folders` into `out`.
 pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>> {
     let outcome = ellipack::merge::merge(folders, out)?;
+    for folder in &outcome.skipped {
+        ellipack::say!(
+            "  {}: no packing.csv (a run stopped before writing, or an unfinished fixed \
+             container): skipped",
+            folder.display()
+        );
+    }
     for (k, c) in outcome.candidates.iter().enumerate() {
-        println!(
+        ellipack::say!(
             "{} {}: density {:.6}{}",
             if k == outcome.best { "*" } else { " " },
             c.folder.display(),
@@ -318,15 +328,15 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
     }
     let best = &outcome.candidates[outcome.best];
     if outcome.written {
-        println!("wrote {} (from {})", out.display(), best.folder.display());
+        ellipack::say!("wrote {} (from {})", out.display(), best.folder.display());
     } else {
-        println!(
+        ellipack::say!(
             "{} already holds the best packing: left as it was",
             out.display()
         );
     }
     if let Some(Published::InPlace(_)) = outcome.published {
-        eprintln!(
+        ellipack::note!(
             "note: the files in {} were replaced one by one, not swapped in as a set",
             out.display()
         );
@@ -423,10 +433,14 @@ fn structure_lines(s: &structure::Structure) -> Vec<String> {
 }
 
 /// `ellipack convert`: the files of `formats` for the packing in `folder`.
-pub fn convert(folder: &Path, formats: &[Format]) -> Result<ExitCode, Box<dyn Error>> {
-    let packing = ellipack::export::convert(folder, formats)?;
+pub fn convert(
+    folder: &Path,
+    formats: &[Format],
+    unfinished: bool,
+) -> Result<ExitCode, Box<dyn Error>> {
+    let packing = ellipack::export::convert(folder, formats, unfinished)?;
     let names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();
-    println!(
+    ellipack::say!(
         "{} {} in a {} container: wrote {} in {}",
         packing.items().len(),
         packing.items().noun(),
@@ -449,6 +463,21 @@ pub struct VerifyArgs {
 /// How many offenders of each kind are printed (all are counted).
 const OFFENDERS_SHOWN: usize = 20;
 
+/// 3 when the header of the packing table at `path` has a `z` column, 2 when it has none, `None`
+/// when it cannot be read (reading it again reports why).
+fn header_dimension(path: &Path) -> Option<usize> {
+    use std::io::BufRead;
+    let mut line = String::new();
+    std::io::BufReader::new(std::fs::File::open(path).ok()?)
+        .read_line(&mut line)
+        .ok()?;
+    Some(if line.trim().split(',').any(|c| c.trim() == "z") {
+        3
+    } else {
+        2
+    })
+}
+
 pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     let csv_path = if args.packing.is_dir() {
         args.packing.join(CSV_FILE)
@@ -457,6 +486,13 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     };
     let (packing, table, stated) = match (args.container, &args.size) {
         (Some(kind), Some(size)) => {
+            // `periodic` names the cell of either dimension: the packing's header says which.
+            let kind = match header_dimension(&csv_path) {
+                Some(n) if kind.is_periodic() => {
+                    ContainerKind::named("periodic", n).unwrap_or(kind)
+                }
+                _ => kind,
+            };
             let center = args
                 .center
                 .clone()
@@ -501,41 +537,39 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     };
     let verification = check(&packing)?;
     let certificate = verification.certificate;
-    println!(
+    ellipack::say!(
         "{} {}, container: {}, density {:.5}",
         packing.items().len(),
         packing.items().noun(),
         packing.container().kind().name(),
         packing.density()
     );
-    println!(
+    ellipack::say!(
         "certificate: {} overlapping pairs, {} containment violations, min μ² = {}",
         certificate.overlapping_pairs,
         certificate.containment_violations,
-        certificate
-            .min_mu2
-            .map_or("—".into(), |m| format!("{m:.12}"))
+        certificate.min_mu2.map_or("—".into(), |m| shown_mu2(m, 12))
     );
     // Messages name items by the `id` column of packing.csv, which a person edited or sorted.
     let id = |row: usize| table.ids.get(row).copied().unwrap_or(row as u64);
     let pairs = &verification.overlapping_pairs;
     if !pairs.is_empty() {
-        println!("overlapping pairs (ids, μ² < 1), deepest first:");
+        ellipack::say!("overlapping pairs (ids, μ² < 1), deepest first:");
         for p in pairs.iter().take(OFFENDERS_SHOWN) {
-            println!(
-                "  {} and {}: μ² = {:.12}",
+            ellipack::say!(
+                "  {} and {}: μ² = {}",
                 id(p.items.0),
                 id(p.items.1),
-                p.mu2
+                shown_mu2(p.mu2, 12)
             );
         }
         if pairs.len() > OFFENDERS_SHOWN {
-            println!("  … and {} more", pairs.len() - OFFENDERS_SHOWN);
+            ellipack::say!("  … and {} more", pairs.len() - OFFENDERS_SHOWN);
         }
     }
     let outside = &verification.outside;
     if !outside.is_empty() {
-        println!(
+        ellipack::say!(
             "outside the container (id, t: the item fits only in the container scaled by t \
              about its centre), worst first:"
         );
@@ -546,27 +580,28 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
             } else {
                 format!("{percent:.1e}")
             };
-            println!(
+            ellipack::say!(
                 "  {}: t = {:.9} (the container would have to be {percent} % larger)",
                 id(o.item),
                 o.scale,
             );
         }
         if outside.len() > OFFENDERS_SHOWN {
-            println!("  … and {} more", outside.len() - OFFENDERS_SHOWN);
+            ellipack::say!("  … and {} more", outside.len() - OFFENDERS_SHOWN);
         }
     }
     if let Some(stated) = stated.filter(|s| *s != certificate) {
-        println!(
+        ellipack::say!(
             "note: summary.json states {} overlapping pairs, {} containment violations",
-            stated.overlapping_pairs, stated.containment_violations
+            stated.overlapping_pairs,
+            stated.containment_violations
         );
     }
     Ok(if certificate.is_certified() {
-        println!("certified");
+        ellipack::say!("certified");
         ExitCode::SUCCESS
     } else {
-        println!("NOT certified");
+        ellipack::say!("NOT certified");
         ExitCode::FAILURE
     })
 }

@@ -43,6 +43,22 @@ pub enum ExportError {
         /// What it is instead.
         reason: String,
     },
+    /// The folder holds the least overlapping configuration of a fixed container's run that
+    /// did not reach its packing fraction, not a packing.
+    #[error(
+        "{}: the least overlapping configuration of an unfinished run ({overlapping_pairs} \
+         overlapping pairs, {outside} items outside), not a packing: a simulation started from \
+         its files would start from overlapping items; pass --unfinished to write them anyway",
+        path.display()
+    )]
+    Unfinished {
+        /// The folder.
+        path: PathBuf,
+        /// Its overlapping pairs.
+        overlapping_pairs: u64,
+        /// Its items outside the container.
+        outside: u64,
+    },
     /// The packing could not be read, the XYZ file written, or a LAMMPS data file read by
     /// [`read_lammps_data`] is not what [`lammps_data`] writes.
     #[error(transparent)]
@@ -912,13 +928,17 @@ pub fn write_formats(
 }
 
 /// `ellipack convert`: reads the packing of `dir` (packing.csv and summary.json) and writes
-/// the files of `formats` beside them, in the cell [`Cell::enclosing`] the packing.
+/// the files of `formats` beside them, in the cell [`Cell::enclosing`] the packing (a periodic
+/// cell reduced, its items wrapped into it: [`Packing::in_reduced_cell`]). The least
+/// overlapping configuration of an unfinished run (`not_reached` in its summary) is refused
+/// unless `unfinished`: its files would start a simulation from overlapping items.
 ///
 /// # Errors
-/// [`ExportError::NotAFolder`] when `dir` is not a folder, the errors of
+/// [`ExportError::NotAFolder`] when `dir` is not a folder, [`ExportError::Unfinished`], the
+/// errors of
 /// [`crate::packing::read_packing_dir`] (a missing or broken packing.csv or summary.json,
 /// named with the line), and those of [`write_formats`].
-pub fn convert(dir: &Path, formats: &[Format]) -> Result<Packing, ExportError> {
+pub fn convert(dir: &Path, formats: &[Format], unfinished: bool) -> Result<Packing, ExportError> {
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
         Ok(_) => {
@@ -935,7 +955,17 @@ pub fn convert(dir: &Path, formats: &[Format]) -> Result<Packing, ExportError> {
             });
         }
     }
-    let (packing, _) = crate::packing::read_packing_dir(dir)?;
+    let (packing, summary) = crate::packing::read_packing_dir(dir)?;
+    if summary.not_reached && !unfinished {
+        return Err(ExportError::Unfinished {
+            path: dir.to_path_buf(),
+            overlapping_pairs: summary.certificate.overlapping_pairs,
+            outside: summary.certificate.containment_violations,
+        });
+    }
+    // A cell edited by hand, or written by another program, is stated reduced with its items
+    // inside, as docs/files.md promises.
+    let packing = packing.in_reduced_cell();
     write_formats(dir, &packing, &Cell::enclosing(&packing), formats)?;
     Ok(packing)
 }

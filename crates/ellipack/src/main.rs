@@ -82,11 +82,12 @@ enum Command {
         #[arg(conflicts_with = "container")]
         summary: Option<PathBuf>,
         /// The container instead of a summary: circle, ellipse, rectangle (2D), ball,
-        /// ellipsoid, cuboid (3D).
+        /// ellipsoid, cuboid (3D), periodic (a cell of the packing's dimension).
         #[arg(long, requires = "size", value_parser = parse_container_kind)]
         container: Option<ContainerKind>,
         /// The container's size: the radius, or the semi-axes or half sides separated by commas
-        /// (`--size 1,2,3`).
+        /// (`--size 1,2,3`); a periodic cell's lengths, then its tilts if any (xy in 2D; xy,
+        /// xz, yz in 3D).
         #[arg(
             long,
             requires = "container",
@@ -121,6 +122,10 @@ enum Command {
             default_value = "lammps,gsd,xyz,obj"
         )]
         formats: Vec<Format>,
+        /// Write the files of an unfinished run's least overlapping configuration
+        /// (`OUT/unfinished`), which is refused otherwise: it is not a packing.
+        #[arg(long)]
+        unfinished: bool,
     },
     /// Measure the structure of a packing folder (packing.csv and summary.json): density,
     /// nematic order S and director of each body axis, Steinhardt Q4 and Q6 (3D) or the
@@ -237,7 +242,7 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e}");
+            ellipack::note!("error: {e}");
             ExitCode::FAILURE
         }
     }
@@ -260,7 +265,11 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             size,
             center,
         })?,
-        Command::Convert { folder, formats } => commands::convert(&folder, &formats)?,
+        Command::Convert {
+            folder,
+            formats,
+            unfinished,
+        } => commands::convert(&folder, &formats, unfinished)?,
         Command::Analyse {
             folder,
             gap,
@@ -275,7 +284,7 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             rdf_bins,
         })?,
         Command::Instances => {
-            print!("{}", ellipack::instances::listing());
+            ellipack::say!("{}", ellipack::instances::listing().trim_end());
             ExitCode::SUCCESS
         }
         other => run_table(other)?,
@@ -337,13 +346,14 @@ fn deliver(
         Err(e) => return Err(e),
     };
     if summary.failed > 0 {
-        eprintln!(
+        ellipack::note!(
             "{} of {} rows failed: see their `error` column",
-            summary.failed, summary.rows
+            summary.failed,
+            summary.rows
         );
     }
     if let Some(path) = output {
-        eprintln!("wrote {} rows to {}", summary.rows, path.display());
+        ellipack::note!("wrote {} rows to {}", summary.rows, path.display());
     }
     Ok(if summary.failed > 0 {
         ExitCode::from(ROWS_FAILED)
@@ -384,7 +394,7 @@ fn contact(
             })
         }
         None => {
-            eprintln!("no --input given: evaluating the bundled example pairs");
+            ellipack::note!("no --input given: evaluating the bundled example pairs");
             deliver(output.as_deref(), |out, destination| {
                 contact_stream(
                     ellipack::EXAMPLE_PAIRS.as_bytes(),

@@ -8,7 +8,9 @@
 
 use crate::folder::{FolderError, Published, RUN_FILES, Staging};
 use crate::pack::{PackError, verify};
-use crate::packing::{CSV_FILE, ContainerKind, Items, Packing, PackingError, read_packing_dir};
+use crate::packing::{
+    CSV_FILE, Container, ContainerKind, Items, Packing, PackingError, Summary, read_packing_dir,
+};
 use std::path::{Path, PathBuf};
 
 /// Why a merge wrote nothing.
@@ -46,10 +48,15 @@ pub enum MergeError {
         difference: String,
     },
     /// No input is a certified packing.
-    #[error("none of the {inputs} packings is certified: nothing to keep")]
+    #[error(
+        "none of the {inputs} packings read is certified ({skipped} folders held no packing): \
+         nothing to keep"
+    )]
     NoneCertified {
         /// How many inputs were read.
         inputs: usize,
+        /// How many folders held no packing.csv.
+        skipped: usize,
     },
     /// The output folder could not be created.
     #[error("cannot create the output folder {path}: {source}")]
@@ -96,18 +103,24 @@ pub struct MergeOutcome {
     pub written: bool,
     /// How the files were published, when written.
     pub published: Option<Published>,
+    /// Inputs with no packing (a run killed before writing one, or a fixed container's run
+    /// that ended with only `unfinished/`), left out.
+    pub skipped: Vec<PathBuf>,
 }
 
-/// The items and container kind that make two packings packings of the same scene.
+/// The items and container that make two packings packings of the same scene: the container's
+/// kind, and for a fixed container (or cell) the container itself.
 #[derive(Debug, PartialEq)]
 struct SceneKey {
     kind: ContainerKind,
+    /// The container, when the run was given it (`fixed_container` in summary.json).
+    fixed: Option<Container>,
     /// Every item's semi-axes, as bits, sorted: the items as a multiset.
     axes: Vec<Vec<u64>>,
 }
 
 impl SceneKey {
-    fn of(packing: &Packing) -> Self {
+    fn of(packing: &Packing, summary: &Summary) -> Self {
         let mut axes: Vec<Vec<u64>> = match packing.items() {
             Items::Ellipses(items) => items
                 .iter()
@@ -121,6 +134,7 @@ impl SceneKey {
         axes.sort_unstable();
         Self {
             kind: packing.container().kind(),
+            fixed: summary.fixed_container.then(|| packing.container().clone()),
             axes,
         }
     }
@@ -129,6 +143,28 @@ impl SceneKey {
     fn difference(&self, other: &SceneKey) -> Option<String> {
         if self.kind != other.kind {
             return Some(format!("container {} against {}", other.kind, self.kind));
+        }
+        match (&self.fixed, &other.fixed) {
+            (Some(a), Some(b)) if !same_container(a, b) => {
+                return Some(format!(
+                    "fixed container {} against {}",
+                    described(b),
+                    described(a)
+                ));
+            }
+            (Some(a), None) => {
+                return Some(format!(
+                    "a variable container against the fixed {}",
+                    described(a)
+                ));
+            }
+            (None, Some(b)) => {
+                return Some(format!(
+                    "the fixed {} against a variable container",
+                    described(b)
+                ));
+            }
+            _ => {}
         }
         if self.axes.len() != other.axes.len() {
             return Some(format!(
@@ -141,9 +177,26 @@ impl SceneKey {
     }
 }
 
+/// A container in words: its kind and size, e.g. `ball of radius [6.0]`.
+fn described(c: &Container) -> String {
+    format!("{} of {} {:?}", c.kind(), c.size_name(), c.size())
+}
+
+/// Whether two fixed containers are one: the same kind, centre and size to 1e-12 relative (the
+/// digits summary.json keeps).
+fn same_container(a: &Container, b: &Container) -> bool {
+    let close = |x: &[f64], y: &[f64]| {
+        x.len() == y.len()
+            && x.iter()
+                .zip(y)
+                .all(|(u, v)| (u - v).abs() <= 1e-12 * u.abs().max(v.abs()).max(1.0))
+    };
+    a.kind() == b.kind() && close(a.center(), b.center()) && close(&a.size(), &b.size())
+}
+
 /// Reads and verifies `folder`.
 fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
-    let (packing, _) = read_packing_dir(folder).map_err(|source| MergeError::Read {
+    let (packing, summary) = read_packing_dir(folder).map_err(|source| MergeError::Read {
         folder: folder.to_path_buf(),
         source,
     })?;
@@ -151,7 +204,7 @@ fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
         folder: folder.to_path_buf(),
         source,
     })?;
-    let key = SceneKey::of(&packing);
+    let key = SceneKey::of(&packing, &summary);
     Ok((
         Candidate {
             folder: folder.to_path_buf(),
@@ -162,8 +215,9 @@ fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
     ))
 }
 
-/// Merges the packings in `inputs` into `out`: verifies each, refuses packings of different
-/// scenes, and writes the densest certified one's files (those `ellipack pack` writes) into
+/// Merges the packings in `inputs` into `out`: skips folders without a packing, verifies each
+/// other, refuses packings of different scenes (items, container kind, and a fixed container
+/// against another or against a variable one), and writes the densest certified one's files (those `ellipack pack` writes) into
 /// `out`, swapped in as a set. A certified packing already in `out` of the same scene takes
 /// part: if it is the densest, nothing is written.
 ///
@@ -171,11 +225,12 @@ fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
 /// [`MergeError`]: an unreadable input, different scenes, no certified input, or an output
 /// folder that cannot be written. Nothing is written then.
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError> {
-    let Some(first_folder) = inputs.first() else {
+    if inputs.is_empty() {
         return Err(MergeError::NoInputs);
-    };
+    }
     let mut candidates = Vec::with_capacity(inputs.len() + 1);
-    let mut first_key: Option<SceneKey> = None;
+    let mut skipped = Vec::new();
+    let mut first_key: Option<(PathBuf, SceneKey)> = None;
     let existing = out.join(CSV_FILE).exists();
     let output_is_input = inputs.iter().any(|i| same_folder(i, out));
     let folders = inputs
@@ -183,10 +238,14 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
         .map(PathBuf::as_path)
         .chain((existing && !output_is_input).then_some(out));
     for folder in folders {
+        if folder.is_dir() && !folder.join(CSV_FILE).exists() {
+            skipped.push(folder.to_path_buf());
+            continue;
+        }
         let (c, key) = candidate(folder)?;
         match &first_key {
-            None => first_key = Some(key),
-            Some(first) => {
+            None => first_key = Some((folder.to_path_buf(), key)),
+            Some((first_folder, first)) => {
                 if let Some(difference) = first.difference(&key) {
                     return Err(MergeError::DifferentScenes {
                         first: first_folder.clone(),
@@ -208,6 +267,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
         })
         .ok_or(MergeError::NoneCertified {
             inputs: candidates.len(),
+            skipped: skipped.len(),
         })?;
     if same_folder(&candidates[best].folder, out) {
         return Ok(MergeOutcome {
@@ -215,6 +275,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
             best,
             written: false,
             published: None,
+            skipped,
         });
     }
     std::fs::create_dir_all(out).map_err(|source| MergeError::OutputFolder {
@@ -235,6 +296,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
         best,
         written: true,
         published: Some(published),
+        skipped,
     })
 }
 

@@ -18,6 +18,7 @@ use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
 use ellipsoid_packer::random::{RandomPacking, RandomSettings, Target, random_packing_seen};
 use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::Body;
+use implicit_packing::certificate::shown_mu2;
 use implicit_packing::containment::{
     Container as SizedContainer, ContainerShape as ModelContainer,
 };
@@ -43,6 +44,17 @@ pub enum PackError {
     /// A packing given to resume from does not match the scene.
     #[error("cannot resume: {0}")]
     Mismatch(String),
+    /// A value of an item or of the container that the model cannot hold, named as the
+    /// packing states it (not as a model variable).
+    #[error("{what} is {value}; {rule}")]
+    OutOfRange {
+        /// The item and coordinate, or the container's value.
+        what: String,
+        /// The value, as the model saw it.
+        value: String,
+        /// What the model accepts.
+        rule: &'static str,
+    },
     /// The folder to resume from holds a packing in another kind of container than the scene's.
     #[error(
         "cannot resume from {summary}: its container is {found}, but the scene ({scene}) has \
@@ -80,7 +92,7 @@ pub enum PackError {
         .0.summary.wall_seconds,
         .0.summary.local_minimisations,
         .0.summary.certificate.overlapping_pairs,
-        .0.summary.certificate.min_mu2.map_or(String::new(), |m| format!(" (smallest μ² {m:.6})")),
+        .0.summary.certificate.min_mu2.map_or(String::new(), |m| format!(" (smallest μ² {})", shown_mu2(m, 6))),
         .0.summary.certificate.containment_violations,
         .0.infeasibility
     )]
@@ -145,7 +157,7 @@ impl std::fmt::Display for StartDefects {
         let mut parts = Vec::new();
         if !self.overlapping.is_empty() {
             let list = listed(&self.overlapping, |&(i, j, m)| {
-                format!("{i} and {j} (μ² = {m:.6})")
+                format!("{i} and {j} (μ² = {})", shown_mu2(m, 6))
             });
             let n = self.overlapping.len();
             parts.push(format!("{n} overlapping pairs: items {list}"));
@@ -440,6 +452,7 @@ fn run_n<const N: usize>(
         density_before: result.best.density_before_repair,
     });
     summary.start_kept = result.start_kept;
+    summary.fixed_container = fixed.is_some();
     summary.shard = options.shard.map(|shard| crate::packing::ShardOrigin {
         index: shard.index(),
         count: shard.count(),
@@ -481,7 +494,9 @@ fn resumed_start<const N: usize>(
         )));
     }
     let x0 = variables_of::<N>(packing, axes, kind)?;
-    let certificate = problem.certify(&x0)?;
+    let certificate = problem
+        .certify(&x0)
+        .map_err(|e| named::<N>(e, axes.len(), kind))?;
     if !certificate.is_feasible() {
         return Err(PackError::StartNotCertified(start_defects(&certificate)));
     }
@@ -548,6 +563,7 @@ fn not_reached<const N: usize>(
             certificate_of(&u.certificate),
         );
         summary.not_reached = true;
+        summary.fixed_container = true;
         Ok(PackError::NotReached(Box::new(Unfinished {
             packing,
             summary,
@@ -652,6 +668,7 @@ fn run_random<const N: usize>(
         density_before: made.packing.density_before_repair,
     });
     summary.start_kept = false;
+    summary.fixed_container = !jammed;
     Ok(RunOutcome {
         packing,
         summary,
@@ -801,7 +818,9 @@ fn verify_n<const N: usize>(
     let kind = model_container(packing.container().kind());
     let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
     let x = variables_of::<N>(packing, axes, kind)?;
-    let model = problem.certify(&x)?;
+    let model = problem
+        .certify(&x)
+        .map_err(|e| named::<N>(e, axes.len(), kind))?;
     let certificate = certificate_of(&model);
     let mut overlapping_pairs = model.overlapping;
     // Deepest first; the stable sort keeps the certificate's (i, j) order among equals.
@@ -813,6 +832,53 @@ fn verify_n<const N: usize>(
         overlapping_pairs,
         outside,
     })
+}
+
+/// A model error about "variable k" named as the packing states it: item i's centre
+/// coordinate (or, in a periodic cell, its fractional coordinate along a cell edge), or its
+/// orientation, or the container's value. Other errors pass unchanged.
+fn named<const N: usize>(
+    e: implicit_packing::Error,
+    items: usize,
+    kind: ModelContainer,
+) -> PackError {
+    use implicit_packing::Error as E;
+    let stride = Model::<N>::vars_per_body();
+    let periodic = kind == ModelContainer::Periodic;
+    let what = |index: usize| {
+        let axis = ["x", "y", "z"];
+        let edge = ["a", "b", "c"];
+        if index >= items * stride {
+            format!("the container's value {}", index - items * stride + 1)
+        } else {
+            let (item, k) = (index / stride, index % stride);
+            match k {
+                k if k < N && periodic => {
+                    format!(
+                        "item {item}'s fractional coordinate along the cell edge {}",
+                        edge[k]
+                    )
+                }
+                k if k < N => format!("item {item}'s centre coordinate {}", axis[k]),
+                _ => format!("item {item}'s orientation"),
+            }
+        }
+    };
+    match e {
+        E::NonFiniteVariable { index, value } => PackError::OutOfRange {
+            what: what(index),
+            value: format!("{value:e}"),
+            rule: "coordinates must be finite and within ±1e30 (rescale the packing, or check \
+                   the container's size and tilts)",
+        },
+        E::FractionalOutOfRange { index, value } => PackError::OutOfRange {
+            what: what(index),
+            value: format!("{value:e}"),
+            rule: "items of a periodic cell must lie within 2^30 cells of it (wrap them into \
+                   the cell)",
+        },
+        other => PackError::Model(other),
+    }
 }
 
 /// The bodies and the container of a packing, as the model and the certificate see them.

@@ -319,6 +319,8 @@ impl Container {
         }
         let size_len = match kind {
             ContainerKind::Circle | ContainerKind::Ball => 1,
+            // A periodic cell's tilts may be left out: a rectangular cell.
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped if size.len() == n => n,
             ContainerKind::Parallelogram | ContainerKind::Parallelepiped => n * (n + 1) / 2,
             _ => n,
         };
@@ -503,10 +505,13 @@ impl Container {
     /// `None` when the container is usable, else what is wrong (a size that is not positive
     /// and finite, a centre that is not finite) and the name of the offending field.
     pub fn defect(&self) -> Option<(&'static str, String)> {
-        if let Some(x) = self.center().iter().find(|x| !x.is_finite()) {
+        // The magnitudes the packing model holds.
+        const MAX: f64 = implicit_packing::shape::MAX_MAGNITUDE;
+        let in_range = |v: f64| (1.0 / MAX..=MAX).contains(&v);
+        if let Some(x) = self.center().iter().find(|x| !(x.abs() <= MAX)) {
             return Some((
                 "center",
-                format!("the centre has a non-finite coordinate {x}"),
+                format!("the centre has a coordinate {x}, beyond ±{MAX:e}"),
             ));
         }
         if let Container::Periodic {
@@ -527,28 +532,33 @@ impl Container {
                     ),
                 ));
             }
-            if let Some(t) = tilts.iter().find(|t| !t.is_finite()) {
-                return Some(("tilts", format!("tilts must be finite, not {t}")));
+            if let Some(t) = tilts.iter().find(|t| !(t.abs() <= MAX)) {
+                return Some((
+                    "tilts",
+                    format!("tilts must be finite, within ±{MAX:e}, not {t}"),
+                ));
             }
-            return lengths
-                .iter()
-                .find(|s| !(s.is_finite() && **s > 0.0))
-                .map(|s| {
-                    (
-                        "lengths",
-                        format!("lengths must be positive and finite, not {s}"),
-                    )
-                });
+            return lengths.iter().find(|s| !in_range(**s)).map(|s| {
+                (
+                    "lengths",
+                    format!(
+                        "lengths must be positive, in [{:e}, {MAX:e}], not {s}",
+                        1.0 / MAX
+                    ),
+                )
+            });
         }
         let size = self.size();
-        size.iter()
-            .find(|s| !(s.is_finite() && **s > 0.0))
-            .map(|s| {
-                (
+        size.iter().find(|s| !in_range(**s)).map(|s| {
+            (
+                self.size_name(),
+                format!(
+                    "{} must be positive, in [{:e}, {MAX:e}], not {s}",
                     self.size_name(),
-                    format!("{} must be positive and finite, not {s}", self.size_name()),
-                )
-            })
+                    1.0 / MAX
+                ),
+            )
+        })
     }
 }
 
@@ -679,6 +689,39 @@ pub struct Packing {
 }
 
 impl Packing {
+    /// The same packing in the form the files state a periodic cell in: its tilts reduced
+    /// (`|xy| ≤ l_x / 2`, `|xz| ≤ l_x / 2`, `|yz| ≤ l_y / 2`, as LAMMPS and HOOMD ask; the
+    /// same lattice) and every centre moved by a lattice translation into the cell (fractional
+    /// coordinates in `[0, 1)` from the origin). Other containers are returned as they are.
+    pub fn in_reduced_cell(&self) -> Packing {
+        let Container::Periodic {
+            origin,
+            lengths,
+            tilts,
+        } = &self.container
+        else {
+            return self.clone();
+        };
+        let mut packing = self.clone();
+        match &mut packing.items {
+            Items::Ellipses(items) => {
+                let h = reduced_cell::<2>(lengths, tilts);
+                for item in items.iter_mut() {
+                    item.center = wrapped_into(&h, origin, item.center);
+                }
+                packing.container = periodic_container(origin, &h);
+            }
+            Items::Ellipsoids(items) => {
+                let h = reduced_cell::<3>(lengths, tilts);
+                for item in items.iter_mut() {
+                    item.center = wrapped_into(&h, origin, item.center);
+                }
+                packing.container = periodic_container(origin, &h);
+            }
+        }
+        packing
+    }
+
     /// The container.
     pub fn container(&self) -> &Container {
         &self.container
@@ -834,6 +877,11 @@ pub struct Summary {
     /// its fixed container (written to `unfinished/`): not a packing, and not certified.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub not_reached: bool,
+    /// True when the container (or periodic cell) is the scene's, fixed: the run filled it
+    /// rather than shrinking it. `ellipack merge` keeps packings of one fixed container apart
+    /// from those of another or of a variable one.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed_container: bool,
 }
 
 /// Which shard of which multi-start a packing came from (`ellipack pack --shard K/N`).
@@ -887,7 +935,55 @@ impl Summary {
             start_kept: false,
             shard: None,
             not_reached: false,
+            fixed_container: false,
         }
+    }
+}
+
+/// The upper-triangular cell matrix of `lengths` and `tilts` (columns are the lattice
+/// vectors), reduced ([`implicit_packing::periodic::reduced`]).
+fn reduced_cell<const N: usize>(lengths: &[f64], tilts: &[f64]) -> [[f64; N]; N] {
+    let mut h: [[f64; N]; N] = std::array::from_fn(|r| {
+        std::array::from_fn(|c| {
+            if r == c {
+                lengths.get(r).copied().unwrap_or(f64::NAN)
+            } else {
+                0.0
+            }
+        })
+    });
+    // Tilts in LAMMPS order: xy, xz, yz.
+    let entries: &[(usize, usize)] = if N == 2 {
+        &[(0, 1)]
+    } else {
+        &[(0, 1), (0, 2), (1, 2)]
+    };
+    for (&(r, c), t) in entries.iter().zip(tilts) {
+        h[r][c] = *t;
+    }
+    implicit_packing::periodic::reduced(&h)
+}
+
+/// `c` moved by a lattice translation of `h` into the cell at `origin`.
+fn wrapped_into<const N: usize>(h: &[[f64; N]; N], origin: &[f64], c: [f64; N]) -> [f64; N] {
+    use implicit_packing::periodic::{to_cartesian, to_fractional};
+    let relative: [f64; N] = std::array::from_fn(|k| c[k] - origin[k]);
+    let s = to_fractional(h, &relative);
+    let inside = to_cartesian(h, &s.map(|v| v - v.floor()));
+    std::array::from_fn(|k| origin[k] + inside[k])
+}
+
+/// The periodic container at `origin` with the cell matrix `h`.
+fn periodic_container<const N: usize>(origin: &[f64], h: &[[f64; N]; N]) -> Container {
+    let tilts = if N == 2 {
+        vec![h[0][1]]
+    } else {
+        vec![h[0][1], h[0][2], h[1][2]]
+    };
+    Container::Periodic {
+        origin: origin.to_vec(),
+        lengths: (0..N).map(|k| h[k][k]).collect(),
+        tilts,
     }
 }
 

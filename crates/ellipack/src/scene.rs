@@ -27,7 +27,8 @@
 //!
 //! [[shapes]]                          # one table per group of identical items
 //! count = 20
-//! semi_axes = [2.0, 1.0]              # dimension values, each in [1e-30, 1e30]
+//! semi_axes = [2.0, 1.0]              # dimension values, each in [1e-30, 1e30]; the whole
+//!                                     # packing must lie within ±1.25e29 of its centre
 //!
 //! [[shapes]]                          # several groups: mixed shapes
 //! count = 10
@@ -845,6 +846,88 @@ impl Scene {
         Some(Container::unchecked(self.container, &vec![0.0; n], &dims))
     }
 
+    /// Why a packing of the scene would lie beyond the magnitudes the model holds (centre
+    /// coordinates within ±[`implicit_packing::shape::MAX_MAGNITUDE`]): its fixed container, or
+    /// for a container the run shrinks the items themselves at a tenth of their area or volume,
+    /// would reach beyond an eighth of it. `None` otherwise.
+    pub fn beyond_model_range(&self) -> Option<String> {
+        let n = self.dimension.get() as f64;
+        let longest = self
+            .item_semi_axes()
+            .iter()
+            .flatten()
+            .copied()
+            .fold(0.0, f64::max);
+        let reach = match self.fixed_container() {
+            Some(c) => c.half_extents().into_iter().fold(0.0, f64::max),
+            None => (self.item_measure() / 0.1).powf(1.0 / n),
+        } + 2.0 * longest;
+        let limit = implicit_packing::shape::MAX_MAGNITUDE / 8.0;
+        (!(reach <= limit)).then(|| {
+            format!(
+                "a packing of these items would reach {} from its centre, beyond the {} the \
+                 model holds: rescale the lengths (or give a larger packing fraction)",
+                short(reach),
+                short(limit)
+            )
+        })
+    }
+
+    /// Why no packing of the scene's items fits its fixed container, when that is plain
+    /// before any work: the items' total area or volume exceeds the container's, or an item
+    /// cannot fit alone — its longest semi-axis beyond a ball's radius (or beyond the largest
+    /// semi-axis or the half diagonal of other containers), or its shortest beyond the
+    /// container's inradius (the item holds a ball of that radius). `None` otherwise, and for
+    /// scenes that shrink their container.
+    pub fn impossible_container(&self) -> Option<String> {
+        let container = self.fixed_container()?;
+        let fraction = self.item_measure() / container.measure();
+        let what = self.container.measure_name();
+        if fraction > 1.0 {
+            return Some(format!(
+                "the items' total {what} is {} times the container's: no packing exists",
+                short(fraction)
+            ));
+        }
+        if self.container.is_periodic() {
+            return None;
+        }
+        let size = container.size();
+        let (inradius, reach) = match self.container {
+            ContainerKind::Circle | ContainerKind::Ball => (size[0], size[0]),
+            ContainerKind::Rectangle | ContainerKind::Cuboid => (
+                size.iter().copied().fold(f64::INFINITY, f64::min),
+                size.iter().map(|h| h * h).sum::<f64>().sqrt(),
+            ),
+            _ => (
+                size.iter().copied().fold(f64::INFINITY, f64::min),
+                size.iter().copied().fold(0.0, f64::max),
+            ),
+        };
+        self.item_semi_axes()
+            .iter()
+            .enumerate()
+            .find_map(|(i, axes)| {
+                let longest = axes.iter().copied().fold(0.0, f64::max);
+                let shortest = axes.iter().copied().fold(f64::INFINITY, f64::min);
+                if longest > reach {
+                    Some(format!(
+                        "item {i} (semi-axes {axes:?}) is longer than the container reaches \
+                     ({}): no packing exists",
+                        short(reach)
+                    ))
+                } else if shortest > inradius {
+                    Some(format!(
+                        "item {i} (semi-axes {axes:?}) is thicker than the container ({} across \
+                     at its narrowest): no packing exists",
+                        short(2.0 * inradius)
+                    ))
+                } else {
+                    None
+                }
+            })
+    }
+
     /// What a random packing compresses to (`solver.start = "random"`, or
     /// `packing_fraction = "jammed"`); `None` for a scene of the lattice starts.
     pub fn random_goal(&self) -> Option<RandomGoal> {
@@ -1182,6 +1265,7 @@ impl Validator<'_> {
                     .enumerate()
                     .find_map(|(i, g)| g.get_ref().orientation.as_ref().map(|o| (i, o.span())))
             });
+        let shapes_span = raw.shapes.as_ref().map_or(0..0, Spanned::span);
         let shapes = self.shapes(raw.shapes, dimension, seed)?;
         let start = raw
             .solver
@@ -1221,7 +1305,7 @@ impl Validator<'_> {
             ));
         }
         let output = self.output(raw.output)?;
-        Ok(Scene {
+        let scene = Scene {
             name: raw.name,
             dimension,
             container: kind,
@@ -1230,7 +1314,45 @@ impl Validator<'_> {
             solver,
             seed,
             output,
-        })
+        };
+        let span_of_shapes = shapes_span;
+        if let Some(reason) = scene.beyond_model_range() {
+            let fixed = scene.fixed_container().is_some();
+            let c = &raw.container;
+            let at = [
+                ("radius", c.radius.as_ref().map(Spanned::span)),
+                ("semi_axes", c.semi_axes.as_ref().map(Spanned::span)),
+                ("half_sides", c.half_sides.as_ref().map(Spanned::span)),
+                ("lengths", c.lengths.as_ref().map(Spanned::span)),
+                (
+                    "packing_fraction",
+                    c.packing_fraction.as_ref().map(Spanned::span),
+                ),
+            ]
+            .into_iter()
+            .find_map(|(key, span)| Some((format!("container.{key}"), span?)))
+            .filter(|_| fixed)
+            .unwrap_or(("shapes".to_string(), span_of_shapes));
+            return Err(self.error(at.1, &at.0, reason));
+        }
+        if let Some(reason) = scene.impossible_container() {
+            let c = &raw.container;
+            let (key, span) = [
+                ("radius", c.radius.as_ref().map(Spanned::span)),
+                ("semi_axes", c.semi_axes.as_ref().map(Spanned::span)),
+                ("half_sides", c.half_sides.as_ref().map(Spanned::span)),
+                ("lengths", c.lengths.as_ref().map(Spanned::span)),
+                (
+                    "packing_fraction",
+                    c.packing_fraction.as_ref().map(Spanned::span),
+                ),
+            ]
+            .into_iter()
+            .find_map(|(key, span)| Some((key, span?)))
+            .unwrap_or(("kind", c.kind.span()));
+            return Err(self.error(span, &format!("container.{key}"), reason));
+        }
+        Ok(scene)
     }
 
     /// The size of a fixed container from the `[container]` keys, checked against the kind.

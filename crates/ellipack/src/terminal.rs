@@ -23,6 +23,13 @@ pub fn say(line: fmt::Arguments<'_>) -> bool {
     }
 }
 
+/// Prints `line` and a newline to standard error, ignoring a failed write: with standard error
+/// closed there is nowhere left to report anything, and the run's files matter more.
+pub fn note(line: fmt::Arguments<'_>) {
+    let mut err = io::stderr().lock();
+    let _ = err.write_fmt(line).and_then(|()| err.write_all(b"\n"));
+}
+
 /// `println!` that never panics: a closed pipe or a full disk on standard output leaves the
 /// line unprinted (see [`say`](crate::terminal::say)). Evaluates to `false` when the line was
 /// not printed.
@@ -30,5 +37,14 @@ pub fn say(line: fmt::Arguments<'_>) -> bool {
 macro_rules! say {
     ($($arg:tt)*) => {
         $crate::terminal::say(::std::format_args!($($arg)*))
+    };
+}
+
+/// `eprintln!` that never panics: a closed standard error leaves the line unprinted (see
+/// [`note`](crate::terminal::note)).
+#[macro_export]
+macro_rules! note {
+    ($($arg:tt)*) => {
+        $crate::terminal::note(::std::format_args!($($arg)*))
     };
 }

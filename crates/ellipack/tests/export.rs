@@ -584,12 +584,12 @@ fn convert_writes_the_chosen_files_of_a_packing_folder() {
     let p = &every_kind()[1];
     let dir = common::temp_dir("export-convert");
     packing::write_files(&dir, p, &common::certified_summary(p), false).unwrap();
-    export::convert(&dir, &[Format::Gsd]).unwrap();
+    export::convert(&dir, &[Format::Gsd], false).unwrap();
     assert_eq!(
         common::names(&dir),
         [packing::CSV_FILE, GSD_FILE, packing::SUMMARY_FILE]
     );
-    let back = export::convert(&dir, &Format::ALL).unwrap();
+    let back = export::convert(&dir, &Format::ALL, false).unwrap();
     assert_eq!(&back, p);
     assert_eq!(
         common::names(&dir),
@@ -613,7 +613,7 @@ fn convert_writes_the_chosen_files_of_a_packing_folder() {
 fn convert_refuses_what_is_not_a_packing_folder() {
     let dir = common::temp_dir("export-bad");
     let missing = dir.join("missing");
-    let e = export::convert(&missing, &Format::ALL).unwrap_err();
+    let e = export::convert(&missing, &Format::ALL, false).unwrap_err();
     assert!(matches!(e, ExportError::NotAFolder { .. }), "{e:?}");
     assert!(
         e.to_string().contains("missing: not a packing folder"),
@@ -621,7 +621,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     );
     let file = dir.join("file.csv");
     std::fs::write(&file, "id\n").unwrap();
-    let e = export::convert(&file, &Format::ALL)
+    let e = export::convert(&file, &Format::ALL, false)
         .unwrap_err()
         .to_string();
     assert!(
@@ -630,7 +630,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     );
     let empty = dir.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let e = export::convert(&empty, &Format::ALL).unwrap_err();
+    let e = export::convert(&empty, &Format::ALL, false).unwrap_err();
     assert!(matches!(e, ExportError::Packing(_)), "{e:?}");
     assert!(e.to_string().contains("packing.csv"), "{e}");
     // A broken row is named by its line, and nothing is written.
@@ -639,7 +639,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     let csv = std::fs::read_to_string(empty.join(packing::CSV_FILE)).unwrap();
     let broken = csv.replacen("\n0,", "\n0,nan-ish,", 1);
     std::fs::write(empty.join(packing::CSV_FILE), broken).unwrap();
-    let e = export::convert(&empty, &Format::ALL)
+    let e = export::convert(&empty, &Format::ALL, false)
         .unwrap_err()
         .to_string();
     assert!(e.contains("line 2"), "{e}");

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 mod common;
 use common::{ellipack, pack_into, summary_json, temp_dir, text};
 
-/// A periodic scene of `count` items with the given semi-axes, one thread, a few seconds.
+/// A periodic scene of `count` items with the given semi-axes, one thread, its work bounded by
+/// local minimisations (the time limit is far beyond it, so a slow machine ends alike).
 fn scene(dir: &Path, count: usize, axes: &str, extra: &str) -> PathBuf {
     let dimension = axes.split(',').count();
     let path = dir.join("scene.toml");
@@ -16,8 +17,8 @@ fn scene(dir: &Path, count: usize, axes: &str, extra: &str) -> PathBuf {
         &path,
         format!(
             "dimension = {dimension}\nseed = 3\n[container]\nkind = \"periodic\"\n{extra}\
-             [[shapes]]\ncount = {count}\nsemi_axes = [{axes}]\n[solver]\ntime_limit = 3.0\n\
-             threads = 1\n[output]\npictures = false\n"
+             [[shapes]]\ncount = {count}\nsemi_axes = [{axes}]\n[solver]\ntime_limit = 600.0\n\
+             local_minimisations = 8\nthreads = 1\n[output]\npictures = false\n"
         ),
     )
     .unwrap();
@@ -159,5 +160,128 @@ fn fixed_cells_are_filled_and_kept() {
                 assert!(got.iter().all(|&v| v == got[0]), "a cube: {got:?}");
             }
         }
+    }
+}
+
+/// Unit spheres in a fixed periodic cube at 0.45 and 0.68: a body-centred cubic lattice holds
+/// them (density 0.6802), so the run starts from a packing and needs no solver work.
+#[test]
+fn fixed_cells_a_lattice_fills_start_as_packings() {
+    for (count, fraction) in [(2, 0.45), (16, 0.45), (16, 0.68)] {
+        let extra = format!("cell = \"fixed\"\npacking_fraction = {fraction}\n");
+        let (density, out, _dir) = pack_and_verify(count, "1.0, 1.0, 1.0", &extra);
+        assert!((density - fraction).abs() < 1e-12, "{density}");
+        assert_eq!(
+            summary_json(&out)["start_kept"],
+            true,
+            "{count} at {fraction}"
+        );
+    }
+}
+
+/// Items long against their width ((8, 1, 1) ellipsoids, (40, 1) ellipses) pack in a
+/// variable cell: the lattice start of one such item, a cell thinner than the item's reach
+/// that was once refused, is used, and small cells of the tiled start that cannot be held are
+/// skipped. One local minimisation each keeps the test short.
+#[test]
+fn elongated_items_pack_in_a_variable_cell() {
+    let dir = temp_dir("periodic-elongated");
+    for axes in ["8.0, 1.0, 1.0", "40.0, 1.0"] {
+        let path = scene(&dir, 1, axes, "cell = \"variable\"\n");
+        let text_of = std::fs::read_to_string(&path).unwrap();
+        let one = text_of.replace("local_minimisations = 8", "local_minimisations = 1");
+        assert_ne!(one, text_of);
+        std::fs::write(&path, one).unwrap();
+        let out = dir.join("out");
+        let o = pack_into(&path, &out);
+        assert!(o.status.success(), "({axes}): {}", text(&o.stderr));
+        let v = ellipack().arg("verify").arg(&out).output().unwrap();
+        assert!(v.status.success(), "{}", text(&v.stdout));
+        let density = summary_json(&out)["density"].as_f64().unwrap();
+        assert!(density > 0.74, "({axes}): {density}");
+    }
+}
+
+/// A fixed cell far smaller than its items (a units typo: 0.07 for unit discs) is refused at
+/// once, by `pack` and by `verify`, naming how many times the items cover it.
+#[test]
+fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
+    let dir = temp_dir("periodic-tiny");
+    let path = scene(
+        &dir,
+        50,
+        "1.0, 1.0",
+        "cell = \"fixed\"\nlengths = [0.07, 0.07]\n",
+    );
+    let o = pack_into(&path, &dir.join("out"));
+    let said = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("cover it 32057.") && said.contains("units"),
+        "{said}"
+    );
+    let mut csv = String::from("id,x,y,a,b,theta\n");
+    for i in 0..2001 {
+        csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * 1e-5, 0.03));
+    }
+    let packing = dir.join("packing.csv");
+    std::fs::write(&packing, csv).unwrap();
+    let v = ellipack()
+        .arg("verify")
+        .arg(&packing)
+        .args(["--container", "periodic", "--size", "0.07,0.07"])
+        .output()
+        .unwrap();
+    let said = text(&v.stdout) + &text(&v.stderr);
+    assert_eq!(v.status.code(), Some(1), "{said}");
+    assert!(said.contains("times over"), "{said}");
+    // 51 items: refused as fast, where the pairs were once all checked.
+    let mut csv = String::from("id,x,y,a,b,theta\n");
+    for i in 0..51 {
+        csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * 1e-3, 0.03));
+    }
+    std::fs::write(&packing, csv).unwrap();
+    let v = ellipack()
+        .arg("verify")
+        .arg(&packing)
+        .args(["--container", "periodic", "--size", "0.07,0.07"])
+        .output()
+        .unwrap();
+    assert!(
+        text(&v.stderr).contains("times over"),
+        "{}",
+        text(&v.stderr)
+    );
+}
+
+/// `verify --container periodic` takes the cell of the packing's dimension: its lengths, with
+/// or without tilts, in 2D and in 3D.
+#[test]
+fn verify_takes_a_periodic_cell_of_either_dimension() {
+    let dir = temp_dir("periodic-verify-given");
+    let cases = [
+        ("id,x,y,a,b,theta\n0,0,0,1,1,0\n1,2,2,1,1,0\n", "4,4"),
+        ("id,x,y,a,b,theta\n0,0,0,1,1,0\n1,2,2,1,1,0\n", "4,4,0.5"),
+        (
+            "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,0,0,0,1,1,1,1,0,0,0\n1,2,2,2,1,1,1,1,0,0,0\n",
+            "4,4,4",
+        ),
+        (
+            "id,x,y,z,a,b,c,qw,qx,qy,qz\n0,0,0,0,1,1,1,1,0,0,0\n1,2,2,2,1,1,1,1,0,0,0\n",
+            "4,4,4,0.5,0,0",
+        ),
+    ];
+    for (csv, size) in cases {
+        let packing = dir.join("packing.csv");
+        std::fs::write(&packing, csv).unwrap();
+        let v = ellipack()
+            .arg("verify")
+            .arg(&packing)
+            .args(["--container", "periodic", "--size", size])
+            .output()
+            .unwrap();
+        let said = text(&v.stdout) + &text(&v.stderr);
+        assert_eq!(v.status.code(), Some(0), "--size {size}: {said}");
+        assert!(said.contains("certified"), "{said}");
     }
 }

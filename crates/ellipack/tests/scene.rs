@@ -459,3 +459,85 @@ fn mangled_scenes_never_panic() {
         }
     }
 }
+
+/// A fixed container no packing of the items can fill is refused when the scene is read (the
+/// key and its line named), not after a whole time limit: items whose area exceeds the
+/// container's, an item longer than a ball reaches, an item thicker than a box.
+#[test]
+fn impossible_fixed_containers_are_refused_up_front() {
+    let scene = |container: &str, axes: &str, count: usize| {
+        format!(
+            "dimension = {}\n[container]\n{container}\n[[shapes]]\ncount = {count}\n\
+             semi_axes = [{axes}]\n",
+            axes.split(',').count()
+        )
+    };
+    assert_error(
+        &scene("kind = \"circle\"\nradius = 0.2", "1.0, 1.0", 75),
+        "container.radius",
+        4,
+        "the items' total area is 1875 times the container's",
+    );
+    assert_error(
+        &scene("kind = \"ball\"\nradius = 4.0", "5.0, 1.0, 1.0", 1),
+        "container.radius",
+        4,
+        "item 0 (semi-axes [5.0, 1.0, 1.0]) is longer than the container reaches (4)",
+    );
+    assert_error(
+        &scene(
+            "kind = \"rectangle\"\nhalf_sides = [10.0, 0.5]",
+            "3.0, 1.0",
+            2,
+        ),
+        "container.half_sides",
+        4,
+        "is thicker than the container (1 across at its narrowest)",
+    );
+    // A needle longer than a ball of the asked fraction holds.
+    assert_error(
+        &scene(
+            "kind = \"ball\"\npacking_fraction = 0.5",
+            "10.0, 1.0, 1.0",
+            1,
+        ),
+        "container.packing_fraction",
+        4,
+        "longer than the container reaches",
+    );
+    // Possible ones pass: an item that fits exactly.
+    parse(&scene("kind = \"ball\"\nradius = 5.0", "5.0, 1.0, 1.0", 1)).unwrap();
+}
+
+#[test]
+fn an_overlap_never_reads_as_mu2_one() {
+    use implicit_packing::certificate::shown_mu2;
+    assert_eq!(shown_mu2(0.9999999, 6), "0.9999999");
+    assert_eq!(shown_mu2(0.87804, 6), "0.878040");
+    assert_eq!(shown_mu2(1.0000000001, 6), "1.000000");
+}
+
+/// Scenes whose packing would lie beyond the magnitudes the model holds are refused when read,
+/// naming the key (never a model variable): a packing fraction so small that the container is
+/// astronomically large, items of semi-axis 1e30.
+#[test]
+fn scenes_beyond_the_models_range_are_refused_naming_the_key() {
+    for fraction in ["1e-100", "5e-324"] {
+        assert_error(
+            &format!(
+                "dimension = 2\n[container]\nkind = \"circle\"\npacking_fraction = {fraction}\n\
+                 [[shapes]]\ncount = 3\nsemi_axes = [1.0, 1.0]\n"
+            ),
+            "container.packing_fraction",
+            4,
+            "beyond the 1.25e29 the model holds",
+        );
+    }
+    assert_error(
+        "dimension = 2\n[container]\nkind = \"circle\"\n[[shapes]]\ncount = 3\n\
+         semi_axes = [1e30, 1e30]\n",
+        "shapes",
+        4,
+        "rescale the lengths",
+    );
+}

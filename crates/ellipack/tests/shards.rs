@@ -122,7 +122,7 @@ fn merge_refuses_other_scenes_and_uncertified_sets() {
     std::fs::write(broken.join("packing.csv"), lines.join("\n") + "\n").unwrap();
     let stderr = refused(&merge(std::slice::from_ref(&broken), &out));
     assert!(
-        stderr.contains("none of the 1 packings is certified"),
+        stderr.contains("none of the 1 packings read is certified"),
         "{stderr}"
     );
     let output = merge(&[broken, a.clone()], &out);
@@ -134,4 +134,76 @@ fn merge_refuses_other_scenes_and_uncertified_sets() {
         assert_eq!(output.status.code(), Some(2), "--shard {bad}");
         assert!(text(&output.stderr).contains("shard"), "--shard {bad}");
     }
+}
+
+/// Four unit circles in a circle: a fixed one (radius given, filled at once from the start),
+/// or the smallest one (one local minimisation).
+fn circles(dir: &Path, name: &str, size: &str) -> PathBuf {
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &scene,
+        format!(
+            "dimension = 2\nseed = 5\n[container]\nkind = \"circle\"\n{size}[[shapes]]\n\
+             count = 4\nsemi_axes = [1.0, 1.0]\n[solver]\ntime_limit = 60.0\n\
+             local_minimisations = 1\nthreads = 1\n[output]\npictures = false\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join(name);
+    assert_success(
+        &ellipack()
+            .arg("pack")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap(),
+    );
+    out
+}
+
+/// Packings of one fixed container merge; one of another fixed container, or of a variable
+/// one, is refused as another scene (a ball of radius 6 never wins over the scene's 10).
+#[test]
+fn merge_compares_the_whole_container() {
+    let dir = temp_dir("merge-containers");
+    let ten = circles(&dir, "ten", "radius = 10.0\n");
+    let ten_again = circles(&dir, "ten-again", "radius = 10.0\n");
+    let six = circles(&dir, "six", "radius = 6.0\n");
+    let smallest = circles(&dir, "smallest", "");
+    assert_eq!(summary(&ten)["fixed_container"], true);
+    assert!(summary(&smallest).get("fixed_container").is_none());
+    assert_success(&merge(&[ten.clone(), ten_again], &dir.join("a")));
+    for (other, expected) in [
+        (
+            &six,
+            "fixed container circle of radius [6.0] against circle of radius [10.0]",
+        ),
+        (&smallest, "a variable container against the fixed circle"),
+    ] {
+        let stderr = refused(&merge(&[ten.clone(), other.clone()], &dir.join("b")));
+        assert!(stderr.contains(expected), "{stderr}");
+        assert!(!dir.join("b").join("packing.csv").exists());
+    }
+}
+
+/// A shard folder without a packing (a killed job, or a fixed container's shard that ended
+/// with only `unfinished/`) is skipped, as an uncertified shard is.
+#[test]
+fn merge_skips_folders_without_a_packing() {
+    let dir = temp_dir("merge-empty-shard");
+    let good = circles(&dir, "good", "");
+    let killed = dir.join("killed");
+    std::fs::create_dir_all(killed.join("unfinished")).unwrap();
+    let best = dir.join("best");
+    let output = merge(&[killed.clone(), good.clone()], &best);
+    assert_success(&output);
+    assert!(
+        text(&output.stdout).contains("killed: no packing.csv"),
+        "{}",
+        text(&output.stdout)
+    );
+    assert_eq!(csv(&best), csv(&good));
+    let stderr = refused(&merge(&[killed], &dir.join("none")));
+    assert!(stderr.contains("1 folders held no packing"), "{stderr}");
 }

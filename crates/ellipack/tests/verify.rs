@@ -241,3 +241,36 @@ fn a_minimal_summary_is_a_container_at_the_origin() {
         .to_string();
     assert!(err.contains("s.json") && err.contains("radius"), "{err}");
 }
+
+/// A periodic packing the model cannot hold is refused naming the item or the container's
+/// value, never a model variable: a tilt of 1e308, an item 1e10 cells away.
+#[test]
+fn values_beyond_the_models_range_are_named_as_the_packing_states_them() {
+    let dir = common::temp_dir("verify-range");
+    let packing = dir.join("packing.csv");
+    let cases = [
+        (
+            "0,0.5,0.5,0.2,0.2,0\n1,1.5,0.5,0.2,0.2,0\n",
+            "4,4,1e308",
+            "tilts must be finite, within ±1e30",
+        ),
+        (
+            "0,0.5,0.5,0.2,0.2,0\n1,1e10,0.5,0.2,0.2,0\n",
+            "1,1",
+            "item 1's fractional coordinate along the cell edge a is 1e10",
+        ),
+    ];
+    for (rows, size, expected) in cases {
+        std::fs::write(&packing, format!("id,x,y,a,b,theta\n{rows}")).unwrap();
+        let v = common::ellipack()
+            .arg("verify")
+            .arg(&packing)
+            .args(["--container", "periodic", "--size", size])
+            .output()
+            .unwrap();
+        let said = common::text(&v.stderr);
+        assert_eq!(v.status.code(), Some(1), "{said}");
+        assert!(said.contains(expected), "{said}");
+        assert!(!said.contains("variable"), "{said}");
+    }
+}

@@ -50,7 +50,7 @@ pub enum Error {
         .0.certificate.overlapping.len(),
         .0.certificate.outside.len(),
         .0.infeasibility,
-        .0.certificate.min_mu2.map_or(String::new(), |m| format!(", smallest μ² {m:.6}"))
+        .0.certificate.min_mu2.map_or(String::new(), |m| format!(", smallest μ² {}", implicit_packing::certificate::shown_mu2(m, 6)))
     )]
     NotReached(Box<crate::fixed::Unfinished>),
     /// The random start ([`crate::random::sequential_addition`]) found no place for an item:

@@ -279,6 +279,49 @@ mod tests {
         assert!(message.contains("packing fraction 0.950000"), "{message}");
     }
 
+    /// A fixed periodic cube of unit spheres at any fraction a cubic or close-packed lattice
+    /// reaches in it starts as a packing: 2 and 16 at 0.45 and 0.68 (body-centred cubic,
+    /// density 0.6802), 4 at 0.74 (face-centred cubic, 0.7405), 1 at 0.52 (simple cubic,
+    /// 0.5236); and 2D: 2 unit discs at 0.9 (hexagonal, 0.9069, in a cell of its shape).
+    #[test]
+    fn fixed_periodic_cells_start_on_the_lattice_that_fits() {
+        let cube = |m: usize, fraction: f64| {
+            let mut p = Model::<3>::new(vec![[1.0; 3]; m], ContainerShape::Periodic).unwrap();
+            let side = (item_measure(&p) / fraction).cbrt();
+            let x = fill_start(
+                &mut p,
+                &LatticeStart::centred(),
+                &[side, side, side, 0.0, 0.0, 0.0],
+            )
+            .unwrap();
+            p.certify(&x).unwrap().is_feasible()
+        };
+        for (m, fraction) in [
+            (2, 0.45),
+            (16, 0.45),
+            (2, 0.68),
+            (16, 0.68),
+            (4, 0.74),
+            (1, 0.52),
+        ] {
+            assert!(cube(m, fraction), "{m} spheres at {fraction}");
+        }
+        assert!(
+            !cube(2, 0.70),
+            "2 spheres at 0.70: beyond body-centred cubic"
+        );
+        let mut p = Model::<2>::new(vec![[1.0; 2]; 2], ContainerShape::Periodic).unwrap();
+        let area = item_measure(&p) / 0.9;
+        let width = (area / 3f64.sqrt()).sqrt();
+        let x = fill_start(
+            &mut p,
+            &LatticeStart::centred(),
+            &[width, width * 3f64.sqrt(), 0.0],
+        )
+        .unwrap();
+        assert!(p.certify(&x).unwrap().is_feasible());
+    }
+
     /// The same code fills a fixed periodic cell: a square cell (no tilt) holding 10 ellipses
     /// (2, 1) at packing fraction 0.7.
     #[test]

@@ -682,37 +682,106 @@ fn place_on_sites<const N: usize>(
 }
 
 /// A start that fills a fixed periodic cell with diagonal `heights` (`l_x, l_y, l_z`): items
-/// unrotated on a densest lattice with an orthogonal unit cell (2D: 2 or 4 items per cell by
-/// [`LatticeStart::orientation`]; 3D: the cubic FCC cell), mapped by `diag(l)`, its unit cells
-/// counted along each axis so that the lattice is compressed least along any axis (the
-/// largest ratio of its natural height to the cell's); the centres are fractional, so the
-/// lattice takes the cell's shape. Below the lattice's density the items do not overlap.
+/// unrotated on a lattice of unit balls with an orthogonal conventional cell
+/// ([`orthogonal_cells`]: square and hexagonal in 2D; simple cubic, body-centred cubic,
+/// face-centred cubic and hexagonal close-packed in 3D), mapped by `diag(l)`, its cells counted
+/// along each axis. Each (lattice, counts) is compressed by the largest ratio of its natural
+/// height to the cell's, `max_k c_k h_k l_k / L_k`; at most 1, no two items overlap (a stretch
+/// by factors ≥ 1 along each axis shortens no distance), so every fraction one of these
+/// lattices reaches in the cell's shape starts as a packing, before any solver work. The
+/// candidates are ranked by that compression, then by their empty sites;
+/// [`LatticeStart::orientation`] picks the rank (0: the least compressed), so a multi-start
+/// tries the others. The centres are fractional, so the lattice takes the cell's shape.
+/// A lattice filling a fixed periodic cell: (compression, empty sites), the counts of its
+/// conventional cells along each axis, and their sites.
+type RankedFill<const N: usize> = ((f64, usize), [usize; N], Vec<[f64; N]>);
+
 fn periodic_fill_start<const N: usize>(
     problem: &Model<N>,
     start: &LatticeStart<N>,
     container: &[f64],
 ) -> Vec<f64> {
     let m = problem.len();
-    let per_cell = if N == 2 {
-        [2, 4][start.orientation % 2]
-    } else {
-        4
-    };
     let l = lattice_semi_axes(problem);
-    let (unit, sites) = unit_cell::<N>(per_cell);
-    let natural: [f64; N] = std::array::from_fn(|k| unit[k][k] * l[k]);
     let heights: [f64; N] = std::array::from_fn(|k| container[k]);
-    let cells = m.div_ceil(per_cell).max(1);
-    let compression = |c: &[usize; N]| {
-        (0..N)
-            .map(|k| c[k] as f64 * natural[k] / heights[k])
-            .fold(0.0, f64::max)
-    };
-    let best = least_cost_counts(cells, |c| (compression(c), c.iter().product::<usize>()));
+    let mut ranked: Vec<RankedFill<N>> = orthogonal_cells::<N>()
+        .into_iter()
+        .map(|(natural, sites)| {
+            let compression = |c: &[usize; N]| {
+                (0..N)
+                    .map(|k| c[k] as f64 * natural[k] * l[k] / heights[k])
+                    .fold(0.0, f64::max)
+            };
+            let cells = m.div_ceil(sites.len()).max(1);
+            let cost = |c: &[usize; N]| (compression(c), sites.len() * c.iter().product::<usize>());
+            let counts = least_cost_counts(cells, cost);
+            let (compression, occupied) = cost(&counts);
+            ((compression, occupied - m), counts, sites)
+        })
+        .collect();
+    ranked.sort_by(|a, b| a.0.0.total_cmp(&b.0.0).then(a.0.1.cmp(&b.0.1)));
+    let (_, counts, sites) = &ranked[start.orientation % ranked.len()];
     let mut x = vec![0.0; problem.var_count()];
-    place_on_sites(&mut x, m, &sites, &best, &start.shift);
+    place_on_sites(&mut x, m, sites, counts, &start.shift);
     x[m * Model::<N>::vars_per_body()..].copy_from_slice(container);
     x
+}
+
+/// The orthogonal conventional cells of lattices of unit balls (minimum distance 2) that fill
+/// a fixed periodic cell: each cell's side lengths and its sites in fractional coordinates.
+/// 2D: the square lattice (density π/4) and the hexagonal one (π/√12) in its centred
+/// rectangular cell, alone and doubled along x. 3D: simple cubic (π/6), body-centred cubic
+/// (π√3/8), face-centred cubic and hexagonal close-packed (π/√18) in its orthohexagonal cell.
+///
+/// # References
+/// - N. W. Ashcroft, N. D. Mermin, *Solid State Physics*, Saunders 1976, chapter 4 (the cubic
+///   and hexagonal close-packed structures and their conventional cells).
+fn orthogonal_cells<const N: usize>() -> Vec<([f64; N], Vec<[f64; N]>)> {
+    let h = 3f64.sqrt();
+    let cell = |sides: &[f64], sites: &[&[f64]]| -> ([f64; N], Vec<[f64; N]>) {
+        (
+            std::array::from_fn(|k| sides[k]),
+            sites
+                .iter()
+                .map(|s| std::array::from_fn(|k| s[k]))
+                .collect(),
+        )
+    };
+    if N == 2 {
+        vec![
+            cell(&[2.0, 2.0], &[&[0.0, 0.0]]),
+            cell(&[2.0, 2.0 * h], &[&[0.0, 0.0], &[0.5, 0.5]]),
+            cell(
+                &[4.0, 2.0 * h],
+                &[&[0.0, 0.0], &[0.5, 0.0], &[0.25, 0.5], &[0.75, 0.5]],
+            ),
+        ]
+    } else {
+        let fcc = 2.0 * std::f64::consts::SQRT_2;
+        let layers = 2.0 * (8.0f64 / 3.0).sqrt();
+        vec![
+            cell(&[2.0, 2.0, 2.0], &[&[0.0, 0.0, 0.0]]),
+            cell(&[4.0 / h; 3], &[&[0.0, 0.0, 0.0], &[0.5, 0.5, 0.5]]),
+            cell(
+                &[fcc; 3],
+                &[
+                    &[0.0, 0.0, 0.0],
+                    &[0.5, 0.5, 0.0],
+                    &[0.5, 0.0, 0.5],
+                    &[0.0, 0.5, 0.5],
+                ],
+            ),
+            cell(
+                &[2.0, 2.0 * h, layers],
+                &[
+                    &[0.0, 0.0, 0.0],
+                    &[0.5, 0.5, 0.0],
+                    &[0.5, 1.0 / 6.0, 0.5],
+                    &[0.0, 2.0 / 3.0, 0.5],
+                ],
+            ),
+        ]
+    }
 }
 
 /// The largest semi-axis of each direction over all items, which unrotated items on a lattice

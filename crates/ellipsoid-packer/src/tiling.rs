@@ -104,7 +104,7 @@ fn tiled<const N: usize>(x: &[f64], k: usize, m: usize) -> Vec<f64> {
 /// A start for `problem` (a periodic cell of identical items): the densest of the small cells
 /// with 1, 2 and 4 items (each a one-thread multi-start of `time_per_cell` with the
 /// `template`'s settings) tiled to the problem's items, certified, with its density; `None`
-/// when the items differ or the cell is not periodic. The small runs stop when `observer`
+/// when the items differ, the cell is not periodic or no small cell could be used. The small runs stop when `observer`
 /// says so.
 ///
 /// # Errors
@@ -125,9 +125,13 @@ pub fn tiled_start<const N: usize>(
         if observer.should_stop() {
             break;
         }
-        let x = small_cell(semi_axes, k, template, time_per_cell, observer)?;
+        // A small cell the model cannot hold (one elongated item in a cell thinner than its
+        // reach needs too many images) is skipped: the run has its lattice start.
+        let Ok(x) = small_cell(semi_axes, k, template, time_per_cell, observer) else {
+            continue;
+        };
         let y = tiled::<N>(&x, k, m);
-        if !problem.certify(&y)?.is_feasible() {
+        if !problem.certify(&y).is_ok_and(|c| c.is_feasible()) {
             continue;
         }
         let density = item_measure(problem) / problem.evaluate(&y, None)?.objective;

@@ -67,6 +67,18 @@ impl Certificate {
     }
 }
 
+/// μ² as a message shows it: `decimals` decimals, or as many as it takes for a value below 1
+/// (an overlap) not to read as 1 (0.9999999 is not "1.000000").
+pub fn shown_mu2(mu2: f64, decimals: usize) -> String {
+    let text = format!("{mu2:.decimals$}");
+    if mu2 < 1.0 && text.parse::<f64>().is_ok_and(|v| v >= 1.0) {
+        // Rust's shortest representation that reads back to the same double.
+        format!("{mu2}")
+    } else {
+        text
+    }
+}
+
 /// The PW85 contact function of two bodies, from their shape matrices in PW85's storage
 /// (upper triangle, row-major) and r12 = c_j − c_i.
 ///
@@ -203,17 +215,18 @@ pub(crate) fn periodic_images<const N: usize>(
     cell: &[[f64; N]; N],
     skin: f64,
 ) -> Result<(crate::periodic::ImageSet<N>, Vec<Body<N>>), Error> {
-    use crate::periodic::{ImageSet, MAX_IMAGES_PER_ITEM, to_cartesian, to_fractional};
+    use crate::periodic::{ImageSet, check_crowding, image_limit, to_cartesian, to_fractional};
     let fractional: Vec<[f64; N]> = bodies
         .iter()
         .map(|b| to_fractional(cell, &b.centre()))
         .collect();
     let r_max = bodies.iter().map(Body::bounding_radius).fold(0.0, f64::max);
+    check_crowding(cell, bodies.iter().map(Body::bounding_radius))?;
     let images = ImageSet::new(
         cell,
         &fractional,
         2.0 * r_max + skin,
-        MAX_IMAGES_PER_ITEM.saturating_mul(bodies.len()),
+        image_limit(bodies.len()),
     )?;
     let extended = (0..images.owner.len())
         .map(|e| {

@@ -88,6 +88,17 @@ pub enum Error {
         /// The distance from the cell within which images are needed.
         reach: f64,
     },
+    /// A periodic cell far smaller than its items (typically given in other units): their
+    /// enclosing balls cover it `cover` times over, so that about `pairs` pairs of images would
+    /// be checked, more than `limit`.
+    CellCrowded {
+        /// `Σ |B(r_i)| / |det H|`.
+        cover: f64,
+        /// The estimated number of close pairs of images.
+        pairs: f64,
+        /// The most pairs allowed.
+        limit: usize,
+    },
     /// A fractional coordinate of an item in a periodic cell so large that its lattice
     /// translation is not an `i32` (beyond ±2³⁰ cells).
     FractionalOutOfRange {
@@ -233,6 +244,18 @@ impl fmt::Display for Error {
                  more than {points} images would be needed",
                 short(width),
                 short(reach)
+            ),
+            Error::CellCrowded {
+                cover,
+                pairs,
+                limit,
+            } => write!(
+                f,
+                "the periodic cell is far smaller than its items: their enclosing balls cover it \
+                 {} times over, so about {} pairs of images would be checked (at most {limit}); \
+                 is the cell given in the items' units?",
+                short(cover),
+                short(pairs.round())
             ),
             Error::FractionalOutOfRange { index, value } => write!(
                 f,

@@ -144,9 +144,55 @@ pub fn to_fractional<const N: usize>(cell: &[[f64; N]; N], c: &[f64; N]) -> [f64
     to_cartesian(&inverse(cell), c)
 }
 
-/// Images per item at most: a cell so thin that an item reaches more of its neighbours'
-/// images is refused ([`Error::PeriodicImages`]) rather than filling the memory.
+/// Images per item at most, and close pairs of images per item at most (beyond a spare
+/// allowance of [`IMAGE_ALLOWANCE`] for cells of few items): a cell so thin or so small that
+/// its items need more is refused ([`Error::PeriodicImages`], [`Error::CellCrowded`]) rather
+/// than filling the memory.
 pub const MAX_IMAGES_PER_ITEM: usize = 4096;
+
+/// Points and pairs of images any cell may use whatever its number of items: a single
+/// elongated item in a sheared cell of its own (a needle's small cell) needs about 10⁴.
+pub const IMAGE_ALLOWANCE: usize = 1 << 16;
+
+/// The most points (items and images) the image set of `m` items may hold.
+pub(crate) fn image_limit(m: usize) -> usize {
+    MAX_IMAGES_PER_ITEM.saturating_mul(m).max(IMAGE_ALLOWANCE)
+}
+
+/// Refuses, before anything is allocated, a cell far smaller than its items: with `r_i` the
+/// enclosing radii, the balls cover the cell `ρ = Σ_i |B(r_i)| / |det H|` times over, and the
+/// pairs of points whose balls meet number about `2^(N−1) m ρ` (`|B(r_i + r_j)| ≤
+/// 2^(N−1) (|B(r_i)| + |B(r_j)|)` by convexity). More than `MAX_IMAGES_PER_ITEM · m +
+/// IMAGE_ALLOWANCE` is [`Error::CellCrowded`] — typically a cell given in the wrong units.
+pub(crate) fn check_crowding<const N: usize>(
+    cell: &[[f64; N]; N],
+    radii: impl Iterator<Item = f64>,
+) -> Result<(), Error> {
+    let det: f64 = (0..N).map(|k| cell[k][k]).product::<f64>().abs();
+    let ball = if N == 2 {
+        std::f64::consts::PI
+    } else {
+        4.0 / 3.0 * std::f64::consts::PI
+    };
+    let (mut m, mut covered) = (0usize, 0.0f64);
+    for r in radii {
+        m += 1;
+        covered += ball * r.powi(N as i32);
+    }
+    let cover = covered / det;
+    let pairs = 2f64.powi(N as i32 - 1) * m as f64 * cover;
+    let limit = MAX_IMAGES_PER_ITEM
+        .saturating_mul(m)
+        .saturating_add(IMAGE_ALLOWANCE);
+    if pairs > limit as f64 || !cover.is_finite() {
+        return Err(Error::CellCrowded {
+            cover,
+            pairs,
+            limit,
+        });
+    }
+    Ok(())
+}
 
 /// Whether a lattice translation `n` is the representative of `{n, −n}`: its first non-zero
 /// component is positive.
@@ -344,12 +390,8 @@ impl<const N: usize> Lattice<N> {
 
     fn build(&mut self, cell: &[[f64; N]; N], bodies: &[Body<N>]) -> Result<(), Error> {
         let pad = self.reach + 2.0 * self.skin;
-        self.images = ImageSet::new(
-            cell,
-            &self.fractional,
-            pad,
-            MAX_IMAGES_PER_ITEM.saturating_mul(bodies.len()),
-        )?;
+        check_crowding(cell, bodies.iter().map(Body::bounding_radius))?;
+        self.images = ImageSet::new(cell, &self.fractional, pad, image_limit(bodies.len()))?;
         let w = widths(cell);
         let t = (0..N).map(|k| (pad / w[k] + 3.0).powi(2)).sum::<f64>();
         self.far = t.sqrt();

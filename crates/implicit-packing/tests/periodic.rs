@@ -246,6 +246,14 @@ fn bad_cells_and_far_items_are_named() {
         Err(Error::FractionalOutOfRange { index: 1, .. })
     ));
     let err = model.evaluate(&[0.0, 0.0, 0.0, 1e-4, 1e-4, 0.0], None);
+    assert!(matches!(err, Err(Error::CellCrowded { .. })), "{err:?}");
+    let message = err.unwrap_err().to_string();
+    assert!(
+        message.contains("cover it 3.14159e8 times over"),
+        "{message}"
+    );
+    // Thin in one direction only, with room along the other: too many images, not pairs.
+    let err = model.evaluate(&[0.0, 0.0, 0.0, 1e7, 1e-6, 0.0], None);
     assert!(matches!(err, Err(Error::PeriodicImages { .. })), "{err:?}");
     let message = err.unwrap_err().to_string();
     assert!(message.contains("too thin"), "{message}");
