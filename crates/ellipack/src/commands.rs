@@ -10,7 +10,7 @@ use ellipack::packing::{
     CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
     read_table_into, write_files,
 };
-use ellipack::render::{RenderOptions, write_pictures};
+use ellipack::render::{RenderError, RenderOptions, write_pictures_until};
 use ellipack::scene::Scene;
 use implicit_packing::certificate::shown_mu2;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -115,6 +115,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         history: History::new(),
         interrupted: Arc::clone(&interrupted),
     };
+    let started = std::time::Instant::now();
     let outcome = run(&scene, &options, &mut terminal);
     let history = terminal.history.into_text();
     bar.finish_and_clear();
@@ -151,9 +152,31 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             width: scene.output.image_width,
             label: scene.name.clone(),
         };
-        write_pictures(staged, &outcome.packing, &options)?;
-        if let Ok(s) = &structure {
-            ellipack::structure_plots::write_structure_pictures(staged, &outcome.packing, s)?;
+        // Pictures are the one optional file: drawing them stops at a signal, or when it
+        // would run past the time limit by more than PICTURE_GRACE (plus 5 % of the limit).
+        let limit = time_limit.unwrap_or(scene.solver.time_limit);
+        let deadline = limit
+            .checked_add(PICTURE_GRACE + limit / 20)
+            .and_then(|d| started.checked_add(d));
+        let stop = || {
+            interrupted.load(Ordering::SeqCst)
+                || deadline.is_some_and(|d| std::time::Instant::now() >= d)
+        };
+        match write_pictures_until(staged, &outcome.packing, &options, &stop) {
+            Ok(()) => {
+                if let Ok(s) = &structure {
+                    ellipack::structure_plots::write_structure_pictures(
+                        staged,
+                        &outcome.packing,
+                        s,
+                    )?;
+                }
+            }
+            Err(RenderError::Stopped) => ellipack::note!(
+                "note: packing.svg and packing.png were not drawn: the run was stopped or \
+                 drawing would have run past its time limit"
+            ),
+            Err(e) => return Err(e.into()),
         }
     }
     if let Published::InPlace(why) = staging.commit()? {
@@ -343,6 +366,9 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
     }
     Ok(ExitCode::SUCCESS)
 }
+
+/// How far past its time limit a run may go on drawing its pictures (besides 5 % of the limit).
+const PICTURE_GRACE: Duration = Duration::from_secs(1);
 
 /// The files for other programs that `ellipack pack` writes beside packing.csv (packing.xyz
 /// is written with them, unless the scene turns it off).

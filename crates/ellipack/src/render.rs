@@ -59,6 +59,10 @@ pub enum RenderError {
     /// The embedded font was rejected (a broken build, not user data).
     #[error("the embedded font could not be loaded")]
     Font,
+    /// The caller asked to stop before the pictures were drawn (the run's time limit or a
+    /// signal).
+    #[error("the pictures were not drawn: the run was stopped or its time limit reached")]
+    Stopped,
     /// A temporary file for the PNG encoder could not be used.
     #[error("{path}: {source}")]
     Io {
@@ -83,13 +87,22 @@ pub fn picture_size(packing: &Packing, options: &RenderOptions) -> (u32, u32) {
 /// # Errors
 /// [`RenderError::Draw`] or [`RenderError::Font`].
 pub fn svg_string(packing: &Packing, options: &RenderOptions) -> Result<String, RenderError> {
+    svg_until(packing, options, &|| false)
+}
+
+/// [`svg_string`], given up with [`RenderError::Stopped`] as soon as `stop` says so.
+fn svg_until(
+    packing: &Packing,
+    options: &RenderOptions,
+    stop: &dyn Fn() -> bool,
+) -> Result<String, RenderError> {
     register_font()?;
     let layout = Layout::new(packing, options);
     let mut text = String::new();
     {
         let backend = SVGBackend::with_string(&mut text, layout.size);
-        draw(backend.into_drawing_area(), packing, &layout)
-            .map_err(|message| draw_error(SVG_FILE, message))?;
+        draw(backend.into_drawing_area(), packing, &layout, stop)
+            .map_err(|e| e.into_error(SVG_FILE))?;
     }
     Ok(text)
 }
@@ -100,6 +113,15 @@ pub fn svg_string(packing: &Packing, options: &RenderOptions) -> Result<String, 
 /// [`RenderError::Draw`], [`RenderError::Font`], or [`RenderError::Io`] for the encoder's
 /// temporary file.
 pub fn png_bytes(packing: &Packing, options: &RenderOptions) -> Result<Vec<u8>, RenderError> {
+    png_until(packing, options, &|| false)
+}
+
+/// [`png_bytes`], given up with [`RenderError::Stopped`] as soon as `stop` says so.
+fn png_until(
+    packing: &Packing,
+    options: &RenderOptions,
+    stop: &dyn Fn() -> bool,
+) -> Result<Vec<u8>, RenderError> {
     register_font()?;
     let layout = Layout::new(packing, options);
     // plotters encodes PNG only into a file; a private temporary file keeps the real target
@@ -111,8 +133,7 @@ pub fn png_bytes(packing: &Packing, options: &RenderOptions) -> Result<Vec<u8>, 
         {
             let backend = BitMapBackend::new(&tmp, layout.size);
             let area = backend.into_drawing_area();
-            draw(area.clone(), packing, &layout)
-                .map_err(|message| draw_error(PNG_FILE, message))?;
+            draw(area.clone(), packing, &layout, stop).map_err(|e| e.into_error(PNG_FILE))?;
             area.present()
                 .map_err(|e| draw_error(PNG_FILE, e.to_string()))?;
         }
@@ -165,8 +186,42 @@ pub fn write_pictures(
     packing: &Packing,
     options: &RenderOptions,
 ) -> Result<(), RenderError> {
-    write_svg(&dir.join(SVG_FILE), packing, options)?;
-    write_png(&dir.join(PNG_FILE), packing, options)
+    write_pictures_until(dir, packing, options, &|| false)
+}
+
+/// [`write_pictures`], given up as soon as `stop` says so (a run's time limit or a signal):
+/// [`RenderError::Stopped`], and no picture is written then.
+///
+/// # Errors
+/// As [`write_pictures`], or [`RenderError::Stopped`].
+pub fn write_pictures_until(
+    dir: &Path,
+    packing: &Packing,
+    options: &RenderOptions,
+    stop: &dyn Fn() -> bool,
+) -> Result<(), RenderError> {
+    // Both drawn before either is written: a stop leaves neither.
+    let svg = svg_until(packing, options, stop)?;
+    let png = png_until(packing, options, stop)?;
+    write_picture(&dir.join(SVG_FILE), Ok(svg.into_bytes()))?;
+    write_picture(&dir.join(PNG_FILE), Ok(png))
+}
+
+/// Why [`draw`] ended early.
+enum Drawing {
+    /// plotters failed.
+    Failed(String),
+    /// The caller asked to stop.
+    Stopped,
+}
+
+impl Drawing {
+    fn into_error(self, file: &str) -> RenderError {
+        match self {
+            Drawing::Failed(message) => draw_error(file, message),
+            Drawing::Stopped => RenderError::Stopped,
+        }
+    }
 }
 
 fn draw_error(file: &str, message: String) -> RenderError {
@@ -511,8 +566,9 @@ fn draw<DB: DrawingBackend>(
     area: DrawingArea<DB, Shift>,
     packing: &Packing,
     layout: &Layout,
-) -> Result<(), String> {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    stop: &dyn Fn() -> bool,
+) -> Result<(), Drawing> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| Drawing::Failed(e.to_string());
     area.fill(&BACKGROUND).map_err(err)?;
     let small = (FONT, 0.85 * layout.font_px).into_font().color(&LABEL);
     let room = f64::from(layout.size.0) - 2.0 * f64::from(layout.margin);
@@ -572,7 +628,11 @@ fn draw<DB: DrawingBackend>(
             (Some(a), Some(b)) => (a.1, b.1),
             _ => (0.0, 0.0),
         };
-        for (i, d) in order {
+        for (k, (i, d)) in order.into_iter().enumerate() {
+            // Often enough to stop within milliseconds, seldom enough to cost nothing.
+            if k % 256 == 0 && stop() {
+                return Err(Drawing::Stopped);
+            }
             let (c, m) = &forms[i];
             let fill = if panel.depth.is_some() {
                 let t = if dmax > dmin {

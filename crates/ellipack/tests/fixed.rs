@@ -10,10 +10,12 @@ use ellipack::scene::Scene;
 use std::path::Path;
 use std::process::Output;
 
-/// 20 ellipsoids (1, 0.75, 0.5) in a ball at packing fraction 0.45, one thread.
+/// 20 ellipsoids (1, 0.75, 0.5) in a ball at packing fraction 0.45, one thread, at most 20
+/// local minimisations (the time limit is far beyond them).
 const BALL: &str = "dimension = 3\nseed = 1\n[container]\nkind = \"ball\"\n\
                     packing_fraction = 0.45\n[[shapes]]\ncount = 20\n\
-                    semi_axes = [1.0, 0.75, 0.5]\n[solver]\ntime_limit = 60.0\nthreads = 1\n\
+                    semi_axes = [1.0, 0.75, 0.5]\n[solver]\ntime_limit = 600.0\n\
+                    local_minimisations = 20\nthreads = 1\n\
                     [output]\npictures = false\n";
 
 /// 12 ellipses (2, 1) in a square at packing fraction 0.95, which no packing reaches (the

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod common;
 use common::{ellipack, refused, succeeded, summary_json, temp_dir, text};
@@ -66,17 +66,13 @@ fn stops_on(signal: &str) {
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(1500));
-    let sent = Instant::now();
     let kill = Command::new("kill")
         .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
     let stdout = succeeded(&child.wait_with_output().unwrap(), &format!("{signal}: "));
-    assert!(
-        sent.elapsed() < Duration::from_secs(15),
-        "{signal}: the run did not stop"
-    );
+    // Stopped by the signal, not by its minute's time limit, on a machine of any speed.
     assert!(stdout.contains("(interrupted)"), "{signal}: {stdout}");
     let (certified, report) = verify(&out);
     assert!(certified, "{signal}: {report}");
@@ -144,10 +140,14 @@ fn an_unwritable_output_folder_is_refused_before_the_run() {
     // A minute of packing would be lost if the folder were found unwritable only at the end.
     let scene = scene(&dir, 12, 60.0, "");
     // /proc exists as a folder but takes no new files, even for root.
-    let started = Instant::now();
     let o = pack(&[scene.to_str().unwrap(), "--out", "/proc"]);
     let stderr = refused(&o);
-    assert!(started.elapsed() < Duration::from_secs(20), "ran first");
+    // Refused by the probe before the run: nothing was packed.
+    assert!(
+        !text(&o.stdout).contains("density"),
+        "ran first: {}",
+        text(&o.stdout)
+    );
     assert!(
         stderr.contains("output folder /proc is not writable"),
         "{stderr}"
