@@ -508,7 +508,8 @@ impl Container {
         // The magnitudes the packing model holds.
         const MAX: f64 = implicit_packing::shape::MAX_MAGNITUDE;
         let in_range = |v: f64| (1.0 / MAX..=MAX).contains(&v);
-        if let Some(x) = self.center().iter().find(|x| !(x.abs() <= MAX)) {
+        let within = |v: f64| (-MAX..=MAX).contains(&v);
+        if let Some(x) = self.center().iter().find(|x| !within(**x)) {
             return Some((
                 "center",
                 format!("the centre has a coordinate {x}, beyond ±{MAX:e}"),
@@ -532,7 +533,7 @@ impl Container {
                     ),
                 ));
             }
-            if let Some(t) = tilts.iter().find(|t| !(t.abs() <= MAX)) {
+            if let Some(t) = tilts.iter().find(|t| !within(**t)) {
                 return Some((
                     "tilts",
                     format!("tilts must be finite, within ±{MAX:e}, not {t}"),

@@ -863,7 +863,7 @@ impl Scene {
             None => (self.item_measure() / 0.1).powf(1.0 / n),
         } + 2.0 * longest;
         let limit = implicit_packing::shape::MAX_MAGNITUDE / 8.0;
-        (!(reach <= limit)).then(|| {
+        (!(0.0..=limit).contains(&reach)).then(|| {
             format!(
                 "a packing of these items would reach {} from its centre, beyond the {} the \
                  model holds: rescale the lengths (or give a larger packing fraction)",
