@@ -221,11 +221,12 @@ impl ContainerKind {
 /// The kind as a person reads it: its name, and `periodic cell` for the cells.
 impl fmt::Display for ContainerKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())?;
         if self.is_periodic() {
-            f.write_str(" cell")?;
+            // Both periodic kinds are named `periodic`: the dimension tells them apart.
+            write!(f, "{}D {} cell", self.dimension(), self.name())
+        } else {
+            f.write_str(self.name())
         }
-        Ok(())
     }
 }
 
@@ -287,7 +288,8 @@ pub enum Container {
     /// `b = (xy, l_y, 0)`, `c = (xz, yz, l_z)` (2D: `a = (l_x, 0)`, `b = (xy, l_y)`) from
     /// `origin`; space is tiled by its translates.
     Periodic {
-        /// The cell's corner (where the fractional coordinates are 0).
+        /// The cell's corner (where the fractional coordinates are 0); the origin when a
+        /// summary leaves it out.
         #[serde(default)]
         origin: Vec<f64>,
         /// `[l_x, l_y]` or `[l_x, l_y, l_z]`.
@@ -1255,21 +1257,29 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError>
 /// [`PackingError::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
 /// wrong type; [`PackingError::Inconsistent`] for a container size that is not positive.
 pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingError> {
-    summary_of(text, source_name, |s: &Summary| &s.container)
+    summary_of(text, source_name, |s: &mut Summary| &mut s.container)
 }
 
 /// A summary of type `T` parsed from JSON `text`, with its container (`container_of`) checked.
 fn summary_of<T: serde::de::DeserializeOwned>(
     text: &str,
     source_name: &str,
-    container_of: impl Fn(&T) -> &Container,
+    container_of: impl Fn(&mut T) -> &mut Container,
 ) -> Result<T, PackingError> {
-    let summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+    let mut summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
         source_name: source_name.to_string(),
         line: e.line() as u64,
         message: format!("column {}: {e}", e.column()),
     })?;
-    if let Some((field, message)) = container_of(&summary).defect() {
+    // A missing origin of a periodic cell is the origin, as a missing centre is elsewhere.
+    if let Container::Periodic {
+        origin, lengths, ..
+    } = container_of(&mut summary)
+        && origin.is_empty()
+    {
+        *origin = vec![0.0; lengths.len()];
+    }
+    if let Some((field, message)) = container_of(&mut summary).defect() {
         return Err(PackingError::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),
@@ -1355,7 +1365,7 @@ pub struct StatedSummary {
 /// # Errors
 /// As [`read_summary`].
 pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, PackingError> {
-    summary_of(text, source_name, |s: &StatedSummary| &s.container)
+    summary_of(text, source_name, |s: &mut StatedSummary| &mut s.container)
 }
 
 /// Reads `packing.csv` as a [`Table`] and puts its items into `container`, checking that they

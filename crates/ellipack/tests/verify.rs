@@ -274,3 +274,47 @@ fn values_beyond_the_models_range_are_named_as_the_packing_states_them() {
         assert!(!said.contains("variable"), "{said}");
     }
 }
+
+/// Smaller messages: a periodic summary without `origin` reads as the origin; a stated
+/// certificate differing only in its smallest μ² draws no note; resuming a 2D cell with a 3D
+/// scene names both dimensions.
+#[test]
+fn small_messages_say_what_is_meant() {
+    let dir = temp_dir("verify-small");
+    std::fs::write(
+        dir.join("packing.csv"),
+        "id,x,y,a,b,theta\n0,0.5,0.5,0.2,0.2,0\n1,2,2,0.2,0.2,0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("summary.json"),
+        r#"{"container": {"kind": "periodic", "lengths": [4, 4], "tilts": [0]}, "items": 2,
+            "density": 0.0157, "objective": 16, "wall_seconds": 0, "local_minimisations": 0,
+            "certificate": {"overlapping_pairs": 0, "containment_violations": 0,
+            "min_mu2": 12.5}}"#,
+    )
+    .unwrap();
+    let out = ellipack().arg("verify").arg(&*dir).output().unwrap();
+    let said = utf8(out.stdout);
+    assert!(out.status.success(), "{said}{}", utf8(out.stderr));
+    assert!(!said.contains("note"), "{said}");
+    std::fs::write(
+        dir.join("scene.toml"),
+        "dimension = 3\n[container]\nkind = \"periodic\"\n[[shapes]]\ncount = 2\n\
+         semi_axes = [0.2, 0.2, 0.2]\n",
+    )
+    .unwrap();
+    let out = ellipack()
+        .arg("pack")
+        .arg(dir.join("scene.toml"))
+        .arg("--out")
+        .arg(&*dir)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    let said = utf8(out.stderr);
+    assert!(
+        said.contains("2D periodic cell") && said.contains("3D periodic cell"),
+        "{said}"
+    );
+}
