@@ -10,10 +10,14 @@ rotation, Q = R diag(a^2, b^2, c^2) R^T. Quaternions are (w, x, y, z), Hamilton 
 
 Vectorised functions take one row (``(3,)``, ``(6,)``) or n rows (``(n, 3)``, ``(n, 6)``) per
 argument; a single row (``(3,)`` or ``(1, 3)``) is broadcast against the n rows of the others. Inputs are converted to
-float64 (integers too) and copied when not C-contiguous. ``threads=1`` (the default) computes on
-the calling thread, ``threads=0`` on every core, ``threads=k`` on k threads; the GIL is released
-during the computation. Bad input raises ValueError naming the row; wrong shapes raise
-ValueError, non-numeric dtypes TypeError.
+float64 (integers too) and copied when not C-contiguous or not aligned. ``threads=1`` (the
+default) computes on the calling thread, ``threads=0`` on every core, ``threads=k`` on k
+threads; the GIL is released during the computation. Bad input raises ValueError naming the
+row; wrong shapes raise ValueError, non-numeric dtypes TypeError. ``out`` must not share memory
+with an input.
+
+For code written for pypw85 (``import ellipack as pypw85``): ``spheroid``, ``contact_function``
+and ``f_neg`` take pypw85's arguments, and :data:`lambda_atol` and :data:`metadata` are there.
 """
 
 from __future__ import annotations
@@ -27,9 +31,32 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _ellipack
-from ._ellipack import Packing, read_packing, verify
+from ._ellipack import NotReached, Packing, read_packing, verify
 
 __version__ = _ellipack.__version__
+
+lambda_atol: float = 1e-6
+"""pypw85's ``lambda_atol``: the absolute tolerance on lambda of :func:`contact_function`, so
+that code written for pypw85 (its tests check |f'(lambda)| <= lambda_atol |f''(lambda)|) runs
+unchanged. pypw85 stops its Brent iterations at this tolerance; ellipack has no tolerance
+parameter: its lambda is the maximiser to about rounding error, well within ``lambda_atol``."""
+
+metadata: dict = {
+    "author": "The ellipack developers",
+    "author_email": "",
+    "description": (
+        "The Perram-Wertheim contact function of ellipsoids and ellipses, the implicit-variable "
+        "overlap measure of Birgin, Lobato and Martinez, and a certified ellipse/ellipsoid "
+        "packer, over NumPy arrays"
+    ),
+    "license": "MIT OR Apache-2.0",
+    "name": "ellipack",
+    "url": "https://github.com/ellipack/ellipack",
+    "version": __version__,
+    "year": "2026",
+}
+"""Metadata about the library, with the keys of pypw85's ``metadata`` (author, author_email,
+description, license, name, url, version, year); the values are ellipack's."""
 
 __all__ = [
     "contact_function",
@@ -48,25 +75,36 @@ __all__ = [
     "OverlapMeasure",
     "pack",
     "Packing",
+    "NotReached",
     "packing_from_arrays",
     "read_packing",
     "verify",
     "analyse",
+    "lambda_atol",
+    "metadata",
 ]
 
 
-def _f64(name: str, x: Any) -> np.ndarray:
-    """`x` as a C-contiguous float64 array; integers are converted, other dtypes refused."""
+def _real(name: str, x: Any) -> np.ndarray:
+    """`x` as an array (no copy of an array), refused unless its dtype is a real number type."""
     a = np.asarray(x)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(
+            f"{name}: expected real numbers (converted to float64), got an array of dtype "
+            f"{a.dtype}"
+        )
+    return a
+
+
+def _f64(name: str, x: Any) -> np.ndarray:
+    """`x` as an aligned C-contiguous float64 array; integers are converted, other dtypes
+    refused."""
+    a = _real(name, x)
     if a.dtype != np.float64:
-        if a.dtype.kind not in "fiu":
-            raise TypeError(
-                f"{name}: expected real numbers (converted to float64), got an array of dtype "
-                f"{a.dtype}"
-            )
         a = a.astype(np.float64)
-    # Not np.ascontiguousarray: it turns a 0-d array into shape (1,).
-    return a if a.flags.c_contiguous else a.copy(order="C")
+    # Not np.ascontiguousarray: it turns a 0-d array into shape (1,). An unaligned array (a view
+    # at an odd byte offset, a packed record field) is copied too: the kernels read aligned rows.
+    return a if a.flags.c_contiguous and a.flags.aligned else a.copy(order="C")
 
 
 def _rows(name: str, x: Any, width: int) -> Tuple[np.ndarray, Optional[int]]:
@@ -123,6 +161,12 @@ def _evaluate(
         result = np.empty(shape)
     else:
         result = _check_out(out, shape)
+        for name, value, _ in args:
+            if isinstance(value, np.ndarray) and np.may_share_memory(value, result):
+                raise ValueError(
+                    f"out must not be one of the inputs: it shares memory with {name} (pass "
+                    "a new array, e.g. np.empty_like(out), or none)"
+                )
     _ellipack._rows(
         kind,
         matrices,
@@ -154,6 +198,11 @@ def _check_out(out: Any, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
         raise ValueError(f"out must have shape {shape}, not {out.shape}")
     if not out.flags.c_contiguous or not out.flags.writeable:
         raise ValueError("out must be C-contiguous and writeable")
+    if not out.flags.aligned:
+        raise ValueError(
+            "out is not aligned (its values do not start at a multiple of their size in bytes): "
+            "the results are written into out itself, so allocate it with np.empty"
+        )
     return out
 
 
@@ -336,10 +385,14 @@ def spheroid(
     threads: Optional[int] = None,
 ) -> np.ndarray:
     """The quadratic form of the spheroid with equatorial semi-axis ``a``, polar semi-axis
-    ``c`` and axis of revolution ``n`` (normalised here): Q = a^2 I + (c^2 - a^2) n n^T.
+    ``c`` and axis of revolution ``n``: Q = a^2 I + (c^2 - a^2) n n^T, with ``n`` as given, as
+    pypw85 computes it. ``n`` should be a unit vector; it is not normalised, so any other n
+    gives the polar semi-axis sqrt(a^2 + (c^2 - a^2) |n|^2) instead of c (pypw85's result).
 
     a, c: numbers or shape (n,); n: (3,) or (n, 3). Returns shape (6,) or (n, 6), into ``out``
-    when given.
+    when given. ValueError, naming the argument, for a or c not positive and finite or whose
+    square overflows or underflows float64 (beyond about 1.3e154 or below 1.5e-154), n not
+    finite or zero, and a Q that overflows or is not positive definite (c < a with |n| > 1).
     """
     args = [("a", a, 1), ("c", c, 1), ("n", n, 3)]
     return _evaluate("spheroid", args, 6, out, threads)
@@ -353,7 +406,9 @@ def from_axes_quaternion(
     threads: Optional[int] = None,
 ) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and quaternions (w, x, y, z) (4,) or
-    (n, 4), normalised here. Returns shape (6,) or (n, 6)."""
+    (n, 4), normalised here. Returns shape (6,) or (n, 6). A semi-axis whose square overflows
+    or underflows float64 (beyond about 1.3e154 or below 1.5e-154) raises ValueError naming
+    it."""
     args = [("axes", axes, 3), ("quaternion", quaternion, 4)]
     return _evaluate("axes_quaternion", args, 6, out, threads)
 
@@ -367,7 +422,7 @@ def from_axes_rotation(
 ) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and rotation matrices (3, 3) or
     (n, 3, 3) whose column k is the direction of semi-axis k (orthogonal within 1e-6,
-    determinant +1). Returns shape (6,) or (n, 6)."""
+    determinant +1). Returns shape (6,) or (n, 6). Semi-axes as :func:`from_axes_quaternion`."""
     r = _f64("rotation", rotation)
     if r.shape[-2:] != (3, 3) or r.ndim not in (2, 3):
         raise ValueError(f"rotation: expected shape (3, 3) or (n, 3, 3), got shape {r.shape}")
@@ -384,7 +439,7 @@ def from_axes_angle_2d(
 ) -> np.ndarray:
     """The ellipse's Q = R(theta) diag(a^2, b^2) R(theta)^T, R(theta) = [[cos, -sin], [sin,
     cos]], for semi-axes (2,) or (n, 2) and angles (radians), a number or shape (n,). Returns
-    ``[Q11, Q12, Q22]``, shape (3,) or (n, 3)."""
+    ``[Q11, Q12, Q22]``, shape (3,) or (n, 3). Semi-axes as :func:`from_axes_quaternion`."""
     args = [("axes", axes, 2), ("theta", theta, 1)]
     return _evaluate("axes_angle_2d", args, 3, out, threads)
 
@@ -549,6 +604,13 @@ def pack(
     certified packing found so far, with ``packing.interrupted`` True; KeyboardInterrupt is
     not raised. Any other exception from a signal handler or from ``progress`` stops the run
     and is raised.
+
+    A container of fixed size (its size or ``packing_fraction`` given in the scene) is filled
+    rather than minimised: ``pack`` returns the first certified packing, or raises
+    :class:`NotReached` (a ValueError) when the time limit (or Ctrl-C) ends the run first. The
+    exception's ``packing`` is the least overlapping configuration, not a packing (items may
+    overlap or stick out; its ``certificate`` counts them and ``summary["not_reached"]`` is
+    True), as ``ellipack pack`` writes it to OUT/unfinished/.
     """
     if items is not None:
         import tempfile
@@ -583,18 +645,36 @@ def packing_from_arrays(
     ``container``: as summary.json has it, e.g. ``{"kind": "ball", "radius": 5.0}`` or
     ``{"kind": "cuboid", "half_sides": [1, 2, 3], "center": [0, 0, 0]}``; ``centres``,
     ``semi_axes``: shape (m, dim); ``orientations``: quaternions (w, x, y, z), shape (m, 4), in
-    3D, angles, shape (m,), in 2D. Its certificate is computed.
+    3D, angles, shape (m,) or (m, 1), in 2D. At most 10 000 000 items. Shapes, dtypes and the
+    item count are checked before anything is converted; float64 C-contiguous arrays are read
+    in place. Its certificate is computed.
     """
-    c = _f64("centres", centres)
-    a = _f64("semi_axes", semi_axes)
-    o = _f64("orientations", orientations)
+    text = json.dumps(container, default=lambda v: v.tolist())
+    dim = _ellipack._container_dimension(text)
+    c = _real("centres", centres)
+    a = _real("semi_axes", semi_axes)
+    o = _real("orientations", orientations)
+    # (name, array, columns, whether shape (m,) is accepted too)
+    parts = [("centres", c, dim, False), ("semi_axes", a, dim, False),
+             ("orientations", o, 1 if dim == 2 else 4, dim == 2)]
+    for name, x, width, flat in parts:
+        if not ((x.ndim == 2 and x.shape[1] == width) or (flat and x.ndim == 1)):
+            wanted = "(m,) or (m, 1)" if flat else f"(m, {width})"
+            raise ValueError(
+                f"{name}: expected shape {wanted} for a {dim}D container, got shape {x.shape}"
+            )
     if o.ndim == 1:
         o = o.reshape(-1, 1)
-    if c.ndim != 2 or a.ndim != 2 or o.ndim != 2:
-        raise ValueError("centres and semi_axes must have shape (m, dim), orientations (m, 4) "
-                         "or (m,)")
+    m = c.shape[0]
+    if a.shape[0] != m or o.shape[0] != m:
+        raise ValueError(
+            f"{m} centres, {a.shape[0]} semi-axes and {o.shape[0]} orientations: one of each "
+            "per item"
+        )
+    if m > _ellipack._MAX_ITEMS:
+        raise ValueError(f"{m} items, more than {_ellipack._MAX_ITEMS}")
     return _ellipack._packing_from_arrays(
-        json.dumps(container, default=lambda v: v.tolist()), c.tolist(), a.tolist(), o.tolist()
+        text, _f64("centres", c), _f64("semi_axes", a), _f64("orientations", o),
     )
 
 

@@ -1,12 +1,19 @@
 """Type stubs of the native module ellipack._ellipack (the Rust part of the package)."""
 
 from os import PathLike
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+_MAX_ITEMS: int
+
+class NotReached(ValueError):
+    """A container of fixed size that the run did not fill without overlap before its time
+    limit (or Ctrl-C); ``packing`` is the least overlapping configuration (not a packing)."""
+
+    packing: Packing
 
 class Packing:
     """A packing: container and items, with the summary of the run or folder that made it."""
@@ -78,11 +85,12 @@ def _pack(
     threads: Optional[int],
     progress: Optional[Callable[[Dict[str, Any]], Any]],
 ) -> Packing: ...
+def _container_dimension(container_json: str) -> int: ...
 def _packing_from_arrays(
     container_json: str,
-    centres: Sequence[Sequence[float]],
-    semi_axes: Sequence[Sequence[float]],
-    orientations: Sequence[Sequence[float]],
+    centres: npt.NDArray[np.float64],
+    semi_axes: npt.NDArray[np.float64],
+    orientations: npt.NDArray[np.float64],
 ) -> Packing: ...
 def _analyse(
     packing: Packing,

@@ -17,10 +17,13 @@ fn _ellipack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(packer::_scene_toml, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_pack, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_packing_from_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(packer::_container_dimension, m)?)?;
     m.add_function(wrap_pyfunction!(packer::read_packing, m)?)?;
     m.add_function(wrap_pyfunction!(packer::verify, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_analyse, m)?)?;
     m.add_class::<packer::PyPacking>()?;
+    m.add("NotReached", m.py().get_type::<packer::NotReached>())?;
+    m.add("_MAX_ITEMS", ellipack::scene::MAX_ITEMS)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

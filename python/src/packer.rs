@@ -3,10 +3,12 @@
 //! packing object, reading a packing folder and verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
-use ellipack::pack::{History, MultiStartProgress, Observer, RunOptions, run, time_limit_of};
+use ellipack::pack::{
+    History, MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of,
+};
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
 use ellipack::scene::Scene;
-use numpy::{PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{
     PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
 };
@@ -23,6 +25,18 @@ const SIGNAL_POLL: Duration = Duration::from_millis(100);
 fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
+
+pyo3::create_exception!(
+    ellipack,
+    NotReached,
+    PyValueError,
+    "A container of fixed size (its size or `packing_fraction` given) that the run did not fill \
+     without overlap before its time limit (or before Ctrl-C). A ValueError, so code that \
+     catches ValueError still does. Its `packing` attribute is the least overlapping \
+     configuration, a Packing that is not a packing: items may overlap or stick out, \
+     `packing.certificate` counts them and `packing.summary['not_reached']` is True (what \
+     `ellipack pack` writes to OUT/unfinished/)."
+);
 
 /// `_scene_toml(obj)`: the TOML text of a scene given as a dict (nested dicts, lists, tuples,
 /// str, bool, int, float; NumPy arrays and scalars through their `tolist()`), so that a dict is
@@ -360,13 +374,42 @@ pub fn _pack(
     if let Some(e) = pending {
         return Err(e);
     }
-    let outcome = result.map_err(value_error)?;
+    let outcome = match result {
+        Ok(outcome) => outcome,
+        Err(e) => return Err(pack_error(py, e, history, interrupted)),
+    };
     Ok(PyPacking {
         packing: outcome.packing,
         summary: outcome.summary,
         history: Some(history),
         interrupted: interrupted || outcome.interrupted,
     })
+}
+
+/// The exception of a run that failed: [`NotReached`] with the least overlapping
+/// configuration as its `packing` for a fixed container that was not filled, ValueError
+/// otherwise.
+fn pack_error(py: Python<'_>, e: PackError, history: String, interrupted: bool) -> PyErr {
+    let message = e.to_string();
+    let PackError::NotReached(unfinished) = e else {
+        return value_error(message);
+    };
+    let stopped = interrupted || unfinished.interrupted;
+    let err = NotReached::new_err(format!(
+        "{message}{}; that configuration, which is not a packing, is this exception's \
+         `packing`",
+        if stopped { " (stopped by Ctrl-C)" } else { "" }
+    ));
+    let packing = PyPacking {
+        packing: unfinished.packing,
+        summary: unfinished.summary,
+        history: Some(history),
+        interrupted: stopped,
+    };
+    match Py::new(py, packing).and_then(|p| err.value(py).setattr("packing", p)) {
+        Ok(()) => err,
+        Err(e) => e,
+    }
 }
 
 fn progress_dict<'py>(py: Python<'py>, p: &MultiStartProgress) -> PyResult<Bound<'py, PyDict>> {
@@ -397,66 +440,96 @@ pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
     Ok(PyPacking::without_run(packing, summary))
 }
 
+/// The container of summary.json's form (JSON text), with a message naming `container`.
+fn container_of(container_json: &str) -> PyResult<Container> {
+    serde_json::from_str(container_json)
+        .map_err(|e| PyValueError::new_err(format!("container: {e}")))
+}
+
+/// `_container_dimension(container_json)`: 2 or 3, the dimension of the items the container
+/// holds, so that the arrays of `packing_from_arrays` are checked before they are converted.
+#[pyfunction]
+pub fn _container_dimension(container_json: &str) -> PyResult<usize> {
+    Ok(container_of(container_json)?.dimension())
+}
+
+/// The rows of the C-contiguous float64 matrix `name`, which must have `width` columns.
+fn matrix_rows<'a>(
+    name: &str,
+    a: &'a PyReadonlyArray2<'_, f64>,
+    width: usize,
+) -> PyResult<std::slice::ChunksExact<'a, f64>> {
+    let columns = a.shape()[1];
+    if columns != width {
+        return Err(PyValueError::new_err(format!(
+            "{name} has {columns} columns, not {width}"
+        )));
+    }
+    // `as_slice` also takes a Fortran-ordered matrix, whose rows are not runs of the slice.
+    let data = match a.as_slice() {
+        Ok(data) if a.is_c_contiguous() => data,
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "{name} is not an aligned C-contiguous array"
+            )));
+        }
+    };
+    // `width`: 1 to 4, never 0, which `chunks_exact` refuses.
+    Ok(data.chunks_exact(width.max(1)))
+}
+
 /// `_packing_from_arrays(container_json, centres, semi_axes, orientations)`: a packing of
-/// items given as rows (orientations: quaternions (w, x, y, z) in 3D, angles in 2D), checked,
-/// with its certificate computed.
+/// items given as C-contiguous float64 matrices of m rows (centres and semi-axes of `dim`
+/// columns; orientations: quaternions (w, x, y, z), 4 columns, in 3D, angles, 1 column, in
+/// 2D), read in place, checked, with its certificate computed.
 #[pyfunction]
 pub fn _packing_from_arrays(
     py: Python<'_>,
     container_json: &str,
-    centres: Vec<Vec<f64>>,
-    semi_axes: Vec<Vec<f64>>,
-    orientations: Vec<Vec<f64>>,
+    centres: PyReadonlyArray2<'_, f64>,
+    semi_axes: PyReadonlyArray2<'_, f64>,
+    orientations: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<PyPacking> {
-    let container: Container = serde_json::from_str(container_json)
-        .map_err(|e| PyValueError::new_err(format!("container: {e}")))?;
-    let m = centres.len();
-    if semi_axes.len() != m || orientations.len() != m {
+    let container = container_of(container_json)?;
+    let m = centres.shape()[0];
+    if semi_axes.shape()[0] != m || orientations.shape()[0] != m {
         return Err(PyValueError::new_err(format!(
             "{m} centres, {} semi-axes and {} orientations: one of each per item",
-            semi_axes.len(),
-            orientations.len()
+            semi_axes.shape()[0],
+            orientations.shape()[0]
         )));
     }
-    let row = |name: &str, i: usize, v: &[f64], k: usize| -> PyResult<()> {
-        if v.len() == k {
-            Ok(())
-        } else {
-            Err(PyValueError::new_err(format!(
-                "item {i}: {name} has {} values, not {k}",
-                v.len()
-            )))
-        }
-    };
-    let dim = container.dimension();
-    let orientation = if dim == 2 {
-        ("angle", 1)
-    } else {
-        ("quaternion", 4)
-    };
-    for i in 0..m {
-        row("centre", i, &centres[i], dim)?;
-        row("semi_axes", i, &semi_axes[i], dim)?;
-        row(orientation.0, i, &orientations[i], orientation.1)?;
+    if m > ellipack::scene::MAX_ITEMS {
+        return Err(PyValueError::new_err(format!(
+            "{m} items, more than {}",
+            ellipack::scene::MAX_ITEMS
+        )));
     }
-    let rows = centres.iter().zip(&semi_axes).zip(&orientations);
+    let dim = container.dimension();
+    let c = matrix_rows("centres", &centres, dim)?;
+    let a = matrix_rows("semi_axes", &semi_axes, dim)?;
+    let rows = c.zip(a);
     let items = if dim == 2 {
+        let o = matrix_rows("orientations", &orientations, 1)?;
         Items::Ellipses(
-            rows.map(|((c, a), o)| EllipseItem {
-                center: [c[0], c[1]],
-                semi_axes: [a[0], a[1]],
-                theta: o[0],
-            })
-            .collect(),
+            rows.zip(o)
+                .map(|((c, a), o)| EllipseItem {
+                    center: [c[0], c[1]],
+                    semi_axes: [a[0], a[1]],
+                    theta: o[0],
+                })
+                .collect(),
         )
     } else {
+        let o = matrix_rows("orientations", &orientations, 4)?;
         Items::Ellipsoids(
-            rows.map(|((c, a), q)| EllipsoidItem {
-                center: [c[0], c[1], c[2]],
-                semi_axes: [a[0], a[1], a[2]],
-                quaternion: [q[0], q[1], q[2], q[3]],
-            })
-            .collect(),
+            rows.zip(o)
+                .map(|((c, a), q)| EllipsoidItem {
+                    center: [c[0], c[1], c[2]],
+                    semi_axes: [a[0], a[1], a[2]],
+                    quaternion: [q[0], q[1], q[2], q[3]],
+                })
+                .collect(),
         )
     };
     let packing = Packing::new(container, items).map_err(value_error)?;

@@ -279,25 +279,24 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
             o[0] = -pw85::objective(lambda, &r12, &q1, &q2).map_err(text)?;
         }
         Kind::Spheroid => {
-            let q = pw85::spheroid(inputs[0].scalar(i), inputs[1].scalar(i), &inputs[2].row(i))
-                .map_err(text)?;
+            let q = spheroid(inputs[0].scalar(i), inputs[1].scalar(i), &inputs[2].row(i))?;
             o.copy_from_slice(&q);
         }
         Kind::AxesQuaternion => {
-            let q = pw85::shape::from_axes_quaternion(&inputs[0].row(i), &inputs[1].row(i))
-                .map_err(text)?;
-            o.copy_from_slice(&q);
+            let axes = inputs[0].row(i);
+            let q = pw85::shape::from_axes_quaternion(&axes, &inputs[1].row(i)).map_err(text)?;
+            o.copy_from_slice(&representable(&axes, q)?);
         }
         Kind::AxesRotation => {
-            let m: [f64; 9] = inputs[1].row(i);
+            let (axes, m): ([f64; 3], [f64; 9]) = (inputs[0].row(i), inputs[1].row(i));
             let rotation = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];
-            let q = pw85::shape::from_axes_rotation(&inputs[0].row(i), &rotation).map_err(text)?;
-            o.copy_from_slice(&q);
+            let q = pw85::shape::from_axes_rotation(&axes, &rotation).map_err(text)?;
+            o.copy_from_slice(&representable(&axes, q)?);
         }
         Kind::AxesAngle2d => {
-            let q = pw85::shape::from_axes_angle_2d(&inputs[0].row(i), inputs[1].scalar(i))
-                .map_err(text)?;
-            o.copy_from_slice(&q);
+            let axes = inputs[0].row(i);
+            let q = pw85::shape::from_axes_angle_2d(&axes, inputs[1].scalar(i)).map_err(text)?;
+            o.copy_from_slice(&representable(&axes, q)?);
         }
         Kind::Measure3 => {
             let t = ellipack::measure::pair_term_3d(&inputs[0].row(i));
@@ -330,6 +329,99 @@ fn one_row(kind: Kind, inputs: &[Input<'_>], i: usize, o: &mut [f64]) -> Result<
         }
     }
     Ok(())
+}
+
+/// The square of the semi-axis `name` = `l` (positive and finite), which must be a finite,
+/// normal float64 for the quadratic form to hold the shape: semi-axes from about 1.5e-154 to
+/// 1.3e154. Beyond, the form overflows to infinity or underflows to zero.
+fn axis_square(name: &str, l: f64) -> Result<f64, String> {
+    let l2 = l * l;
+    if l2.is_finite() && l2 >= f64::MIN_POSITIVE {
+        return Ok(l2);
+    }
+    let (size, what) = if l2.is_finite() {
+        (
+            "small",
+            "underflows float64 (it loses its digits or becomes 0)",
+        )
+    } else {
+        ("large", "overflows float64")
+    };
+    Err(format!(
+        "{name} = {l:e} is too {size}: its square {what}; a quadratic form holds semi-axes \
+         from {:.2e} to {:.2e}",
+        f64::MIN_POSITIVE.sqrt(),
+        f64::MAX.sqrt()
+    ))
+}
+
+/// The form `q` of semi-axes `axes` (checked positive and finite by pw85), refused when a
+/// semi-axis or the form is beyond float64, naming the semi-axis.
+fn representable<const N: usize, const M: usize>(
+    axes: &[f64; N],
+    q: [f64; M],
+) -> Result<[f64; M], String> {
+    for (k, &l) in axes.iter().enumerate() {
+        axis_square(&format!("axes[{k}]"), l)?;
+    }
+    if q.iter().all(|x| x.is_finite()) {
+        Ok(q)
+    } else {
+        Err(format!(
+            "axes = {axes:?}: the form R diag(axes²) Rᵀ overflows float64; a quadratic form \
+             holds semi-axes up to about {:.2e}",
+            f64::MAX.sqrt()
+        ))
+    }
+}
+
+/// pypw85's spheroid, Q = a² I + (c² − a²) n nᵀ with `n` as given (a unit vector gives the
+/// semi-axes a, a and c) and pypw85's order of operations, every argument checked: a and c
+/// positive, finite and representable squared, n finite and non-zero, Q finite and positive
+/// definite.
+fn spheroid(a: f64, c: f64, n: &[f64; 3]) -> Result<[f64; 6], String> {
+    for (index, value) in [a, c].into_iter().enumerate() {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(pw85::Error::InvalidSemiAxis { index, value }.to_string());
+        }
+    }
+    let (a2, c2) = (axis_square("a", a)?, axis_square("c", c)?);
+    if let Some(k) = n.iter().position(|x| !x.is_finite()) {
+        return Err(format!("n[{k}] is not finite ({})", n[k]));
+    }
+    if n.iter().all(|&x| x == 0.0) {
+        return Err("n, the axis of revolution, is zero".to_string());
+    }
+    let [nx, ny, nz] = *n;
+    let k = c2 - a2;
+    let q = [
+        nx * nx * k + a2,
+        nx * ny * k,
+        nx * nz * k,
+        ny * ny * k + a2,
+        ny * nz * k,
+        nz * nz * k + a2,
+    ];
+    if q.iter().any(|x| !x.is_finite()) {
+        return Err(format!(
+            "n = {n:?} is too long: Q = a² I + (c² − a²) n nᵀ overflows float64 (n is used as \
+             given, as in pypw85: give a unit vector)"
+        ));
+    }
+    // The eigenvalues are a² (twice) and a² + (c² − a²)|n|² along n, positive unless c < a and
+    // |n| > 1.
+    let n2 = nx * nx + ny * ny + nz * nz;
+    if k < 0.0 && n2 > 1.0 {
+        let along_n = c2 * n2 - a2 * (n2 - 1.0);
+        if along_n.is_nan() || along_n <= 0.0 {
+            return Err(format!(
+                "n = {n:?}: with |n|² = {n2} and c < a, Q = a² I + (c² − a²) n nᵀ is not \
+                 positive definite (its eigenvalue along n is {along_n:e}); n is used as \
+                 given, as in pypw85: give a unit vector"
+            ));
+        }
+    }
+    Ok(q)
 }
 
 /// The output row of a pair term: U, d², ε, f, X, and whether X is unique (1 or 0).
@@ -392,6 +484,18 @@ fn evaluate(
     }
 }
 
+/// Why the array `name` cannot be read as one slice: not aligned, or not C-contiguous.
+fn not_a_slice(name: &str, aligned: bool) -> PyErr {
+    PyValueError::new_err(if aligned {
+        format!("{name} is not C-contiguous")
+    } else {
+        format!(
+            "{name} is not aligned (its float64 values do not start at a multiple of 8 bytes): \
+             np.require(a, requirements='CA') or a copy fixes it"
+        )
+    })
+}
+
 /// `_rows(kind, inputs, out, threads, batch)`: evaluates `kind` on every row.
 ///
 /// Each input is a C-contiguous float64 matrix with the kind's row width and either one row
@@ -432,17 +536,21 @@ pub fn _rows(
                 "input {k} has shape ({rows}, {w}), not (1, {width}) or ({n}, {width})"
             )));
         }
-        let data = a
-            .as_slice()
-            .map_err(|_| PyValueError::new_err(format!("input {k} is not C-contiguous")))?;
+        // `as_slice` also takes a Fortran-ordered matrix, whose rows are not runs of the slice.
+        let data = match a.as_slice() {
+            Ok(data) if a.is_c_contiguous() => data,
+            _ => return Err(not_a_slice(&format!("input {k}"), a.is_aligned())),
+        };
         views.push(Input {
             data,
             stride: if rows == 1 { 0 } else { width },
         });
     }
-    let out = out
-        .as_slice_mut()
-        .map_err(|_| PyValueError::new_err("out is not C-contiguous"))?;
+    let (aligned, c_order) = (out.is_aligned(), out.is_c_contiguous());
+    let out = match out.as_slice_mut() {
+        Ok(out) if c_order => out,
+        _ => return Err(not_a_slice("out", aligned)),
+    };
     let pool = match threads {
         0 | 1 => None,
         t => pool(t).map(Some)?,

@@ -233,8 +233,9 @@ def test_shape_constructors_agree():
     b = ellipack.from_axes_rotation(axes, rot)
     assert np.allclose(a, b, atol=1e-15)
     assert np.allclose(a, [4.0, 0, 0, 1.0, 0, 9.0], atol=1e-14)
-    # A spheroid of revolution about x against the same from semi-axes.
-    s = ellipack.spheroid(1.0, 3.0, [2.0, 0, 0])
+    # A spheroid of revolution about x against the same from semi-axes (n is used as given,
+    # as pypw85 does: test_pypw85.py).
+    s = ellipack.spheroid(1.0, 3.0, [1.0, 0, 0])
     assert np.allclose(s, ellipack.from_axes_quaternion([3.0, 1.0, 1.0], [1, 0, 0, 0]))
     # Vectorised: rows of rotations.
     many = ellipack.from_axes_rotation(np.tile(axes, (3, 1)), np.stack([rot] * 3))
@@ -301,3 +302,78 @@ def test_measure_broadcasting_and_errors():
         ellipack.overlap_measure(ci, ai, qi, cj, [[1.0, 1, 1], [1, -1, 1], [1, 1, 1]], qi)
     with pytest.raises(ValueError, match="aj has 2 rows but cj has 3"):
         ellipack.overlap_measure(ci, ai, qi, cj, np.ones((2, 3)), qi)
+
+
+def test_shape_constructors_refuse_what_float64_cannot_hold():
+    """A semi-axis whose square overflows (or underflows) float64 raises, naming the argument,
+    instead of returning inf or NaN."""
+    q = [1.0, 0, 0, 0]
+    with pytest.raises(ValueError, match=r"^a = 1e200 is too large: its square overflows"):
+        ellipack.spheroid(1e200, 1.0, [0.0, 0, 1])
+    with pytest.raises(ValueError, match=r"^c = 1e-200 is too small: its square underflows"):
+        ellipack.spheroid(1.0, 1e-200, [0.0, 0, 1])
+    with pytest.raises(ValueError, match=r"^n = \[1e200, 0.0, 0.0\] is too long"):
+        ellipack.spheroid(1.0, 2.0, [1e200, 0, 0])
+    with pytest.raises(ValueError, match=r"^axes\[0\] = 1e200 is too large"):
+        ellipack.from_axes_quaternion([1e200, 2, 3], q)
+    with pytest.raises(ValueError, match=r"^axes\[2\] = 1e-160 is too small"):
+        ellipack.from_axes_rotation([1.0, 2, 1e-160], np.eye(3))
+    with pytest.raises(ValueError, match=r"^axes\[1\] = 1e200 is too large"):
+        ellipack.from_axes_angle_2d([2.0, 1e200], 0.3)
+    # In a batch, the row is named; the rows before are unaffected.
+    axes = np.tile([1.0, 2.0, 3.0], (4, 1))
+    axes[2, 1] = 1e155
+    with pytest.raises(ValueError, match=r"^row 2: axes\[1\] = 1e155 is too large"):
+        ellipack.from_axes_quaternion(axes, q)
+    with pytest.raises(ValueError, match=r"^row 1: a = 1e300"):
+        ellipack.spheroid([1.0, 1e300], 2.0, [0.0, 0, 1])
+    # The largest and smallest semi-axes that fit still give finite, positive forms.
+    for l in (1.3e154, 1.5e-154):
+        form = ellipack.from_axes_quaternion([l, l, l], [1.0, 1, 1, 1])
+        assert np.all(np.isfinite(form)) and form[0] > 0 and form[3] > 0 and form[5] > 0
+        assert np.all(np.isfinite(ellipack.from_axes_angle_2d([l, l], 0.7)))
+        assert np.all(np.isfinite(ellipack.spheroid(l, l, [0.6, 0, 0.8])))
+
+
+def test_unaligned_arrays_are_read_and_an_unaligned_out_is_named():
+    def unaligned(values):
+        """A C-contiguous float64 view that starts one byte into its buffer."""
+        values = np.asarray(values, dtype=np.float64)
+        raw = np.zeros(values.size * 8 + 1, dtype=np.uint8)[1:]
+        a = raw.view(np.float64).reshape(values.shape)
+        a[...] = values
+        assert a.flags.c_contiguous and not a.flags.aligned
+        return a
+
+    rng = np.random.default_rng(3)
+    r12 = rng.normal(size=(50, 3))
+    q1 = random_forms(rng, 50)
+    q2 = random_forms(rng, 50)
+    expected = ellipack.contact_function(r12, q1, q2)
+    got = ellipack.contact_function(unaligned(r12), unaligned(q1), q2)
+    assert np.array_equal(got[0], expected[0]) and np.array_equal(got[1], expected[1])
+    assert ellipack.contact_function(unaligned([3.0, 0, 0]), q1[0], q1[0])[0] == pytest.approx(
+        ellipack.contact_function([3.0, 0, 0], q1[0], q1[0])[0], rel=0
+    )
+    with pytest.raises(ValueError, match=r"^out is not aligned.*np\.empty"):
+        ellipack.contact_function(r12, q1, q2, out=unaligned(np.zeros((50, 2))))
+
+
+def test_out_must_not_be_an_input():
+    r = np.array([[3.0, 0.0], [0.0, 5.0]])
+    q = [1.0, 0.0, 1.0]
+    with pytest.raises(ValueError, match="out must not be one of the inputs: it shares memory "
+                                         "with r12"):
+        ellipack.contact_function_2d(r, q, q, out=r)
+    # A view of an input counts too, and the input is left as it was.
+    rows = np.tile([1.0, 0.0, 1.0], (2, 1))
+    with pytest.raises(ValueError, match="shares memory with q2"):
+        ellipack.contact_function_2d(r, q, rows, out=rows.reshape(-1)[:4].reshape(2, 2))
+    assert rows.tolist() == [[1.0, 0.0, 1.0]] * 2
+    axes = np.array([[2.0, 1.0, 0.0]])
+    with pytest.raises(ValueError, match="shares memory with axes"):
+        ellipack.from_axes_angle_2d(axes[:, :2], 0.0, out=axes)
+    # A separate out is filled.
+    out = np.empty((2, 2))
+    ellipack.contact_function_2d(r, q, q, out=out)
+    assert out[:, 0].tolist() == [2.25, 6.25]

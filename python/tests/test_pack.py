@@ -359,3 +359,86 @@ def test_the_independent_check_catches_an_overlap_and_an_item_outside():
         check_independently(outside)
     apart = ellipack.packing_from_arrays(container, [[-1.0, 0], [1.001, 0]], axes, [0, 0])
     check_independently(apart)
+
+
+def traced_peak(call):
+    """The peak of memory that Python and NumPy allocate during `call()` (not the Rust part's),
+    and what it returned or raised."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        try:
+            result = call()
+        except Exception as e:  # noqa: BLE001 - returned for the caller to check
+            result = e
+        return tracemalloc.get_traced_memory()[1], result
+    finally:
+        tracemalloc.stop()
+
+
+def test_packing_from_arrays_reads_the_arrays_in_place_after_checking_them():
+    """No conversion to Python lists, no copy of float64 C-contiguous arrays, and every check
+    of shapes, dtypes and the item count before anything is converted."""
+    m = 200_000
+    cube = {"kind": "cuboid", "half_sides": [200.0, 200.0, 200.0]}
+    centres, axes = np.zeros((m, 3)), np.ones((m, 3))
+    turns = np.tile([1.0, 0.0, 0.0, 0.0], (m - 1, 1))
+    peak, error = traced_peak(lambda: ellipack.packing_from_arrays(cube, centres, axes, turns))
+    assert isinstance(error, ValueError)
+    assert str(error) == "200000 centres, 200000 semi-axes and 199999 orientations: one of each per item"
+    assert peak < 1_000_000
+    # Integers are converted only once the shapes fit the container.
+    int_centres, int_axes = np.zeros((m, 2), dtype=np.int64), np.ones((m, 3), dtype=np.int64)
+    angles = np.zeros(m)
+    peak, error = traced_peak(lambda: ellipack.packing_from_arrays(
+        {"kind": "circle", "radius": 5.0}, int_centres, int_axes, angles))
+    assert isinstance(error, ValueError) and peak < 1_000_000
+    assert str(error) == "semi_axes: expected shape (m, 2) for a 2D container, got shape (200000, 3)"
+    with pytest.raises(TypeError, match="orientations: expected real numbers"):
+        ellipack.packing_from_arrays(cube, centres, axes, np.ones((m, 4), dtype=complex))
+    # More items than any scene holds, given as broadcast views that take no memory.
+    many = ellipack._ellipack._MAX_ITEMS + 1
+    peak, error = traced_peak(lambda: ellipack.packing_from_arrays(
+        cube, np.broadcast_to(np.zeros(3), (many, 3)), np.broadcast_to(np.ones(3), (many, 3)),
+        np.broadcast_to([1.0, 0, 0, 0], (many, 4))))
+    assert isinstance(error, ValueError) and str(error) == f"{many} items, more than {many - 1}"
+    assert peak < 1_000_000
+
+    # 8000 unit spheres on a grid 2.5 apart: read in place, certified.
+    g = np.arange(20) * 2.5 - 23.75
+    grid = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    k = len(grid)
+    ones, identity = np.ones((k, 3)), np.tile([1.0, 0, 0, 0], (k, 1))
+    peak, packing = traced_peak(lambda: ellipack.packing_from_arrays(
+        {"kind": "cuboid", "half_sides": [25.0, 25.0, 25.0]}, grid, ones, identity))
+    assert isinstance(packing, ellipack.Packing), packing
+    assert len(packing) == k and packing.certificate["overlapping_pairs"] == 0
+    assert packing.certificate["containment_violations"] == 0
+    assert peak < 200_000
+    assert np.array_equal(packing.centres, grid)
+
+
+def test_a_fixed_container_not_filled_raises_not_reached_with_the_configuration(tmp_path):
+    """7 unit discs fill at most 7/9 of a circle: at 0.8 the run ends at its time limit with
+    ellipack.NotReached, a ValueError carrying the least overlapping configuration."""
+    scene = {
+        "dimension": 2,
+        "seed": 1,
+        "container": {"kind": "circle", "packing_fraction": 0.8},
+        "shapes": [{"count": 7, "semi_axes": [1.0, 1.0]}],
+        "solver": {"time_limit": 1.0, "threads": 1},
+    }
+    assert issubclass(ellipack.NotReached, ValueError)
+    with pytest.raises(ellipack.NotReached, match="packing fraction 0.8000 not reached") as caught:
+        ellipack.pack(scene, progress=False)
+    unfinished = caught.value.packing
+    assert isinstance(unfinished, ellipack.Packing) and len(unfinished) == 7
+    assert unfinished.density == pytest.approx(0.8, rel=1e-12)
+    assert unfinished.summary["not_reached"] is True
+    v = ellipack.verify(unfinished)
+    assert not v["certified"]
+    assert len(v["overlapping_pairs"]) == unfinished.certificate["overlapping_pairs"]
+    assert unfinished.history.count("\n") >= 2
+    unfinished.write(tmp_path / "unfinished")
+    assert ellipack.read_packing(tmp_path / "unfinished").summary["not_reached"] is True
