@@ -33,8 +33,8 @@ use crate::arith::{Arith, Dd, DdT, Mag};
 use crate::arith::{is_positive, select_gt, select_sign};
 use crate::error::{Argument, Error};
 use crate::form::QuadraticForm;
-use crate::poly::{OddsForm, OddsSearch, RationalForm, Search, coefficients_2d, pencil3};
-use crate::sym::{Sym2, Sym3, mat_vec};
+use crate::poly::{Coefficients, OddsForm, OddsSearch, RationalForm, Search, coefficients_2d};
+use crate::sym::{Sym2, Sym3};
 use simd::multiversion;
 
 /// Relative error bound on μ² above which the coefficients are recomputed in double-double.
@@ -523,8 +523,13 @@ pub(crate) fn inputs_finite_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<b
 /// f(λ) = λ (1 − λ) r12ᵀ Q(λ)⁻¹ r12,   Q(λ) = (1 − λ) Q1 + λ Q2,   0 ≤ λ ≤ 1,
 /// ```
 ///
-/// evaluated from the Bernstein form of its numerator and denominator (eq. 15), which loses
-/// no digits to cancellation. The PW85 library's `f_neg` is −f.
+/// evaluated from the Bernstein form of its numerator and denominator (eqs. 15–16), a sum of
+/// non-negative terms. The cancellation sits in the seven coefficients (needles, pancakes,
+/// very different sizes): their running error bound, carried to a(λ) and b(λ), decides
+/// whether the `f64` coefficients are good to 1e-14 relative in f; otherwise they are
+/// recomputed in double-double arithmetic, as [`contact_function`] does. The relative error
+/// is then a few units in the last place (the reference file `pw85_objective.csv`: below
+/// 1e-15 on needles, pancakes and size ratios up to 1e8). The PW85 library's `f_neg` is −f.
 ///
 /// # Errors
 /// As [`contact_function`], and [`Error::LambdaOutOfRange`] unless 0 ≤ λ ≤ 1.
@@ -547,60 +552,222 @@ pub fn objective(lambda: f64, r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<f6
     crate::extreme::check_positive_definite_balanced(Argument::Q1, q1)?;
     crate::extreme::check_positive_definite_balanced(Argument::Q2, q2)?;
     let (r, a, b) = crate::extreme::uniformly_rescaled(r12, q1, q2);
-    Ok(RationalForm::new(&r, &a, &b).f(lambda))
+    // The coefficients with the bound of their rounding error (Σ|terms|, depth-weighted
+    // below), in one pass as in `contact_function`; relative to a(λ) and b(λ), which are sums
+    // of non-negative Bernstein terms, the bound gives at most u times `amplified` in f.
+    // NaN (a = 0 from r12 = 0, or a coefficient rounded below zero) fails the test and
+    // refines.
+    let (fast, bound) = crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(&r, &a, &b);
+    let (alpha_bound, beta_bound) = depth_weighted(&bound.alpha, &bound.beta);
+    let [value_a, _, _, value_b, _, _] =
+        crate::poly::pencil_values(&fast.alpha, &fast.beta, lambda);
+    let amplified = amplification(
+        &alpha_bound,
+        &beta_bound,
+        [lambda, value_a, value_b, 1.0, 1.0],
+    );
+    if UNIT_ROUNDOFF * amplified <= OBJECTIVE_REFINE_ABOVE {
+        Ok(fast.f(lambda))
+    } else {
+        Ok(exact_coefficients(&r, &a, &b).f(lambda))
+    }
 }
 
+/// Bound on the relative error that the `f64` coefficients may bring into [`objective`]
+/// before they are recomputed in double-double: with the evaluation's own few units in the
+/// last place, an unrefined f is within about 1.1e-14 of the exact one. An ordinary pair
+/// (Σ|terms| within a few times the value) stays below it; the double-double coefficients
+/// cost about twice the `f64` ones.
+const OBJECTIVE_REFINE_ABOVE: f64 = 1e-14;
+
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
-/// [`ContactDetails`]). Costs one contact function and a 3×3 matrix–vector product.
+/// [`ContactDetails`]).
+///
+/// μ² and λ₀ are [`contact_function`]'s, bit for bit. The rest is computed in double-double
+/// arithmetic (about 32 digits), because two steps lose digits on stiff pairs:
+///
+/// 1. λ₀ itself: [`contact_function`] returns it to a few 1e-13 absolute on stiff pairs (μ² is
+///    stationary there, eq. 12, so it does not need more), but x₀(λ) of eq. 9 moves with λ.
+///    One to three Newton steps on the numerator p(u) of f′ (eqs. 18–20 in the odds
+///    u = λ / (1 − λ), or in 1/u when λ₀ > ½ so that 1 − λ₀ keeps its relative precision),
+///    with the coefficients in double-double, give (1 − λ₀, λ₀) to a few units in the last
+///    place.
+/// 2. Q(λ₀)⁻¹ r12 = adj Q(λ₀) r12 / det Q(λ₀) (eqs. 9–10) and Q1 Q(λ₀)⁻¹ r12: the adjugate,
+///    determinant and products of a needle's or pancake's Q(λ) cancel by up to its squared
+///    aspect ratio, in double-double still far below the last place.
+///
+/// On the reference file `pw85_details.csv` (needles, pancakes, upstream PW85's needle grid,
+/// size ratios up to 1e8) the point, the normal and ∂μ²/∂r12 are within 1e-15 relative. The
+/// inputs are first scaled by powers of two (exactly) so that the largest form entry is
+/// near 1. Costs a contact function and about 0.5 µs more.
 ///
 /// # Errors
 /// As [`contact_function`].
 pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDetails, Error> {
     // The dispatched entry point, so that the details agree with `contact_function` bit for bit.
     let contact = crate::contact_function(r12, q1, q2)?;
-    let p = pencil3::<f64>(r12, q1, q2);
-    // adj Q(λ) = s² adj Q1 + st M + t² adj Q2, from the same (possibly refined) arithmetic as
-    // the coefficients, so that s = adj Q(λ) r / b(λ) is as accurate as μ².
-    let (adj1, mixed, adj2) = if contact.refined {
-        let d = pencil3::<Dd>(r12, q1, q2);
-        (
-            d.adj1.map(Arith::to_f64),
-            d.mixed.map(Arith::to_f64),
-            d.adj2.map(Arith::to_f64),
-        )
-    } else {
-        (p.adj1, p.mixed, p.adj2)
-    };
-    let t = contact.lambda;
-    let s = 1.0 - t;
-    let adj: Sym3 = core::array::from_fn(|k| s * s * adj1[k] + s * t * mixed[k] + t * t * adj2[k]);
-    // b(λ) = det Q(λ) from the same pieces: det is linear in each row, so the cofactor
-    // expansion of Q(λ) against its own adjugate gives it.
-    let q: Sym3 = core::array::from_fn(|k| s * q1[k] + t * q2[k]);
-    let b = q[0] * adj[0] + q[1] * adj[1] + q[2] * adj[2];
-    let sv = mat_vec(&adj, r12).map(|x| x / b);
-    let norm = (sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]).sqrt();
-    let normal = if norm > 0.0 {
-        sv.map(|x| x / norm)
-    } else {
-        [0.0; 3]
-    };
+    // Lengths are divided by 2^k and forms by 4^k (exact): then y = Q⁻¹ r12 is 2^k times
+    // the original one and the point 2^−k times.
+    let k = crate::extreme::uniform_exponent(q1, q2);
+    let (r, a, b) = crate::extreme::uniformly_rescaled(r12, q1, q2);
+    let details = exact_details(&r, &a, &b, contact.lambda);
+    let by = |x: f64, e: i32| crate::extreme::scale_by_power_of_two(x, e);
+    let y = details.y.map(|x| by(x, -k));
+    let [s, t] = details.weights;
     let ss = [
-        sv[0] * sv[0],
-        2.0 * sv[0] * sv[1],
-        2.0 * sv[0] * sv[2],
-        sv[1] * sv[1],
-        2.0 * sv[1] * sv[2],
-        sv[2] * sv[2],
+        y[0] * y[0],
+        2.0 * y[0] * y[1],
+        2.0 * y[0] * y[2],
+        y[1] * y[1],
+        2.0 * y[1] * y[2],
+        y[2] * y[2],
     ];
     Ok(ContactDetails {
         contact,
-        point: mat_vec(q1, &sv).map(|x| s * x),
-        normal,
-        grad_r12: sv.map(|x| 2.0 * t * s * x),
+        point: details.point.map(|x| by(x, k)),
+        normal: details.normal,
+        grad_r12: y.map(|x| 2.0 * t * s * x),
         grad_q1: ss.map(|x| -t * s * s * x),
         grad_q2: ss.map(|x| -t * t * s * x),
     })
+}
+
+/// What [`exact_details`] computes: (1 − λ₀, λ₀), y = Q(λ₀)⁻¹ r12, the point
+/// (1 − λ₀) Q1 y (eq. 9a) and the unit normal y / |y|.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ExactDetails {
+    pub weights: [f64; 2],
+    pub y: [f64; 3],
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+}
+
+multiversion! {
+    /// [`contact_details`] after the contact function, on the rescaled pair, from the
+    /// contact function's λ: see there. Dispatched so that the double-double products use the
+    /// hardware FMA.
+    pub(crate) fn exact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3, lambda: f64) -> ExactDetails
+        => fused exact_details_portable;
+}
+
+#[inline(always)]
+fn exact_details_portable<const FMA: bool>(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+    lambda: f64,
+) -> ExactDetails {
+    type D<const F: bool> = DdT<F>;
+    let [s, t] = refined_weights::<FMA>(r12, q1, q2, lambda);
+    let lift = D::<FMA>::lift;
+    // Q(λ₀) = (1 − λ₀) Q1 + λ₀ Q2 (eq. 10): each entry's two products exact, their sum to
+    // 2⁻¹⁰⁴ relative, whatever the sizes of Q1 and Q2.
+    let q: [D<FMA>; 6] = core::array::from_fn(|k| lift(s) * lift(q1[k]) + lift(t) * lift(q2[k]));
+    let adj = crate::sym::adjugate_generic(&q);
+    let det = crate::sym::det_generic(&q, &adj).to_f64();
+    let r = r12.map(lift);
+    // v = adj Q(λ₀) r12 = det Q(λ₀) · y, and w = Q1 v (eq. 9a without the factors).
+    let v = sym_mat_vec(&adj, &r);
+    let w = sym_mat_vec(&crate::sym::lift6::<D<FMA>>(q1), &v);
+    let v = v.map(Arith::to_f64);
+    // Q(λ₀) is positive definite, so y has the direction of v: the normal needs no
+    // division by the determinant.
+    let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let normal = if norm > 0.0 {
+        v.map(|x| x / norm)
+    } else {
+        [0.0; 3]
+    };
+    ExactDetails {
+        weights: [s, t],
+        y: v.map(|x| x / det),
+        point: w.map(|x| s * (x.to_f64() / det)),
+        normal,
+    }
+}
+
+/// A x for a symmetric A in packed storage (Q11, Q12, Q13, Q22, Q23, Q33), in any arithmetic.
+#[inline(always)]
+fn sym_mat_vec<T: Arith>(a: &[T; 6], x: &[T; 3]) -> [T; 3] {
+    [
+        a[0] * x[0] + a[1] * x[1] + a[2] * x[2],
+        a[1] * x[0] + a[3] * x[1] + a[4] * x[2],
+        a[2] * x[0] + a[4] * x[1] + a[5] * x[2],
+    ]
+}
+
+/// (1 − λ₀, λ₀) to a few units in the last place each, from the contact function's λ₀.
+///
+/// Newton's method on p(u) = A B + u (1 + u) (A′ B − A B′), the numerator of f′ (eqs. 18–20)
+/// in the odds u = λ / (1 − λ) (see [`crate::poly::OddsForm`]), with the Bernstein
+/// coefficients and p, p′ in double-double; for λ₀ > ½ on the reversed form (Q1 and Q2
+/// swapped), whose odds are (1 − λ) / λ, so that a λ₀ near 1 keeps 1 − λ₀ to its relative
+/// precision. The start is within about 1e-13 of the root (absolute in λ), and the root is
+/// simple (f is strictly concave in the odds' sense: p decreases through it), so the steps
+/// shrink quadratically; the loop ends at a step below 2⁻⁵⁸ relative, after three steps at
+/// most, or at the first step that would leave (0, ∞) or is not finite (r12 = 0: p ≡ 0), then
+/// keeping the last good u.
+#[inline(always)]
+fn refined_weights<const FMA: bool>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3, lambda: f64) -> [f64; 2] {
+    let Coefficients { alpha, beta } = crate::poly::coefficients::<DdT<FMA>>(r12, q1, q2);
+    let reversed = lambda > 0.5;
+    let (alpha, beta) = if reversed {
+        let ([a0, a1, a2], [b0, b1, b2, b3]) = (alpha, beta);
+        ([a2, a1, a0], [b3, b2, b1, b0])
+    } else {
+        (alpha, beta)
+    };
+    // 1 − λ is exact for λ ≥ ½ (Sterbenz), so the reversed odds start from all the
+    // precision the double λ has.
+    let mut u = if reversed {
+        (1.0 - lambda) / lambda
+    } else {
+        lambda / (1.0 - lambda)
+    };
+    for _ in 0..3 {
+        let (p, slope) = odds_numerator_and_slope(&alpha, &beta, DdT::<FMA>::lift(u));
+        let step = p.to_f64() / slope.to_f64();
+        let next = u - step;
+        if !(next > 0.0 && next < f64::INFINITY) {
+            break;
+        }
+        u = next;
+        if step.abs() <= f64::from_bits((1023 - 58) << 52) * u {
+            break;
+        }
+    }
+    // λ = u / (1 + u), 1 − λ = 1 / (1 + u): each a few roundings from the exact value.
+    let rho = 1.0 / (1.0 + u);
+    if reversed {
+        [u * rho, rho]
+    } else {
+        [rho, u * rho]
+    }
+}
+
+/// p(u) and p′(u) in any arithmetic, with A(u) = α₀ + α₁u + α₂u² and
+/// B(u) = β₀ + β₁u + β₂u² + β₃u³ (see [`crate::poly::OddsForm`]):
+///
+/// ```text
+/// p(u)  = A B + u (1 + u) (A′ B − A B′),
+/// p′(u) = A′ B + A B′ + (1 + 2u) (A′ B − A B′) + u (1 + u) (A″ B − A B″).
+/// ```
+#[inline(always)]
+fn odds_numerator_and_slope<T: Arith>(alpha: &[T; 3], beta: &[T; 4], u: T) -> (T, T) {
+    let [a0, a1, a2] = *alpha;
+    let [b0, b1, b2, b3] = *beta;
+    let (one, three) = (T::lift(1.0), T::lift(3.0));
+    let a = a0 + (a1 + a2 * u) * u;
+    let da = a1 + (a2 * u).twice();
+    let dda = a2.twice();
+    let b = b0 + (b1 + (b2 + b3 * u) * u) * u;
+    let db = b1 + (b2.twice() + three * b3 * u) * u;
+    let ddb = b2.twice() + (three * b3 * u).twice();
+    let w = u * (one + u);
+    let cross = da * b - a * db;
+    let p = a * b + w * cross;
+    let slope = da * b + a * db + (one + u.twice()) * cross + w * (dda * b - a * ddb);
+    (p, slope)
 }
 
 /// Relative rounding error of evaluating f from exact non-negative coefficients (a dozen

@@ -55,12 +55,7 @@ const fn pow2(e: i32) -> f64 {
 /// lies in [1, 4): a uniform scaling, under which f(λ) and μ² are invariant, that brings
 /// ordinary pairs of any size into the fast path's window.
 pub(crate) fn uniformly_rescaled(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> ([f64; 3], Sym3, Sym3) {
-    let largest = q1.iter().chain(q2).fold(0.0_f64, |m, x| m.max(x.abs()));
-    let k = if largest > 0.0 && largest.is_finite() {
-        exponent(largest).div_euclid(2)
-    } else {
-        0
-    };
+    let k = uniform_exponent(q1, q2);
     (
         r12.map(|x| scale_by_power_of_two(x, -k)),
         q1.map(|x| scale_by_power_of_two(x, -2 * k)),
@@ -68,9 +63,19 @@ pub(crate) fn uniformly_rescaled(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> ([f64;
     )
 }
 
+/// The k of [`uniformly_rescaled`]: lengths are divided by 2^k, forms by 4^k.
+pub(crate) fn uniform_exponent(q1: &Sym3, q2: &Sym3) -> i32 {
+    let largest = q1.iter().chain(q2).fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest > 0.0 && largest.is_finite() {
+        exponent(largest).div_euclid(2)
+    } else {
+        0
+    }
+}
+
 /// x · 2^e, exact unless the result overflows (±∞) or is subnormal (rounded once, as a
 /// product into that range is).
-fn scale_by_power_of_two(x: f64, e: i32) -> f64 {
+pub(crate) fn scale_by_power_of_two(x: f64, e: i32) -> f64 {
     let mut x = x;
     let mut e = e;
     while e > 1000 {

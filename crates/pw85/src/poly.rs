@@ -678,12 +678,10 @@ impl<T: Arith> Coefficients<T> {
     }
 }
 
-/// adj(Q1), adj(Q2), M(Q1, Q2) and the Bernstein coefficients, in arithmetic `T`.
+/// The Bernstein coefficients of a pair of ellipsoids, in arithmetic `T`, formed from
+/// adj(Q1), adj(Q2) and the mixed adjugate M(Q1, Q2) (eq. 16).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Pencil3<T> {
-    pub adj1: [T; 6],
-    pub adj2: [T; 6],
-    pub mixed: [T; 6],
     pub coefficients: Coefficients<T>,
 }
 
@@ -714,12 +712,7 @@ pub(crate) fn pencil3_lifted<T: Arith>(r12: [T; 3], a: [T; 6], b: [T; 6]) -> Pen
             det_generic(&b, &adj2),
         ],
     };
-    Pencil3 {
-        adj1,
-        adj2,
-        mixed,
-        coefficients,
-    }
+    Pencil3 { coefficients }
 }
 
 /// The `f64` Bernstein coefficients and their Σ|terms| (the running error bound) in one pass:
