@@ -111,8 +111,8 @@ pub enum PackError {
     },
     /// A time limit that is not a positive number of seconds a clock can count to.
     #[error(
-        "the time limit must be a positive number of seconds, at most {max:.3e} (about 585 \
-         billion years), not {seconds:e}",
+        "the time limit must be a number of seconds from 1e-9 (a nanosecond) to {max:.3e} \
+         (about 585 billion years), not {seconds:e}",
         max = Duration::MAX.as_secs_f64()
     )]
     TimeLimit {
@@ -187,12 +187,16 @@ fn listed<T>(items: &[T], show: impl Fn(&T) -> String) -> String {
 /// (which would otherwise panic).
 ///
 /// # Errors
-/// [`PackError::TimeLimit`] for zero, negative, NaN, infinite or too large values.
+/// [`PackError::TimeLimit`] for zero, negative, NaN, infinite, too large values, or values
+/// below a nanosecond.
 pub fn time_limit_of(seconds: f64) -> Result<Duration, PackError> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(PackError::TimeLimit { seconds });
     }
-    Duration::try_from_secs_f64(seconds).map_err(|_| PackError::TimeLimit { seconds })
+    Duration::try_from_secs_f64(seconds)
+        .ok()
+        .filter(|d| !d.is_zero())
+        .ok_or(PackError::TimeLimit { seconds })
 }
 
 /// Makes sure the output folder can be written before a run spends its time: creates it,

@@ -1804,14 +1804,22 @@ impl Validator<'_> {
             s.optimality_tolerance = v;
         }
         if let Some(v) = self.positive(&raw.time_limit, "solver.time_limit")? {
+            let span = raw.time_limit.as_ref().map_or(0..0, Spanned::span);
             s.time_limit = Duration::try_from_secs_f64(v).map_err(|_| {
-                let span = raw.time_limit.as_ref().map_or(0..0, Spanned::span);
                 self.error(
-                    span,
+                    span.clone(),
                     "solver.time_limit",
                     format!("{} seconds is too long", short(v)),
                 )
             })?;
+            // A limit below a nanosecond would be a zero duration: no limit a clock can tell.
+            if s.time_limit.is_zero() {
+                return Err(self.error(
+                    span,
+                    "solver.time_limit",
+                    format!("{} seconds is shorter than a nanosecond", short(v)),
+                ));
+            }
         }
         if let Some(t) = &raw.threads {
             s.threads = usize::try_from(*t.get_ref()).map_err(|_| {

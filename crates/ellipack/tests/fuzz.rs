@@ -236,8 +236,31 @@ fn read_says_something<T, E: std::error::Error>(
     }
 }
 
+/// A scene read or refused in words; one that is read gives its container, its items and its
+/// random goal without a panic, and reads back from its own TOML to the same scene.
 fn check_scene(bytes: &[u8]) {
-    read_says_something(bytes, "fuzz.toml", Scene::from_toml_str);
+    match Scene::from_toml_str(&String::from_utf8_lossy(bytes), "fuzz.toml") {
+        Err(e) => says_something(&e),
+        Ok(scene) => {
+            let _ = scene.fixed_container();
+            let _ = scene.random_goal();
+            assert_eq!(scene.item_semi_axes().len(), scene.item_count());
+            let again = Scene::from_toml_str(&scene.to_toml_string(), "again.toml").unwrap();
+            assert_eq!(again, scene);
+        }
+    }
+}
+
+#[test]
+fn the_base_scenes_are_read() {
+    for text in [
+        PERIODIC_FIXED_SCENE,
+        PERIODIC_VARIABLE_SCENE,
+        FIXED_SCENE,
+        RANDOM_SCENE,
+    ] {
+        Scene::from_toml_str(text, "base.toml").unwrap();
+    }
 }
 
 fn check_packing_csv(bytes: &[u8]) {
@@ -259,6 +282,35 @@ fn check_lammps(bytes: &[u8]) {
 fn lammps_text(p: &packing::Packing) -> String {
     export::lammps_data(p, &export::Cell::enclosing(p))
 }
+
+/// A fixed periodic cell given by its lengths, with a second key that conflicts when a
+/// mutation duplicates a line.
+const PERIODIC_FIXED_SCENE: &str = "dimension = 3\nseed = 7\n[container]\nkind = \"periodic\"\n\
+                                    cell = \"fixed\"\nlengths = [10.0, 12.0, 9.0]\n[[shapes]]\n\
+                                    count = 16\nsemi_axes = [1.0, 0.75, 0.5]\n[solver]\n\
+                                    time_limit = 5.0\nthreads = 1\n[output]\npictures = false\n";
+
+/// A variable periodic cell of ellipses.
+const PERIODIC_VARIABLE_SCENE: &str = "dimension = 2\n[container]\nkind = \"periodic\"\n\
+                                       cell = \"variable\"\n[[shapes]]\ncount = 4\n\
+                                       semi_axes = [2.0, 1.0]\n[solver]\n\
+                                       local_minimisations = 3\n";
+
+/// Fixed containers of every kind of size key: radius, semi-axes, half sides and a fraction.
+const FIXED_SCENE: &str = "dimension = 3\n[container]\nkind = \"ball\"\nradius = 6.0\n\
+                           [[shapes]]\ncount = 10\nsemi_axes = [1.0, 1.0, 1.0]\n[[shapes]]\n\
+                           count = 3\nsemi_axes = [2.0, 0.5, 0.5]\n[solver]\ntime_limit = 2.0\n\
+                           # semi_axes = [3.0, 4.0, 5.0]\n# half_sides = [4.0, 4.0, 4.0]\n\
+                           # packing_fraction = 0.45\n";
+
+/// A random packing: distributions, an orientation and the jammed target.
+const RANDOM_SCENE: &str = "dimension = 3\nseed = 3\n[container]\nkind = \"periodic\"\n\
+                            packing_fraction = \"jammed\"\n[[shapes]]\ncount = 50\n\
+                            semi_axes = [1.0, 0.75, 0.5]\n\
+                            size = { distribution = \"lognormal\", sigma = 0.2, min = 0.5, max = 2.0 }\n\
+                            aspect = { distribution = \"uniform\", min = 1.0, max = 2.0 }\n\
+                            orientation = { axis = [0.0, 0.0, 1.0], concentration = 4.0 }\n\
+                            [solver]\nstart = \"random\"\n";
 
 const PAIRS_2D: &str = "case_id,r12_x,r12_y,q1_0,q1_1,q1_2,q2_0,q2_1,q2_2\n\
                         apart,3,0,1,0,1,1,0,1\n\
@@ -326,6 +378,26 @@ proptest! {
 
     #[test]
     fn scene(bytes in input(ellipack::scene::DEFAULT_SCENE)) {
+        check_scene(&bytes);
+    }
+
+    #[test]
+    fn scene_periodic_fixed(bytes in input(PERIODIC_FIXED_SCENE)) {
+        check_scene(&bytes);
+    }
+
+    #[test]
+    fn scene_periodic_variable(bytes in input(PERIODIC_VARIABLE_SCENE)) {
+        check_scene(&bytes);
+    }
+
+    #[test]
+    fn scene_fixed_containers(bytes in input(FIXED_SCENE)) {
+        check_scene(&bytes);
+    }
+
+    #[test]
+    fn scene_random(bytes in input(RANDOM_SCENE)) {
         check_scene(&bytes);
     }
 
