@@ -203,7 +203,8 @@ fn elongated_items_pack_in_a_variable_cell() {
 }
 
 /// A fixed cell far smaller than its items (a units typo: 0.07 for unit discs) is refused at
-/// once, by `pack` and by `verify`, naming how many times the items cover it.
+/// once: by `pack` when the scene is read (the items' area is 32057 times the cell's), by
+/// `verify` before any image is made, naming how many times their enclosing balls cover it.
 #[test]
 fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
     let dir = temp_dir("periodic-tiny");
@@ -216,8 +217,9 @@ fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
     let o = pack_into(&path, &dir.join("out"));
     let said = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{said}");
+    // Read from the scene: the items' area is that many times the cell's.
     assert!(
-        said.contains("cover it 32057.") && said.contains("units"),
+        said.contains("container.lengths") && said.contains("32057."),
         "{said}"
     );
     let mut csv = String::from("id,x,y,a,b,theta\n");
