@@ -123,6 +123,13 @@ def _rows(name: str, x: Any, width: int) -> Tuple[np.ndarray, Optional[int]]:
     raise ValueError(f"{name}: expected shape ({width},) or (n, {width}), got shape {a.shape}")
 
 
+# The fast path of one pair or one shape (pypw85's scalar calls): `_one(kind, out, *args)` reads
+# numbers, float64 arrays of the row's shape and lists of numbers as they are, evaluates the row
+# as `_evaluate` would, and returns None for anything else (other dtypes, batches, a wrong
+# shape, an `out` it does not fill), which then takes the vectorised path: its conversions,
+# checks and errors.
+_one = _ellipack._one
+
 # More threads than this is a mistake, not a wish: each count keeps its own pool alive.
 _MAX_THREADS = 1024
 
@@ -215,6 +222,10 @@ def _pair_args(r12: Any, q1: Any, q2: Any, dim: int) -> list:
 def _pair(
     kind: str, r12: Any, q1: Any, q2: Any, dim: int, out: Any, threads: Optional[int]
 ) -> tuple:
+    if threads is None:
+        one = _one(kind, out, r12, q1, q2)
+        if one is not None:
+            return one
     result = _evaluate(kind, _pair_args(r12, q1, q2, dim), 2, out, threads)
     if result.ndim == 1:
         return float(result[0]), float(result[1])
@@ -269,6 +280,10 @@ def contact_function_2d(
 
 
 def _verdict(kind, r12, q1, q2, dim, out, threads):
+    if threads is None and out is None:
+        one = _one(kind, None, r12, q1, q2)
+        if one is not None:
+            return one
     args = _pair_args(r12, q1, q2, dim)
     shape = _output_shape(args, 1)
     if out is not None:
@@ -335,7 +350,9 @@ def contact_details(
     """mu^2, lambda, the contact point, the common normal and the gradients of mu^2 with
     respect to r12, q1 and q2 (see :class:`ContactDetails`). Shapes as
     :func:`contact_function`."""
-    d = _evaluate("details3", [("r12", r12, 3), ("q1", q1, 6), ("q2", q2, 6)], 23, None, threads)
+    d = None if threads is not None else _one("details3", None, r12, q1, q2)
+    if d is None:
+        d = _evaluate("details3", _pair_args(r12, q1, q2, 3), 23, None, threads)
     if d.ndim == 1:
         return ContactDetails(float(d[0]), float(d[1]), d[2:5], d[5:8], d[8:11], d[11:17], d[17:23])
     return ContactDetails(
@@ -350,7 +367,9 @@ def contact_details_2d(
     (3,) or (n, 3); the point, normal and ``grad_r12`` have 2 entries, ``grad_q1`` and
     ``grad_q2`` 3 (off-diagonal entries counted twice). mu^2 and lambda are those of
     :func:`contact_function_2d`."""
-    d = _evaluate("details2", _pair_args(r12, q1, q2, 2), 14, None, threads)
+    d = None if threads is not None else _one("details2", None, r12, q1, q2)
+    if d is None:
+        d = _evaluate("details2", _pair_args(r12, q1, q2, 2), 14, None, threads)
     if d.ndim == 1:
         return ContactDetails(float(d[0]), float(d[1]), d[2:4], d[4:6], d[6:8], d[8:11], d[11:14])
     return ContactDetails(
@@ -369,6 +388,10 @@ def f_neg(
     """-f(lambda) = -lambda (1 - lambda) r12^T Q(lambda)^-1 r12, Q(lambda) = (1 - lambda) Q1 +
     lambda Q2: the function whose minimum over [0, 1] is -mu^2 (pypw85's ``f_neg``, for use
     with a scalar minimiser). ``lambda_`` in [0, 1], a number or shape (n,)."""
+    if threads is None:
+        one = _one("f_neg3", None, lambda_, r12, q1, q2)
+        if one is not None:
+            return one
     r = _evaluate(
         "f_neg3", [("lambda_", lambda_, 1), ("r12", r12, 3), ("q1", q1, 6), ("q2", q2, 6)],
         1, None, threads,
@@ -394,6 +417,10 @@ def spheroid(
     square overflows or underflows float64 (beyond about 1.3e154 or below 1.5e-154), n not
     finite or zero, and a Q that overflows or is not positive definite (c < a with |n| > 1).
     """
+    if threads is None:
+        one = _one("spheroid", out, a, c, n)
+        if one is not None:
+            return one
     args = [("a", a, 1), ("c", c, 1), ("n", n, 3)]
     return _evaluate("spheroid", args, 6, out, threads)
 
@@ -409,6 +436,10 @@ def from_axes_quaternion(
     (n, 4), normalised here. Returns shape (6,) or (n, 6). A semi-axis whose square overflows
     or underflows float64 (beyond about 1.3e154 or below 1.5e-154) raises ValueError naming
     it."""
+    if threads is None:
+        one = _one("axes_quaternion", out, axes, quaternion)
+        if one is not None:
+            return one
     args = [("axes", axes, 3), ("quaternion", quaternion, 4)]
     return _evaluate("axes_quaternion", args, 6, out, threads)
 
@@ -423,6 +454,10 @@ def from_axes_rotation(
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and rotation matrices (3, 3) or
     (n, 3, 3) whose column k is the direction of semi-axis k (orthogonal within 1e-6,
     determinant +1). Returns shape (6,) or (n, 6). Semi-axes as :func:`from_axes_quaternion`."""
+    if threads is None:
+        one = _one("axes_rotation", out, axes, rotation)
+        if one is not None:
+            return one
     r = _f64("rotation", rotation)
     if r.shape[-2:] != (3, 3) or r.ndim not in (2, 3):
         raise ValueError(f"rotation: expected shape (3, 3) or (n, 3, 3), got shape {r.shape}")
@@ -440,6 +475,10 @@ def from_axes_angle_2d(
     """The ellipse's Q = R(theta) diag(a^2, b^2) R(theta)^T, R(theta) = [[cos, -sin], [sin,
     cos]], for semi-axes (2,) or (n, 2) and angles (radians), a number or shape (n,). Returns
     ``[Q11, Q12, Q22]``, shape (3,) or (n, 3). Semi-axes as :func:`from_axes_quaternion`."""
+    if threads is None:
+        one = _one("axes_angle_2d", out, axes, theta)
+        if one is not None:
+            return one
     args = [("axes", axes, 2), ("theta", theta, 1)]
     return _evaluate("axes_angle_2d", args, 3, out, threads)
 
@@ -480,6 +519,12 @@ def overlap_measure(
     the centres' last axis. Evaluated as ``ellipack measure`` does (in the units of the larger
     body), so the result does not depend on the units.
     """
+    if threads is None:
+        r = _one("measure3", None, ci, ai, oi, cj, aj, oj)
+        if r is None:
+            r = _one("measure2", None, ci, ai, oi, cj, aj, oj)
+        if r is not None:
+            return _overlap_measure(r, r.shape[0] - 5)
     c = _f64("ci", ci)
     dim = c.shape[-1] if c.ndim else 0
     if dim not in (2, 3):
@@ -494,6 +539,11 @@ def overlap_measure(
     width = 2 * (2 * dim + ow)
     r = _evaluate(f"measure{dim}", [("pairs", table if n is not None else table[0], width)],
                   3 + dim + 2, None, threads)
+    return _overlap_measure(r, dim)
+
+
+def _overlap_measure(r: np.ndarray, dim: int) -> OverlapMeasure:
+    """The measure from its output rows (U, d2, eps, f, X, whether X is unique)."""
     x = np.where(r[..., -1:] != 0.0, r[..., 4:4 + dim], np.nan)
     if r.ndim == 1:
         return OverlapMeasure(float(r[3]), float(r[0]), float(r[1]), float(r[2]), x)

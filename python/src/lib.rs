@@ -8,11 +8,13 @@ use pyo3::prelude::*;
 
 mod packer;
 mod rows;
+mod scalar;
 
 /// The extension module.
 #[pymodule]
 fn _ellipack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rows::_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(scalar::_one, m)?)?;
     m.add_function(wrap_pyfunction!(rows::_bench_rust_batch, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_scene_toml, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_pack, m)?)?;

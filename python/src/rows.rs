@@ -18,7 +18,7 @@ const CHUNK: usize = 256;
 
 /// What a row-wise call computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
+pub(crate) enum Kind {
     Contact3,
     Contact2,
     Overlap3,
@@ -35,7 +35,7 @@ enum Kind {
 }
 
 impl Kind {
-    fn from_name(name: &str) -> PyResult<Kind> {
+    pub(crate) fn from_name(name: &str) -> PyResult<Kind> {
         Ok(match name {
             "contact3" => Kind::Contact3,
             "contact2" => Kind::Contact2,
@@ -74,7 +74,7 @@ impl Kind {
     }
 
     /// The width of an output row.
-    fn output_width(self) -> usize {
+    pub(crate) fn output_width(self) -> usize {
         match self {
             Kind::Contact3 | Kind::Contact2 => 2,
             Kind::Overlap3 | Kind::Overlap2 | Kind::FNeg3 => 1,
@@ -94,9 +94,9 @@ impl Kind {
 /// One argument: rows of `width` values, or a single row that every output row reuses
 /// (`stride` 0), so that reading a row has no branch.
 #[derive(Clone, Copy)]
-struct Input<'a> {
-    data: &'a [f64],
-    stride: usize,
+pub(crate) struct Input<'a> {
+    pub(crate) data: &'a [f64],
+    pub(crate) stride: usize,
 }
 
 impl Input<'_> {
@@ -115,9 +115,9 @@ impl Input<'_> {
 }
 
 /// The first row that could not be evaluated.
-struct RowError {
+pub(crate) struct RowError {
     row: usize,
-    message: String,
+    pub(crate) message: String,
 }
 
 /// The pairs of a chunk and their results, kept from chunk to chunk so that a call allocates
@@ -451,7 +451,7 @@ fn pool(threads: usize) -> PyResult<Arc<rayon::ThreadPool>> {
 
 /// Every chunk of `out`, on the calling thread (`threads == 1`), rayon's global pool
 /// (`threads == 0`) or `pool`; the error of the lowest failing row.
-fn evaluate(
+pub(crate) fn evaluate(
     kind: Kind,
     inputs: &[Input<'_>],
     out: &mut [f64],
