@@ -666,8 +666,8 @@ impl Observer for Terminal {
         ));
     }
 
-    fn iteration(&self, p: &auglag::Progress<'_>) {
-        if let auglag::Event::Outer {
+    fn iteration(&self, p: &ellipsoid_packer::multistart::SolverProgress<'_>) {
+        if let ellipsoid_packer::multistart::SolverEvent::Outer {
             objective,
             infeasibility,
             ..

@@ -533,13 +533,14 @@ fn check_fixed_size(
 /// The scene's solver settings, mapped once onto the packer's settings of one local
 /// minimisation.
 fn local_settings(scene: &Scene) -> LocalSettings {
+    use ellipsoid_packer::local::InnerSolver;
     let mut local = LocalSettings::default();
     local.feasibility_tolerance = scene.solver.feasibility_tolerance;
     local.optimality_tolerance = scene.solver.optimality_tolerance;
     local.inner_solver = match scene.solver.inner_solver {
-        crate::scene::InnerSolverName::Spg => auglag::InnerSolver::Spg,
-        crate::scene::InnerSolverName::ProjectedLbfgs => auglag::InnerSolver::ProjectedLbfgs,
-        crate::scene::InnerSolverName::TruncatedNewton => auglag::InnerSolver::TruncatedNewton,
+        crate::scene::InnerSolverName::Spg => InnerSolver::Spg,
+        crate::scene::InnerSolverName::ProjectedLbfgs => InnerSolver::ProjectedLbfgs,
+        crate::scene::InnerSolverName::TruncatedNewton => InnerSolver::TruncatedNewton,
     };
     local.method = match scene.solver.method {
         crate::scene::MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,

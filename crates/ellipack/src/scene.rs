@@ -190,7 +190,7 @@ impl Dimension {
 }
 
 /// The name, in a scene file, of the inner solver of the augmented Lagrangian's
-/// bound-constrained subproblems ([`auglag::InnerSolver`]).
+/// bound-constrained subproblems ([`ellipsoid_packer::local::InnerSolver`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum InnerSolverName {

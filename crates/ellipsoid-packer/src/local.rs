@@ -26,7 +26,10 @@
 
 use crate::Error;
 use crate::compression::{add_counts, compression};
-use auglag::{Control, InnerSolver, Options, Phr, Progress, Report};
+use auglag::{Control, Options, Phr, Progress, Report};
+
+/// The solver of the augmented Lagrangian's bound-constrained subproblems.
+pub use auglag::InnerSolver;
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::{Certificate, Model, ModelGradient};
 use std::cell::RefCell;

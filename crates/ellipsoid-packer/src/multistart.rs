@@ -246,6 +246,10 @@ pub struct Callbacks<F, I, S> {
 /// The solver's report at each iteration (see [`Observer::iteration`]).
 pub use auglag::Progress as SolverProgress;
 
+/// What a [`SolverProgress`] reports: an outer iteration of the augmented Lagrangian (with its
+/// objective and infeasibility) or an inner one.
+pub use auglag::Event as SolverEvent;
+
 impl<F> Callbacks<F, fn(&SolverProgress<'_>), fn() -> bool>
 where
     F: FnMut(&MultiStartProgress) + Sync,
