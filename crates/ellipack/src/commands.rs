@@ -174,7 +174,9 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             }
             Err(RenderError::Stopped) => ellipack::note!(
                 "note: packing.svg and packing.png were not drawn: the run was stopped or \
-                 drawing would have run past its time limit"
+                 drawing would have run past its time limit (`ellipack convert {} --pictures` \
+                 draws them)",
+                out.display()
             ),
             Err(e) => return Err(e.into()),
         }
@@ -368,7 +370,7 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
 }
 
 /// How far past its time limit a run may go on drawing its pictures (besides 5 % of the limit).
-const PICTURE_GRACE: Duration = Duration::from_secs(1);
+const PICTURE_GRACE: Duration = Duration::from_secs(2);
 
 /// The files for other programs that `ellipack pack` writes beside packing.csv (packing.xyz
 /// is written with them, unless the scene turns it off).
@@ -463,9 +465,14 @@ pub fn convert(
     folder: &Path,
     formats: &[Format],
     unfinished: bool,
+    pictures: bool,
 ) -> Result<ExitCode, Box<dyn Error>> {
     let packing = ellipack::export::convert(folder, formats, unfinished)?;
-    let names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();
+    let mut names: Vec<&str> = formats.iter().map(|f| f.file_name()).collect();
+    if pictures {
+        write_pictures_until(folder, &packing, &RenderOptions::default(), &|| false)?;
+        names.extend([ellipack::render::SVG_FILE, ellipack::render::PNG_FILE]);
+    }
     ellipack::say!(
         "{} {} in a {} container: wrote {} in {}",
         packing.items().len(),

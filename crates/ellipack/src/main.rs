@@ -30,7 +30,9 @@ enum Command {
     /// (2, 1) in a minimum-area ellipse, 45 s).
     ///
     /// Writes packing.csv, summary.json, packing.xyz, packing.data, packing.gsd,
-    /// container.obj, packing.svg and packing.png in the output folder, which is checked for writing before the run begins. Every run ends with
+    /// container.obj, packing.svg and packing.png in the output folder, which is checked for writing before the run begins. The pictures are left out when drawing them would end
+    /// more than 2 s (plus 5 % of the limit) past the time limit, or at a signal; `ellipack
+    /// convert OUT --pictures` draws them. Every run ends with
     /// a certified packing: the start is one, and the best so far is kept. Ctrl-C, SIGTERM and
     /// SIGHUP stop the run and write the best certified packing found so far; with --resume, a
     /// run starts from the (certified) packing already in the folder and never writes a worse
@@ -126,6 +128,10 @@ enum Command {
         /// (`OUT/unfinished`), which is refused otherwise: it is not a packing.
         #[arg(long)]
         unfinished: bool,
+        /// Also draw packing.svg and packing.png (which `pack` leaves out when drawing them
+        /// would run past its time limit).
+        #[arg(long)]
+        pictures: bool,
     },
     /// Measure the structure of a packing folder (packing.csv and summary.json): density,
     /// nematic order S and director of each body axis, Steinhardt Q4 and Q6 (3D) or the
@@ -269,7 +275,8 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             folder,
             formats,
             unfinished,
-        } => commands::convert(&folder, &formats, unfinished)?,
+            pictures,
+        } => commands::convert(&folder, &formats, unfinished, pictures)?,
         Command::Analyse {
             folder,
             gap,

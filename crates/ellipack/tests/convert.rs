@@ -156,3 +156,16 @@ fn convert_refuses_an_unfinished_configuration_unless_asked() {
     assert_success(&convert(&["--unfinished"], &dir));
     assert!(dir.join("packing.data").is_file());
 }
+
+/// `convert --pictures` draws the pictures that a run left out.
+#[test]
+fn convert_draws_the_pictures_when_asked() {
+    let dir = folder("convert-pictures");
+    assert_success(&convert(&["--pictures", "--formats", "xyz"], &dir));
+    let listing = names(&dir);
+    assert!(
+        listing.contains(&"packing.png".to_string())
+            && listing.contains(&"packing.svg".to_string()),
+        "{listing:?}"
+    );
+}
