@@ -550,6 +550,25 @@ struct RawContainer {
     packing_fraction: Option<Spanned<RawFraction>>,
 }
 
+impl RawContainer {
+    /// The size keys given, with their spans, in the order of [`ContainerSize::key`]'s names.
+    fn size_keys(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        [
+            ("radius", self.radius.as_ref().map(Spanned::span)),
+            ("semi_axes", self.semi_axes.as_ref().map(Spanned::span)),
+            ("half_sides", self.half_sides.as_ref().map(Spanned::span)),
+            ("lengths", self.lengths.as_ref().map(Spanned::span)),
+            (
+                "packing_fraction",
+                self.packing_fraction.as_ref().map(Spanned::span),
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(key, span)| Some((key, span?)))
+        .collect()
+    }
+}
+
 /// A packing fraction as written: a number, or a word (`"jammed"`).
 enum RawFraction {
     Number(f64),
@@ -1315,41 +1334,18 @@ impl Validator<'_> {
             seed,
             output,
         };
-        let span_of_shapes = shapes_span;
+        // A refusal of the container names the size key the scene gave (the first of them);
+        // one of items too large for the model, the shapes when no size was given.
+        let size_key = raw.container.size_keys().into_iter().next();
         if let Some(reason) = scene.beyond_model_range() {
-            let fixed = scene.fixed_container().is_some();
-            let c = &raw.container;
-            let at = [
-                ("radius", c.radius.as_ref().map(Spanned::span)),
-                ("semi_axes", c.semi_axes.as_ref().map(Spanned::span)),
-                ("half_sides", c.half_sides.as_ref().map(Spanned::span)),
-                ("lengths", c.lengths.as_ref().map(Spanned::span)),
-                (
-                    "packing_fraction",
-                    c.packing_fraction.as_ref().map(Spanned::span),
-                ),
-            ]
-            .into_iter()
-            .find_map(|(key, span)| Some((format!("container.{key}"), span?)))
-            .filter(|_| fixed)
-            .unwrap_or(("shapes".to_string(), span_of_shapes));
-            return Err(self.error(at.1, &at.0, reason));
+            let (key, span) = match (&size_key, scene.fixed_container()) {
+                (Some((key, span)), Some(_)) => (format!("container.{key}"), span.clone()),
+                _ => ("shapes".to_string(), shapes_span),
+            };
+            return Err(self.error(span, &key, reason));
         }
         if let Some(reason) = scene.impossible_container() {
-            let c = &raw.container;
-            let (key, span) = [
-                ("radius", c.radius.as_ref().map(Spanned::span)),
-                ("semi_axes", c.semi_axes.as_ref().map(Spanned::span)),
-                ("half_sides", c.half_sides.as_ref().map(Spanned::span)),
-                ("lengths", c.lengths.as_ref().map(Spanned::span)),
-                (
-                    "packing_fraction",
-                    c.packing_fraction.as_ref().map(Spanned::span),
-                ),
-            ]
-            .into_iter()
-            .find_map(|(key, span)| Some((key, span?)))
-            .unwrap_or(("kind", c.kind.span()));
+            let (key, span) = size_key.unwrap_or(("kind", raw.container.kind.span()));
             return Err(self.error(span, &format!("container.{key}"), reason));
         }
         Ok(scene)
@@ -1362,19 +1358,7 @@ impl Validator<'_> {
         kind: ContainerKind,
         dimension: Dimension,
     ) -> Result<Option<ContainerSize>, SceneError> {
-        let given: Vec<(&str, std::ops::Range<usize>)> = [
-            ("radius", raw.radius.as_ref().map(Spanned::span)),
-            ("semi_axes", raw.semi_axes.as_ref().map(Spanned::span)),
-            ("half_sides", raw.half_sides.as_ref().map(Spanned::span)),
-            ("lengths", raw.lengths.as_ref().map(Spanned::span)),
-            (
-                "packing_fraction",
-                raw.packing_fraction.as_ref().map(Spanned::span),
-            ),
-        ]
-        .into_iter()
-        .filter_map(|(key, span)| Some((key, span?)))
-        .collect();
+        let given = raw.size_keys();
         if given.len() > 1 {
             // The key written later in the file is the one reported.
             let mut by_position = given.clone();

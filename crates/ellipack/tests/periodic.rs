@@ -222,38 +222,24 @@ fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
         said.contains("container.lengths") && said.contains("32057."),
         "{said}"
     );
-    let mut csv = String::from("id,x,y,a,b,theta\n");
-    for i in 0..2001 {
-        csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * 1e-5, 0.03));
-    }
+    // 2 001 items, and 51 (whose pairs were once all checked, for 78 s): refused at once.
     let packing = dir.join("packing.csv");
-    std::fs::write(&packing, csv).unwrap();
-    let v = ellipack()
-        .arg("verify")
-        .arg(&packing)
-        .args(["--container", "periodic", "--size", "0.07,0.07"])
-        .output()
-        .unwrap();
-    let said = text(&v.stdout) + &text(&v.stderr);
-    assert_eq!(v.status.code(), Some(1), "{said}");
-    assert!(said.contains("times over"), "{said}");
-    // 51 items: refused as fast, where the pairs were once all checked.
-    let mut csv = String::from("id,x,y,a,b,theta\n");
-    for i in 0..51 {
-        csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * 1e-3, 0.03));
+    for (rows, step) in [(2001, 1e-5), (51, 1e-3)] {
+        let mut csv = String::from("id,x,y,a,b,theta\n");
+        for i in 0..rows {
+            csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * step, 0.03));
+        }
+        std::fs::write(&packing, csv).unwrap();
+        let v = ellipack()
+            .arg("verify")
+            .arg(&packing)
+            .args(["--container", "periodic", "--size", "0.07,0.07"])
+            .output()
+            .unwrap();
+        let said = text(&v.stdout) + &text(&v.stderr);
+        assert_eq!(v.status.code(), Some(1), "{rows} rows: {said}");
+        assert!(said.contains("times over"), "{rows} rows: {said}");
     }
-    std::fs::write(&packing, csv).unwrap();
-    let v = ellipack()
-        .arg("verify")
-        .arg(&packing)
-        .args(["--container", "periodic", "--size", "0.07,0.07"])
-        .output()
-        .unwrap();
-    assert!(
-        text(&v.stderr).contains("times over"),
-        "{}",
-        text(&v.stderr)
-    );
 }
 
 /// `verify --container periodic` takes the cell of the packing's dimension: its lengths, with
