@@ -21,6 +21,7 @@ pub mod paper_tables;
 pub mod periodic_cells;
 pub mod periodic_peer;
 pub mod plot;
+pub mod provenance;
 pub mod random_study;
 pub mod reference;
 pub mod report;

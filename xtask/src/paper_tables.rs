@@ -210,9 +210,9 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             certified: c.is_certified(),
             min_mu2: c.min_mu2,
             budget_seconds: options.minutes * 60.0,
-            machine: machine(threads),
+            machine: crate::provenance::machine_with_threads(threads),
             method: scene.solver.method.name().to_string(),
-            commit: crate::periodic_cells::commit(),
+            commit: crate::provenance::commit(),
         };
         if let Some((old, _)) = &earlier {
             // The table keeps nine decimals: the resumed packing itself reads back up to 5e-10
@@ -479,21 +479,6 @@ fn paper_to_best(name: &str) -> Option<(&'static str, u32)> {
         .iter()
         .find(|(n, _, _)| *n == name)
         .map(|&(_, t, k)| (t, k))
-}
-
-/// The processor model and thread count, as far as the system tells.
-pub(crate) fn machine(threads: usize) -> String {
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown processor".into());
-    let cores = std::thread::available_parallelism().map_or(1, usize::from);
-    format!("{model}, {cores} cores, {threads} threads used")
 }
 
 /// The rows of an earlier `paper_tables.csv` (none if it is missing or unreadable: the file

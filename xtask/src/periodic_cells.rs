@@ -173,19 +173,6 @@ fn between_markers(text: &str, table: &str) -> Option<String> {
     crate::output::between_markers(text, (BEGIN, END), table)
 }
 
-/// The short hash of the checked-out commit, or `unknown`.
-pub(crate) fn commit() -> String {
-    std::process::Command::new("git")
-        .args(["rev-parse", "--short", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map_or_else(
-            || "unknown".into(),
-            |o| String::from_utf8_lossy(&o.stdout).trim().to_string(),
-        )
-}
-
 fn csv(rows: &[Row]) -> String {
     let mut out = String::from(
         "study,shape,items,target_fraction,density,seconds,local_minimisations,known_density\n",
@@ -214,8 +201,8 @@ fn markdown(rows: &[Row], options: &Options) -> String {
          within {} minutes.\n\n\
          | study | items | target | density | known | seconds | local minimisations |\n\
          |---|---|---:|---:|---:|---:|---:|\n",
-        commit(),
-        crate::paper_tables::machine(options.threads),
+        crate::provenance::commit(),
+        crate::provenance::machine_with_threads(options.threads),
         options.seconds,
         options.items,
         options.threads,

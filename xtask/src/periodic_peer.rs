@@ -18,6 +18,7 @@
 use crate::error::{self, Error};
 use crate::output::{Outputs, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use crate::provenance::{commit, machine};
 use ellipack::pack::{RunOptions, run as pack_run};
 use ellipack::scene::Scene;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
@@ -586,60 +587,6 @@ pub fn run_ours_as(
         ),
     };
     Ok((points, row))
-}
-
-/// The processor model (`lscpu`'s model name) and the number of cores.
-pub fn machine() -> String {
-    let lscpu = std::process::Command::new("lscpu")
-        .output()
-        .ok()
-        .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
-        .unwrap_or_default();
-    let field = |name: &str| {
-        lscpu
-            .lines()
-            .find(|l| l.trim_start().starts_with(name))
-            .and_then(|l| l.split_once(':'))
-            .map(|(_, v)| v.trim().to_string())
-    };
-    let model = field("Model name").unwrap_or_else(|| "unknown processor".into());
-    let cores = field("CPU(s)").unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map_or(1, usize::from)
-            .to_string()
-    });
-    format!("{model}, {cores} cores")
-}
-
-/// The commit the study runs from (`git rev-parse --short HEAD`), with `+changes` when the
-/// working tree differs from it.
-pub fn commit() -> String {
-    let root = crate::workspace_root();
-    let git = |args: &[&str]| {
-        std::process::Command::new("git")
-            .args(args)
-            .current_dir(&root)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
-    let head = git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "unknown".into());
-    // Only the code matters: the study's own outputs change with every run.
-    let dirty = git(&[
-        "status",
-        "--porcelain",
-        "--",
-        "crates",
-        "xtask",
-        "Cargo.lock",
-    ])
-    .is_some_and(|s| !s.is_empty());
-    if dirty {
-        format!("{head}+changes")
-    } else {
-        head
-    }
 }
 
 /// Runs the study and writes its files under `root`; returns the messages of runs that could

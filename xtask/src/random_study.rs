@@ -12,8 +12,8 @@
 
 use crate::error::Error;
 use crate::output::Outputs;
-use crate::periodic_peer::{commit, machine};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use crate::provenance::{commit, machine};
 use crate::scale::peak_rss_mib;
 use ellipack::pack::{RunOptions, run as pack_run};
 use ellipack::scene::Scene;

@@ -232,8 +232,8 @@ fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
         density_before_repair: result.density_before_repair,
         certified: result.certificate.is_feasible(),
         peak_rss_mib: peak_rss_mib(),
-        machine: crate::paper_tables::machine(threads()),
-        commit: crate::periodic_cells::commit(),
+        machine: crate::provenance::machine_with_threads(threads()),
+        commit: crate::provenance::commit(),
     })
 }
 

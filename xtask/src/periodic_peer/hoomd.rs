@@ -3,11 +3,9 @@
 //! low packing fraction, compression under the `OverlapPenalty` Hamiltonian, translation and
 //! rotation sweeps at temperature 1).
 
-use super::{
-    Cell, PeerMoves, Point, RandomPair, RunRow, SEMI_AXES, certify_periodic, commit, item_volume,
-    machine,
-};
+use super::{Cell, PeerMoves, Point, RandomPair, RunRow, SEMI_AXES, certify_periodic, item_volume};
 use crate::error::{self, Error};
+use crate::provenance::{commit, machine};
 use hoomd_geometry::{
     Convex, IntersectsAtGlobal, Volume,
     shape::{Cuboid, Ellipsoid},
