@@ -14,7 +14,9 @@
 //!                                     # variables (the densest periodic packing), or
 //!                                     # "fixed": a given cell, with lengths or
 //!                                     # packing_fraction
-//! # A container of given size is filled, not minimised (at most one of these keys):
+//! # A container of given size is filled, not minimised (at most one of these keys). One no
+//! # packing fits (the items' area or volume beyond its own, an item longer than it reaches
+//! # or thicker than its narrowest width) is refused when the scene is read.
 //! # radius = 12.0                     # circle, ball
 //! # semi_axes = [9.0, 7.0]            # ellipse, ellipsoid
 //! # half_sides = [10.0, 8.0]          # rectangle, cuboid
