@@ -4,7 +4,7 @@
 //! The runs end by the compression's own rules (no test depends on the time limit).
 
 mod common;
-use common::{ellipack, pack_into, succeeded, summary_json, temp_dir, text};
+use common::{ellipack, pack_into, pack_into_with, succeeded, summary_json, temp_dir, text};
 use ellipack::scene::{RandomGoal, Scene, StartName};
 use std::path::Path;
 use std::process::Output;
@@ -338,14 +338,7 @@ fn a_jammed_run_resumes_from_its_packing_and_refuses_another_container() {
     succeeded(&pack(&dir, DISCS, &out), "discs");
     let before = summary_json(&out)["density"].as_f64().unwrap();
     let path = dir.join("scene.toml");
-    let resumed = ellipack()
-        .args(["pack"])
-        .arg(&path)
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .unwrap();
+    let resumed = pack_into_with(&path, &out, &["--resume"]);
     succeeded(&resumed, "resumed");
     let after = summary_json(&out)["density"].as_f64().unwrap();
     assert!(after >= before, "{after} < {before}");
@@ -354,14 +347,7 @@ fn a_jammed_run_resumes_from_its_packing_and_refuses_another_container() {
         DISCS.replace("kind = \"periodic\"", "kind = \"rectangle\""),
     )
     .unwrap();
-    let refused = ellipack()
-        .args(["pack"])
-        .arg(&path)
-        .arg("--out")
-        .arg(&out)
-        .arg("--resume")
-        .output()
-        .unwrap();
+    let refused = pack_into_with(&path, &out, &["--resume"]);
     assert_eq!(refused.status.code(), Some(1), "{}", text(&refused.stderr));
     assert!(
         text(&refused.stderr).contains("container"),
