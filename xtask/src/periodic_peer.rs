@@ -17,7 +17,7 @@
 
 use crate::error::{self, Error};
 use crate::output::{Outputs, Stability};
-use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use crate::plot::{Figure, Kind, Series, render};
 use crate::provenance::{commit, machine};
 use ellipack::pack::{RunOptions, run as pack_run};
 use ellipack::scene::Scene;
@@ -1063,18 +1063,10 @@ fn figure(points: &[Point], runs: &[RunRow]) -> Figure {
             color: k,
         });
     }
-    Figure {
-        panels: vec![Panel {
-            title: "Ellipsoids (1, 0.75, 0.5), periodic cell, one thread".into(),
-            x_label: "wall time (s), logarithmic".into(),
-            x_log: true,
-            y_label: "certified packing fraction".into(),
-            series,
-            legend: Corner::LowerRight,
-            ..Panel::default()
-        }],
-        panel_height: 640,
-    }
+    crate::plot::density_against_time(
+        "Ellipsoids (1, 0.75, 0.5), periodic cell, one thread",
+        series,
+    )
 }
 
 /// The best certified fraction of a run at `t` seconds (none before its first point).

@@ -366,6 +366,23 @@ fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, fig: &Figure) -
     root.present()
 }
 
+/// One panel of certified packing fraction against wall time (logarithmic), as the random
+/// and peer studies draw their runs.
+pub fn density_against_time(title: &str, series: Vec<Series>) -> Figure {
+    Figure {
+        panels: vec![Panel {
+            title: title.into(),
+            x_label: "wall time (s), logarithmic".into(),
+            x_log: true,
+            y_label: "certified packing fraction".into(),
+            series,
+            legend: Corner::LowerRight,
+            ..Panel::default()
+        }],
+        panel_height: 640,
+    }
+}
+
 /// Draws `fig` to `dir/base.svg` and `dir/base.png`.
 pub fn render(fig: &Figure, dir: &Path, base: &str, outputs: &mut Outputs) -> Result<(), Error> {
     register_font(&dir.join(base))?;

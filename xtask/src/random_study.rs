@@ -12,7 +12,7 @@
 
 use crate::error::Error;
 use crate::output::Outputs;
-use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
+use crate::plot::{Figure, Kind, Series, render};
 use crate::provenance::{commit, machine};
 use crate::scale::peak_rss_mib;
 use ellipack::pack::{RunOptions, run as pack_run};
@@ -154,18 +154,10 @@ fn figure(rows: &[Row], points: &[(String, f64, f64)]) -> Figure {
             color: k,
         })
         .collect();
-    Figure {
-        panels: vec![Panel {
-            title: "Random packings: density of each kept compression step".into(),
-            x_label: "wall time (s), logarithmic".into(),
-            x_log: true,
-            y_label: "certified packing fraction".into(),
-            series,
-            legend: Corner::LowerRight,
-            ..Panel::default()
-        }],
-        panel_height: 640,
-    }
+    crate::plot::density_against_time(
+        "Random packings: density of each kept compression step",
+        series,
+    )
 }
 
 fn history_csv(points: &[(String, f64, f64)]) -> String {
