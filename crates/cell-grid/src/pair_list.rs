@@ -239,9 +239,27 @@ impl<const D: usize> PairList<D> {
             }
             None => self.builder.clone().build(points)?,
         };
-        let codes = &mut self.codes;
-        codes.clear();
-        grid.for_each_close_pair(|i, j, _, _| codes.push((i as u64) << 32 | j as u64));
+        let code = |i: usize, j: usize| (i as u64) << 32 | j as u64;
+        // The pairs in any order: the counting sort and the sorted rows below make the list
+        // the same on any number of threads.
+        #[cfg(feature = "rayon")]
+        {
+            self.codes = grid.par_fold_close_pairs(
+                Vec::new,
+                |acc, i, j, _, _| acc.push(code(i, j)),
+                |mut a, mut b| {
+                    a.append(&mut b);
+                    a
+                },
+            );
+        }
+        #[cfg(not(feature = "rayon"))]
+        {
+            self.codes.clear();
+            let codes = &mut self.codes;
+            grid.for_each_close_pair(|i, j, _, _| codes.push(code(i, j)));
+        }
+        let codes = &self.codes;
         // Counting sort by first item, then each (short) row by partner.
         let m = points.len();
         self.start.clear();
@@ -380,15 +398,18 @@ impl<const D: usize> PairList<D> {
         emit(&hits[..n]);
     }
 
-    /// The rows cut into consecutive ranges of about equal numbers of listed pairs.
+    /// The rows `rows` cut into consecutive ranges of about equal numbers of listed pairs.
     #[cfg(feature = "rayon")]
-    pub(crate) fn row_chunks(&self, chunks: usize) -> Vec<Range<usize>> {
-        let m = self.start.len().saturating_sub(1);
-        let total = self.partner.len();
+    pub(crate) fn row_chunks(&self, rows: Range<usize>, chunks: usize) -> Vec<Range<usize>> {
+        if self.start.is_empty() {
+            return Vec::new();
+        }
+        let m = rows.end.min(self.start.len() - 1);
+        let mut lo = rows.start.min(m);
+        let total = self.start[m] - self.start[lo];
         // Small lists are not worth a task each.
         let per = total.div_ceil(chunks.max(1)).max(4096);
         let mut out = Vec::with_capacity(chunks + 1);
-        let mut lo = 0;
         while lo < m {
             let target = self.start[lo] + per;
             // First row that starts at or beyond the target.

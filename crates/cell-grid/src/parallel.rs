@@ -81,6 +81,12 @@ impl<const D: usize> Grid<D> {
     }
 }
 
+/// Ranges of rows a pair list's parallel folds cut the list into (fewer when it holds under
+/// 4 096 pairs a range): a constant, so that the grouping of the folds — and a sum over the
+/// ranges — depends on the list alone, never on the number of threads. Sixty-four keep eight
+/// threads busy with the ranges of unequal cost.
+const ROW_RANGES: usize = 64;
+
 impl<const D: usize> PairList<D> {
     /// Parallel [`for_each_close_pair`](Self::for_each_close_pair) as a fold: the rows of the
     /// list are cut into consecutive ranges of about equal numbers of pairs, each task folds
@@ -103,7 +109,7 @@ impl<const D: usize> PairList<D> {
         R: Fn(T, T) -> T + Sync + Send,
     {
         self.refresh(points)?;
-        let chunks = self.row_chunks(8 * rayon::current_num_threads().max(1));
+        let chunks = self.row_chunks(0..points.len(), ROW_RANGES);
         let list = &*self;
         Ok(chunks
             .into_par_iter()
@@ -121,8 +127,8 @@ impl<const D: usize> PairList<D> {
     /// its pairs, in ascending `(i, j)` order, into `states[k]` after `start(&mut states[k])`.
     ///
     /// Read in the order of `states`, the pairs come in the order of the serial scan, whatever
-    /// the scheduling: a sum over the states in order is the same on every run with the same
-    /// number of threads. The states keep their memory from call to call, so a state that
+    /// the scheduling, and the cut depends on the list alone: a sum over the states in order
+    /// is the same on every run, with any number of threads. The states keep their memory from call to call, so a state that
     /// collects pairs allocates only when a range holds more of them than ever before.
     ///
     /// # Errors
@@ -139,8 +145,30 @@ impl<const D: usize> PairList<D> {
         S: Fn(&mut T) + Sync + Send,
         G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
     {
+        self.par_fold_close_pairs_from_into(points, 0..points.len(), states, start, fold)
+    }
+
+    /// As [`par_fold_close_pairs_into`](Self::par_fold_close_pairs_into), for the pairs whose
+    /// first item `i` is in `rows` only (as
+    /// [`for_each_close_pair_from`](Self::for_each_close_pair_from)).
+    ///
+    /// # Errors
+    /// Those of [`refresh`](Self::refresh); `states` is left as it was then.
+    pub fn par_fold_close_pairs_from_into<T, S, G>(
+        &mut self,
+        points: &[[f64; D]],
+        rows: std::ops::Range<usize>,
+        states: &mut Vec<T>,
+        start: S,
+        fold: G,
+    ) -> Result<(), Error>
+    where
+        T: Send + Default,
+        S: Fn(&mut T) + Sync + Send,
+        G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
+    {
         self.refresh(points)?;
-        let chunks = self.row_chunks(8 * rayon::current_num_threads().max(1));
+        let chunks = self.row_chunks(rows, ROW_RANGES);
         states.resize_with(chunks.len(), T::default);
         let list = &*self;
         chunks

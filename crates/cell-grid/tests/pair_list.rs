@@ -235,6 +235,36 @@ fn the_parallel_fold_gives_the_serial_pairs_in_order() {
         assert!(states.len() > 1);
         assert_eq!(serial, states.concat());
     }
+
+    // From a range of rows: the serial pairs of those rows, cut the same way on one thread
+    // as on two.
+    let rows = 5_000..12_000;
+    let mut from = Vec::new();
+    list.for_each_close_pair_from(&pts, rows.clone(), |i, j, d, d2| from.push((i, j, d, d2)))
+        .expect("valid");
+    assert!(!from.is_empty() && from.iter().all(|p| rows.contains(&p.0)));
+    let cut_on = |threads: usize, list: &mut PairList<3>| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool");
+        let mut states: Vec<Vec<(usize, usize, [f64; 3], f64)>> = Vec::new();
+        pool.install(|| {
+            list.par_fold_close_pairs_from_into(
+                &pts,
+                rows.clone(),
+                &mut states,
+                Vec::clear,
+                |acc, i, j, d, d2| acc.push((i, j, d, d2)),
+            )
+        })
+        .expect("valid");
+        states
+    };
+    let (one, two) = (cut_on(1, &mut list), cut_on(2, &mut list));
+    assert!(one.len() > 1);
+    assert_eq!(one, two);
+    assert_eq!(from, one.concat());
 }
 
 proptest! {

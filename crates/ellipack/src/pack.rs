@@ -603,9 +603,12 @@ fn run_random<const N: usize>(
     local.method = LocalMethod::Compression;
     local.fixed_orientations = scene.item_fixed_orientations();
     let seed = options.seed.unwrap_or(scene.seed);
+    // One compression: the threads share its evaluations (0: every core).
+    let threads = options.threads.unwrap_or(scene.solver.threads);
     let settings = RandomSettings::new(target, seed)
         .with_local(local.clone())
-        .with_orientations(scene.item_orientations());
+        .with_orientations(scene.item_orientations())
+        .with_threads(threads);
     let time_limit = options.time_limit.unwrap_or(scene.solver.time_limit);
     let shared: &dyn Observer = &*observer;
     let mut observe = |p: &ellipsoid_packer::multistart::SolverProgress<'_>| {
@@ -619,6 +622,7 @@ fn run_random<const N: usize>(
         None => random_packing_seen(&mut problem, &dims, &settings, &mut observe, &mut kept),
         Some(packing) => {
             let fixed = (target == Target::Fraction).then_some(dims.as_slice());
+            problem.set_threads(threads)?;
             let x0 = resumed_start(&mut problem, packing, scene, fixed, axes)?;
             let aim = (target == Target::Fraction)
                 .then(|| problem.evaluate(&x0, None))

@@ -621,7 +621,8 @@ fn dilate<const N: usize>(problem: &Model<N>, x: &[f64], s: f64) -> Vec<f64> {
 }
 
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality
-/// constraints h₁ = overlap, h₂ = containment, evaluated together.
+/// constraints h₁ = overlap, h₂ = containment, evaluated together. In energy mode (a fixed
+/// container, [`Adapter::as_energy`]) the objective is h₁ + h₂ and there are no constraints.
 pub(crate) struct Adapter<'a, const N: usize> {
     model: RefCell<&'a mut Model<N>>,
     gradient: RefCell<ModelGradient>,
@@ -635,6 +636,8 @@ pub(crate) struct Adapter<'a, const N: usize> {
     fixed: Option<Vec<f64>>,
     /// Angle variables held at these values: `(variable, value)`.
     frozen: Vec<(usize, f64)>,
+    /// Energy mode: overlap + containment is the objective, unconstrained.
+    energy: bool,
 }
 
 /// A point with the overlap and containment values and the three gradients there.
@@ -665,6 +668,42 @@ impl<'a, const N: usize> Adapter<'a, N> {
             centre_bound,
             fixed,
             frozen: Vec::new(),
+            energy: false,
+        }
+    }
+
+    /// Energy mode (with a fixed container only): the sum of the overlap and containment
+    /// measures, `E = h₁ + h₂ ≥ 0` with `E = 0` exactly on packings, minimised as an objective
+    /// without constraints. The penalty of the augmented Lagrangian, `λh + ρh²/2` with λ = 0
+    /// in its first outer iteration, is quartic in the penetrations there; E is quadratic, as
+    /// the overlap energies minimised in jamming studies. On random starts of 3·10⁴ and 10⁵
+    /// ellipsoids compressed to φ = 0.6 the last placement took 751 and 1 000 inner
+    /// iterations against 901 and 1 297 with the Lagrangian.
+    pub(crate) fn as_energy(mut self, energy: bool) -> Self {
+        self.energy = energy && self.fixed.is_some();
+        self
+    }
+
+    /// E and, when asked, ∇E (see [`Adapter::as_energy`]); NaN where the model refuses `x`.
+    fn energy(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        let mut model = self.model.borrow_mut();
+        let Some(g) = grad else {
+            return model
+                .evaluate(x, None)
+                .map_or(f64::NAN, |e| e.overlap + e.containment);
+        };
+        let mut mg = self.gradient.borrow_mut();
+        match model.evaluate(x, Some(&mut mg)) {
+            Ok(e) => {
+                for ((g, o), c) in g.iter_mut().zip(&mg.overlap).zip(&mg.containment) {
+                    *g = o + c;
+                }
+                e.overlap + e.containment
+            }
+            Err(_) => {
+                g.fill(f64::NAN);
+                f64::NAN
+            }
         }
     }
 
@@ -736,10 +775,13 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn n_eq(&self) -> usize {
-        2
+        if self.energy { 0 } else { 2 }
     }
 
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
+        if self.energy {
+            return self.energy(x, grad);
+        }
         if self.fixed.is_some() {
             if let Some(g) = grad {
                 g.fill(0.0);
@@ -763,6 +805,9 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn constraints(&self, x: &[f64], c: &mut [f64]) {
+        if self.energy {
+            return;
+        }
         match self.model.borrow_mut().evaluate(x, None) {
             Ok(e) => {
                 c[0] = e.overlap;
@@ -773,6 +818,9 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn constraints_jt_times(&self, x: &[f64], w: &[f64], out: &mut [f64]) {
+        if self.energy {
+            return;
+        }
         let mut model = self.model.borrow_mut();
         let mut mg = self.gradient.borrow_mut();
         if model.evaluate(x, Some(&mut mg)).is_err() {
@@ -788,6 +836,10 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     /// trait documents: sf ∇²V v + Σᵢ [λᵢ⁺ ∇²cᵢ v + ρ sᵢ² ∇cᵢ (∇cᵢᵀ v)] over the overlap and
     /// containment constraints.
     fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
+        if self.energy {
+            // The solver's difference quotient of gradients serves the energy.
+            return false;
+        }
         let mut model = self.model.borrow_mut();
         let mut at = self.hessian_point.borrow_mut();
         if at.x != x {
@@ -830,6 +882,18 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
     }
 
     fn lagrangian(&self, x: &[f64], phr: &Phr<'_>, grad: Option<&mut [f64]>) -> Option<f64> {
+        if self.energy {
+            let sf = phr.objective_scale();
+            let value = match grad {
+                None => self.energy(x, None),
+                Some(g) => {
+                    let value = self.energy(x, Some(&mut *g));
+                    g.iter_mut().for_each(|v| *v *= sf);
+                    value
+                }
+            };
+            return Some(sf * value);
+        }
         let sf = self.objective_weight(phr);
         let mut model = self.model.borrow_mut();
         Some(match grad {

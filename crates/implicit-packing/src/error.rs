@@ -109,6 +109,14 @@ pub enum Error {
     },
     /// The neighbour grid rejected the input.
     Grid(cell_grid::Error),
+    /// The threads asked for the model's evaluations could not be started (the error is
+    /// `Clone`, so rayon's reason is kept as its message).
+    ThreadPool {
+        /// Threads asked for.
+        threads: usize,
+        /// Rayon's message.
+        reason: String,
+    },
     /// The PW85 contact function rejected a pair during certification.
     Certification {
         /// The pair `(i, j)`.
@@ -264,6 +272,10 @@ impl fmt::Display for Error {
                 short(value)
             ),
             Error::Grid(ref e) => write!(f, "neighbour grid: {e}"),
+            Error::ThreadPool {
+                threads,
+                ref reason,
+            } => write!(f, "could not start {threads} threads: {reason}"),
             Error::Certification {
                 pair: (i, j),
                 ref source,

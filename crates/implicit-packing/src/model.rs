@@ -127,6 +127,9 @@ pub struct Model<const N: usize> {
     ranges: RangeWork<N>,
     // In a periodic cell: the fractional positions, the images and their own list.
     lattice: Option<Lattice<N>>,
+    // The threads of the evaluations (`None`: rayon's global pool, or the caller's).
+    #[cfg(feature = "rayon")]
+    pool: Option<std::sync::Arc<rayon::ThreadPool>>,
 }
 
 /// The skin of the model's pair list, relative to the smallest enclosing radius: pairs
@@ -183,7 +186,33 @@ impl<const N: usize> Model<N> {
             torques: Vec::new(),
             pairs,
             ranges: RangeWork::default(),
+            #[cfg(feature = "rayon")]
+            pool: None,
         })
+    }
+
+    /// Evaluates on `threads` threads of a pool of the model's own (0: on the caller's pool,
+    /// rayon's global one by default: every core). The values and gradients are the same bits
+    /// on any number of threads: the pair sums are cut into ranges by the pair list alone and
+    /// summed in their order, the gradient scattered in the order of the pairs.
+    ///
+    /// # Errors
+    /// [`Error::ThreadPool`] when the threads cannot be started.
+    #[cfg(feature = "rayon")]
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), Error> {
+        self.pool = match threads {
+            0 => None,
+            n => Some(std::sync::Arc::new(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| Error::ThreadPool {
+                        threads: n,
+                        reason: e.to_string(),
+                    })?,
+            )),
+        };
+        Ok(())
     }
 
     /// Number of ellipsoids `m`.
@@ -241,45 +270,30 @@ impl<const N: usize> Model<N> {
         if let (Some(lattice), Container::Periodic { cell }) = (&mut self.lattice, container) {
             // The centre variables are fractional coordinates: the body sits at H s.
             lattice.fractional.clear();
-            let mut vars = [0.0; 6];
-            for (i, l) in self.semi_axes.iter().enumerate() {
-                let v = &x[i * stride..(i + 1) * stride];
-                let s: [f64; N] = std::array::from_fn(|k| v[k]);
+            for i in 0..self.semi_axes.len() {
+                let s: [f64; N] = std::array::from_fn(|k| x[i * stride + k]);
                 if let Some(k) = (0..N).find(|&k| s[k].abs() > MAX_CELLS) {
                     return Err(Error::FractionalOutOfRange {
                         index: i * stride + k,
                         value: s[k],
                     });
                 }
-                vars[..stride].copy_from_slice(v);
-                vars[..N].copy_from_slice(&crate::periodic::to_cartesian(&cell, &s));
-                let (body, spin) = make_body_and_spins(l, &vars[..stride]);
                 lattice.fractional.push(s);
-                self.bodies.push(body);
-                self.spins.push(spin);
             }
+            let fractional = &lattice.fractional;
+            let body_at = |(i, l): (usize, &[f64; N])| {
+                let mut vars = [0.0; 6];
+                vars[..stride].copy_from_slice(&x[i * stride..(i + 1) * stride]);
+                vars[..N].copy_from_slice(&crate::periodic::to_cartesian(&cell, &fractional[i]));
+                make_body_and_spins(l, &vars[..stride])
+            };
+            make_bodies(&self.semi_axes, body_at, &mut self.bodies, &mut self.spins);
             lattice.update(&cell, &self.bodies)?;
             return Ok(container);
         }
         let body_of =
             |(i, l): (usize, &[f64; N])| make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
-        #[cfg(feature = "rayon")]
-        {
-            use rayon::prelude::*;
-            self.semi_axes
-                .par_iter()
-                .enumerate()
-                .map(body_of)
-                .unzip_into_vecs(&mut self.bodies, &mut self.spins);
-        }
-        #[cfg(not(feature = "rayon"))]
-        {
-            let (bodies, spins) = (&mut self.bodies, &mut self.spins);
-            for (body, spin) in self.semi_axes.iter().enumerate().map(body_of) {
-                bodies.push(body);
-                spins.push(spin);
-            }
-        }
+        make_bodies(&self.semi_axes, body_of, &mut self.bodies, &mut self.spins);
         self.centres.extend(self.bodies.iter().map(|b| b.centre()));
         Ok(container)
     }
@@ -291,6 +305,19 @@ impl<const N: usize> Model<N> {
     /// NaN or infinite variable (or a centre coordinate beyond `1e30`),
     /// [`Error::InvalidContainer`] for a non-positive container dimension.
     pub fn evaluate(
+        &mut self,
+        x: &[f64],
+        gradient: Option<&mut ModelGradient>,
+    ) -> Result<Evaluation, Error> {
+        #[cfg(feature = "rayon")]
+        if let Some(pool) = self.pool.clone() {
+            return pool.install(|| self.evaluate_here(x, gradient));
+        }
+        self.evaluate_here(x, gradient)
+    }
+
+    /// [`Model::evaluate`] on the current thread's pool.
+    fn evaluate_here(
         &mut self,
         x: &[f64],
         gradient: Option<&mut ModelGradient>,
@@ -648,18 +675,24 @@ struct PeriodicSums<'a, const N: usize> {
 }
 
 impl<const N: usize> PeriodicSums<'_, N> {
+    #[cfg(not(feature = "rayon"))]
     fn add(&mut self, owner: &[u32], a: usize, b: usize, &(f, ref g): &Term<N>) {
         if f > 0.0 {
             self.sum += f;
-            for k in 0..N {
-                self.forces[a][k] += g.centre_i[k];
-                self.forces[b][k] += g.centre_j[k];
-            }
-            let (oa, ob) = (owner[a] as usize, owner[b] as usize);
-            for k in 0..3 {
-                self.torques[oa][k] += g.torque_i[k];
-                self.torques[ob][k] += g.torque_j[k];
-            }
+            self.add_gradient(owner, a, b, g);
+        }
+    }
+
+    /// The forces of a pair term on its two points, its torques on their owners.
+    fn add_gradient(&mut self, owner: &[u32], a: usize, b: usize, g: &PairGradient<N>) {
+        for k in 0..N {
+            self.forces[a][k] += g.centre_i[k];
+            self.forces[b][k] += g.centre_j[k];
+        }
+        let (oa, ob) = (owner[a] as usize, owner[b] as usize);
+        for k in 0..3 {
+            self.torques[oa][k] += g.torque_i[k];
+            self.torques[ob][k] += g.torque_j[k];
         }
     }
 }
@@ -685,15 +718,7 @@ impl<const N: usize> Model<N> {
         let lattice = self.lattice.as_mut().ok_or(Error::Empty)?;
         match gradient {
             None => {
-                let mut queue = KernelQueue::<N, ValueOnly>::default();
-                let mut sum = 0.0;
-                let mut emit = |_: usize, _: usize, &f: &f64| sum += f;
-                lattice.for_each_pair(|(bodies, _), a, b| {
-                    ev.pairs += 1;
-                    queue.push(bodies, a, b, &mut emit);
-                })?;
-                queue.flush(lattice.points().0, &mut emit);
-                ev.overlap = sum;
+                (ev.overlap, ev.pairs) = periodic_pair_value(lattice, &mut self.ranges)?;
             }
             Some(g) => {
                 g.reset(n);
@@ -723,13 +748,46 @@ impl<const N: usize> Model<N> {
         };
         acc.torques.clear();
         acc.torques.resize(m, [0.0; 3]);
-        let mut queue = KernelQueue::<N, WithGradient>::default();
-        lattice.for_each_pair(|(bodies, owner), a, b| {
-            *pairs += 1;
-            queue.push(bodies, a, b, &mut |a, b, t| acc.add(owner, a, b, t));
-        })?;
-        let (bodies, owner) = lattice.points();
-        queue.flush(bodies, &mut |a, b, t| acc.add(owner, a, b, t));
+        #[cfg(not(feature = "rayon"))]
+        let owner = {
+            let mut queue = KernelQueue::<N, WithGradient>::default();
+            lattice.for_each_pair(|(bodies, owner), a, b| {
+                *pairs += 1;
+                queue.push(bodies, a, b, &mut |a, b, t| acc.add(owner, a, b, t));
+            })?;
+            let (bodies, owner) = lattice.points();
+            queue.flush(bodies, &mut |a, b, t| acc.add(owner, a, b, t));
+            owner
+        };
+        #[cfg(feature = "rayon")]
+        let owner = {
+            let ranges = &mut self.ranges.gradients;
+            lattice.par_fold_pairs_into(
+                ranges,
+                |s| {
+                    s.kept.0 = 0.0;
+                    s.kept.1 = 0;
+                    s.kept.2.clear();
+                },
+                |s, (bodies, _), a, b| {
+                    let RangeShare { kept, queue } = s;
+                    kept.1 += 1;
+                    queue.push(bodies, a, b, &mut keep(kept));
+                },
+            )?;
+            // Serial, in the order of the ranges: each point's force and each item's torque
+            // summed in the order of the serial scan, on any number of threads.
+            let (bodies, owner) = lattice.points();
+            for RangeShare { kept, queue } in ranges.iter_mut() {
+                queue.flush(bodies, &mut keep(kept));
+                for (a, b, g) in &kept.2 {
+                    acc.add_gradient(owner, *a, *b, g);
+                }
+                acc.sum += kept.0;
+                *pairs += kept.1;
+            }
+            owner
+        };
         // ∂/∂s_i = Hᵀ Σ_e F_e and ∂/∂H_ab = Σ_e F_e,a u_e,b (module `periodic`).
         let mut item_force = vec![[0.0; N]; m];
         let mut dcell = [[0.0; N]; N];
@@ -856,6 +914,46 @@ impl<const N: usize> Model<N> {
             }
         }
         sum
+    }
+}
+
+/// Σf over the representative pairs of a periodic cell's points, and their number: on rayon's
+/// pool range by range with the `rayon` feature (the same sum on any number of threads).
+fn periodic_pair_value<const N: usize>(
+    lattice: &mut crate::periodic::Lattice<N>,
+    #[cfg_attr(not(feature = "rayon"), allow(unused_variables))] ranges: &mut RangeWork<N>,
+) -> Result<(f64, usize), Error> {
+    #[cfg(not(feature = "rayon"))]
+    {
+        let (mut sum, mut count) = (0.0, 0);
+        let mut queue = KernelQueue::<N, ValueOnly>::default();
+        let mut emit = |_: usize, _: usize, &f: &f64| sum += f;
+        lattice.for_each_pair(|(bodies, _), a, b| {
+            count += 1;
+            queue.push(bodies, a, b, &mut emit);
+        })?;
+        queue.flush(lattice.points().0, &mut emit);
+        Ok((sum, count))
+    }
+    #[cfg(feature = "rayon")]
+    {
+        lattice.par_fold_pairs_into(
+            &mut ranges.values,
+            |s| s.kept = (0.0, 0, ()),
+            |s, (bodies, _), a, b| {
+                let RangeShare { kept, queue } = s;
+                kept.1 += 1;
+                queue.push(bodies, a, b, &mut |_, _, &f| kept.0 += f);
+            },
+        )?;
+        let bodies = lattice.points().0;
+        let (mut sum, mut count) = (0.0, 0);
+        for RangeShare { kept, queue } in &mut ranges.values {
+            queue.flush(bodies, &mut |_, _, &f| kept.0 += f);
+            sum += kept.0;
+            count += kept.1;
+        }
+        Ok((sum, count))
     }
 }
 
@@ -1169,6 +1267,32 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
             acc.0 += f;
             acc.2.push((i, j, *g));
         }
+    }
+}
+
+/// The bodies and spins of the items, `body_of((i, l_i))` each, appended in order: on
+/// rayon's pool with the feature, in tasks of at least [`BODIES_PER_TASK`] items (a small
+/// model never waits for the pool).
+fn make_bodies<const N: usize>(
+    semi_axes: &[[f64; N]],
+    body_of: impl Fn((usize, &[f64; N])) -> (Body<N>, [f64; 2]) + Sync + Send,
+    bodies: &mut Vec<Body<N>>,
+    spins: &mut Vec<[f64; 2]>,
+) {
+    #[cfg(feature = "rayon")]
+    {
+        use rayon::prelude::*;
+        semi_axes
+            .par_iter()
+            .with_min_len(BODIES_PER_TASK)
+            .enumerate()
+            .map(body_of)
+            .unzip_into_vecs(bodies, spins);
+    }
+    #[cfg(not(feature = "rayon"))]
+    for (body, spin) in semi_axes.iter().enumerate().map(body_of) {
+        bodies.push(body);
+        spins.push(spin);
     }
 }
 

@@ -299,6 +299,10 @@ fn next_in_box<const N: usize>(n: &mut [i32; N], lo: &[i32; N], hi: &[i32; N]) -
     false
 }
 
+/// Points (items and images) placed per rayon task at least.
+#[cfg(feature = "rayon")]
+const POINTS_PER_TASK: usize = 4096;
+
 /// The model's workspace in a periodic cell: the items' fractional positions, their images,
 /// the bodies at every point and a Verlet list over them.
 ///
@@ -356,14 +360,29 @@ impl<const N: usize> Lattice<N> {
         if self.needs_build(cell, bodies) {
             self.build(cell, bodies)?;
         }
-        self.extended.clear();
-        self.points.clear();
-        for e in 0..self.images.owner.len() {
-            let b = &bodies[self.images.owner[e] as usize];
-            let c = to_cartesian(cell, &self.images.fractional(e, &self.fractional));
-            self.extended
-                .push(Body::from_parts_unchecked(c, b.semi_axes(), b.rotation()));
-            self.points.push(c);
+        let (images, fractional) = (&self.images, &self.fractional);
+        let point = |e: usize| {
+            let b = &bodies[images.owner[e] as usize];
+            let c = to_cartesian(cell, &images.fractional(e, fractional));
+            (Body::from_parts_unchecked(c, b.semi_axes(), b.rotation()), c)
+        };
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            (0..images.owner.len())
+                .into_par_iter()
+                .with_min_len(POINTS_PER_TASK)
+                .map(point)
+                .unzip_into_vecs(&mut self.extended, &mut self.points);
+        }
+        #[cfg(not(feature = "rayon"))]
+        {
+            self.extended.clear();
+            self.points.clear();
+            for (body, c) in (0..images.owner.len()).map(point) {
+                self.extended.push(body);
+                self.points.push(c);
+            }
         }
         Ok(())
     }
@@ -415,6 +434,7 @@ impl<const N: usize> Lattice<N> {
     /// Calls `f(points, a, b)` for every representative pair of points `(a, b)` whose
     /// enclosing balls meet (see the module documentation), in ascending `(a, b)`, with the
     /// bodies and owners of the points.
+    #[cfg(not(feature = "rayon"))]
     pub(crate) fn for_each_pair(
         &mut self,
         mut f: impl FnMut(Points<'_, N>, usize, usize),
@@ -430,6 +450,40 @@ impl<const N: usize> Lattice<N> {
                 })
                 .map_err(Error::Grid),
             None => Ok(()),
+        }
+    }
+
+    /// [`Lattice::for_each_pair`] on rayon's pool: the item rows of the list cut into ranges
+    /// (cell-grid's `par_fold_close_pairs_from_into`, a cut that depends on the list alone),
+    /// range `k` folding its representative pairs, in ascending `(a, b)`, into `states[k]`
+    /// after `start(&mut states[k])`. Read in the order of `states`, the pairs come in the
+    /// order of [`Lattice::for_each_pair`], on any number of threads.
+    #[cfg(feature = "rayon")]
+    pub(crate) fn par_fold_pairs_into<T: Send + Default>(
+        &mut self,
+        states: &mut Vec<T>,
+        start: impl Fn(&mut T) + Sync + Send,
+        fold: impl Fn(&mut T, Points<'_, N>, usize, usize) + Sync + Send,
+    ) -> Result<(), Error> {
+        let (images, points, bodies) = (&self.images, &self.points, &self.extended);
+        match &mut self.list {
+            Some(list) => list
+                .par_fold_close_pairs_from_into(
+                    points,
+                    0..images.items,
+                    states,
+                    start,
+                    |state, a, b, _, _| {
+                        if images.is_representative(a, b) {
+                            fold(state, (bodies, &images.owner), a, b);
+                        }
+                    },
+                )
+                .map_err(Error::Grid),
+            None => {
+                states.clear();
+                Ok(())
+            }
         }
     }
 
