@@ -210,25 +210,15 @@ impl<const D: usize> PairList<D> {
             return false;
         }
         let h2 = self.allowed2;
-        // No early exit: the common answer is "valid", and the loop without a branch per item
-        // vectorises.
-        let mut valid = true;
-        if grid.any_periodic {
-            for (p, r) in points.iter().zip(&self.reference) {
-                let d = grid.min_image(*r, *p);
-                valid &= dot(&d, &d) <= h2;
-            }
-        } else {
-            for (p, r) in points.iter().zip(&self.reference) {
-                let mut s = 0.0;
-                for k in 0..D {
-                    let t = p[k] - r[k];
-                    s += t * t;
-                }
-                valid &= s <= h2;
-            }
+        #[cfg(feature = "rayon")]
+        if points.len() >= 2 * POINTS_PER_TASK {
+            use rayon::prelude::*;
+            return points
+                .par_chunks(POINTS_PER_TASK)
+                .zip(self.reference.par_chunks(POINTS_PER_TASK))
+                .all(|(p, r)| moved_within(grid, p, r, h2));
         }
-        valid
+        moved_within(grid, points, &self.reference, h2)
     }
 
     fn rebuild(&mut self, points: &[[f64; D]]) -> Result<(), Error> {
@@ -421,6 +411,38 @@ impl<const D: usize> PairList<D> {
         out
     }
 }
+
+/// Whether every point is within `√h2` of its reference (minimum image on periodic axes).
+/// No early exit: the common answer is "valid", and the loop without a branch per item
+/// vectorises.
+fn moved_within<const D: usize>(
+    grid: &Grid<D>,
+    points: &[[f64; D]],
+    reference: &[[f64; D]],
+    h2: f64,
+) -> bool {
+    let mut valid = true;
+    if grid.any_periodic {
+        for (p, r) in points.iter().zip(reference) {
+            let d = grid.min_image(*r, *p);
+            valid &= dot(&d, &d) <= h2;
+        }
+    } else {
+        for (p, r) in points.iter().zip(reference) {
+            let mut s = 0.0;
+            for k in 0..D {
+                let t = p[k] - r[k];
+                s += t * t;
+            }
+            valid &= s <= h2;
+        }
+    }
+    valid
+}
+
+/// Points per rayon task of the displacement test (two tasks' worth at least to split).
+#[cfg(feature = "rayon")]
+const POINTS_PER_TASK: usize = 8192;
 
 /// Buffered candidates per scan before `f` runs.
 const BATCH: usize = 64;

@@ -311,7 +311,9 @@ impl<'a> Placer<'a> {
     /// whose point a dilation by at most `enough` makes a packing — in energy mode, whose
     /// single long outer iteration would otherwise run to its cap, also at inner iterations
     /// 10, 20, 32, … (a fifth more each time, so that the certificates cost a few percent of
-    /// the placement). A placement the observer stopped is returned as it is, solved.
+    /// the placement) and whenever the energy has halved since the last try (it falls by
+    /// orders of magnitude in a placement's last tenth). A placement the observer stopped
+    /// is returned as it is, solved.
     fn place<const N: usize>(
         &mut self,
         problem: &mut Model<N>,
@@ -324,7 +326,9 @@ impl<'a> Placer<'a> {
             .as_energy(self.energy);
         let mut stall = Stall::new(self.options.max_inner_iterations, self.energy);
         let mut early = None;
-        let mut next_check = self.energy.then_some(FIRST_INNER_CHECK);
+        // Energy placements: the next inner iteration to try the point at, and the energy
+        // at the last try.
+        let mut next_check = self.energy.then_some((FIRST_INNER_CHECK, f64::INFINITY));
         let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
         let solution =
             auglag::minimize_with_callback(&adapter, x, &self.options, |p: &Progress<'_>| {
@@ -335,8 +339,11 @@ impl<'a> Placer<'a> {
                 // A point good enough is kept even where the fall would say stall.
                 let check = match (p.event, next_check.as_mut()) {
                     (Event::Outer { .. }, _) => true,
-                    (Event::Inner { .. }, Some(next)) if p.total_inner_iterations >= *next => {
+                    (Event::Inner { merit, .. }, Some((next, at)))
+                        if p.total_inner_iterations >= *next || merit <= 0.5 * *at =>
+                    {
                         *next = p.total_inner_iterations + (p.total_inner_iterations / 5).max(10);
+                        *at = merit;
                         true
                     }
                     _ => false,

@@ -50,9 +50,9 @@ pub const START_FRACTION_3D: f64 = 0.2;
 /// The largest relative shrink δ of the container's linear size in one compression step
 /// toward a packing fraction (jammed runs keep the settings' own, 0.02 by default). From a
 /// random start most of the way costs a few iterations a step: 10⁴ ellipsoids (1, 0.75, 0.5)
-/// went from φ = 0.2 to 0.53 in six steps and 173 inner iterations with δ up to 0.08, in
-/// sixteen steps and 411 inner iterations with δ up to 0.02; δ up to 0.12 lost a step given
-/// up at 1 712 iterations.
+/// went from φ = 0.2 to 0.53 in six steps and 142 inner iterations with δ up to 0.08, to
+/// 0.52 in sixteen steps and 360 inner iterations with δ up to 0.02 (placements by the
+/// augmented Lagrangian); δ up to 0.12 lost a step given up after 1 712 iterations.
 pub const LARGEST_STEP_TO_A_FRACTION: f64 = 0.08;
 /// Attempts per item before the start is tried again in a container twice as large.
 pub const ATTEMPTS_PER_ITEM: usize = 10_000;
