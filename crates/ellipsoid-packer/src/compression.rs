@@ -282,19 +282,20 @@ impl<'a> Placer<'a> {
         let tolerance = settings
             .polish_tolerance
             .unwrap_or(settings.feasibility_tolerance);
+        let outer = settings
+            .max_outer_iterations
+            .min(PLACEMENT_OUTER_ITERATIONS);
+        let inner = settings
+            .max_inner_iterations
+            .min(PLACEMENT_INNER_ITERATIONS);
+        // An energy placement is one unconstrained minimisation, which ends at its inner
+        // cap: it gets the budget of all the outer iterations of a Lagrangian one.
+        let inner = if energy { inner * outer } else { inner };
         let limits = settings
             .clone()
             .with_optimality_tolerance(PLACEMENT_OPTIMALITY)
-            .with_max_inner_iterations(
-                settings
-                    .max_inner_iterations
-                    .min(PLACEMENT_INNER_ITERATIONS),
-            )
-            .with_max_outer_iterations(
-                settings
-                    .max_outer_iterations
-                    .min(PLACEMENT_OUTER_ITERATIONS),
-            );
+            .with_max_inner_iterations(inner)
+            .with_max_outer_iterations(outer);
         Self {
             options: solver_options(&limits, tolerance),
             energy,

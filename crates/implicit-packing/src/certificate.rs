@@ -160,13 +160,65 @@ fn certify_periodic<const N: usize>(
     Ok(cert)
 }
 
+/// What the PW85 calls of a set of pairs found: the count, the least μ², the overlaps and
+/// the refused pair with the least items. Every part is independent of the order the pairs
+/// come in, so that the pairs may be split over threads.
+#[derive(Default)]
+struct Verdicts {
+    checked: usize,
+    min_mu2: Option<f64>,
+    overlapping: Vec<Overlap>,
+    failure: Option<((usize, usize), pw85::Error)>,
+}
+
+impl Verdicts {
+    fn add<const N: usize>(&mut self, bodies: &[Body<N>], (a, b): (usize, usize), (i, j): (usize, usize)) {
+        self.checked += 1;
+        match contact(&bodies[a], &bodies[b]) {
+            Ok(c) => {
+                self.min_mu2 = Some(self.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
+                if c.mu2 < 1.0 {
+                    self.overlapping.push(Overlap {
+                        items: (i.min(j), i.max(j)),
+                        mu2: c.mu2,
+                    });
+                }
+            }
+            Err(e) => {
+                let items = (i.min(j), i.max(j));
+                if self.failure.as_ref().is_none_or(|(least, _)| items < *least) {
+                    self.failure = Some((items, e));
+                }
+            }
+        }
+    }
+
+    /// Both sets of verdicts as one.
+    #[cfg_attr(not(feature = "rayon"), allow(dead_code))]
+    fn merged(mut self, other: Self) -> Self {
+        self.checked += other.checked;
+        self.min_mu2 = match (self.min_mu2, other.min_mu2) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        self.overlapping.extend(other.overlapping);
+        if let Some((items, e)) = other.failure
+            && self.failure.as_ref().is_none_or(|(least, _)| items < *least)
+        {
+            self.failure = Some((items, e));
+        }
+        self
+    }
+}
+
 /// PW85 on the pairs of `bodies` whose enclosing balls meet, into `cert`: the count, the least
 /// μ² and the overlaps (sorted). `pair` maps a close pair of bodies to the bodies to compare
-/// and the items they stand for, or skips it (`None`). The first pair PW85 refuses is the
-/// error.
+/// and the items they stand for, or skips it (`None`). The refused pair with the least items
+/// is the error. With the `rayon` feature the pairs are split over the current pool's
+/// threads; the certificate is the same on any number.
 fn check_close_pairs<const N: usize>(
     bodies: &[Body<N>],
-    pair: impl Fn(usize, usize) -> Option<((usize, usize), (usize, usize))>,
+    pair: impl Fn(usize, usize) -> Option<((usize, usize), (usize, usize))> + Sync + Send,
     cert: &mut Certificate,
 ) -> Result<(), Error> {
     let centres: Vec<[f64; N]> = bodies.iter().map(Body::centre).collect();
@@ -174,33 +226,35 @@ fn check_close_pairs<const N: usize>(
     let grid = cell_grid::Grid::<N>::with_radii(&radii)
         .build(&centres)
         .map_err(Error::Grid)?;
-    let mut failure = None;
-    grid.for_each_close_pair(|a, b, _, _| {
-        let Some(((a, b), (i, j))) = pair(a, b) else {
-            return;
-        };
-        cert.pairs_checked += 1;
-        match contact(&bodies[a], &bodies[b]) {
-            Ok(c) => {
-                cert.min_mu2 = Some(cert.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
-                if c.mu2 < 1.0 {
-                    cert.overlapping.push(Overlap {
-                        items: (i.min(j), i.max(j)),
-                        mu2: c.mu2,
-                    });
-                }
-            }
-            Err(e) => {
-                failure.get_or_insert(Error::Certification {
-                    pair: (i, j),
-                    source: e,
-                });
-            }
+    let fold = |v: &mut Verdicts, a: usize, b: usize| {
+        if let Some((bodies_ab, items)) = pair(a, b) {
+            v.add(bodies, bodies_ab, items);
         }
-    });
-    if let Some(e) = failure {
-        return Err(e);
+    };
+    #[cfg(feature = "rayon")]
+    let verdicts = grid.par_fold_close_pairs(
+        Verdicts::default,
+        |v, a, b, _, _| fold(v, a, b),
+        Verdicts::merged,
+    );
+    #[cfg(not(feature = "rayon"))]
+    let verdicts = {
+        let mut v = Verdicts::default();
+        grid.for_each_close_pair(|a, b, _, _| fold(&mut v, a, b));
+        v
+    };
+    if let Some(((i, j), source)) = verdicts.failure {
+        return Err(Error::Certification {
+            pair: (i, j),
+            source,
+        });
     }
+    cert.pairs_checked += verdicts.checked;
+    cert.min_mu2 = match (cert.min_mu2, verdicts.min_mu2) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
+    cert.overlapping.extend(verdicts.overlapping);
     // Items pair once each in a container; in a periodic cell two items may overlap through
     // several images, ordered by μ².
     cert.overlapping
@@ -228,16 +282,25 @@ pub(crate) fn periodic_images<const N: usize>(
         2.0 * r_max + skin,
         image_limit(bodies.len()),
     )?;
-    let extended = (0..images.owner.len())
-        .map(|e| {
-            let b = &bodies[images.owner[e] as usize];
-            Body::from_parts_unchecked(
-                to_cartesian(cell, &images.fractional(e, &fractional)),
-                b.semi_axes(),
-                b.rotation(),
-            )
-        })
-        .collect();
+    let point = |e: usize| {
+        let b = &bodies[images.owner[e] as usize];
+        Body::from_parts_unchecked(
+            to_cartesian(cell, &images.fractional(e, &fractional)),
+            b.semi_axes(),
+            b.rotation(),
+        )
+    };
+    #[cfg(feature = "rayon")]
+    let extended = {
+        use rayon::prelude::*;
+        (0..images.owner.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(point)
+            .collect()
+    };
+    #[cfg(not(feature = "rayon"))]
+    let extended = (0..images.owner.len()).map(point).collect();
     Ok((images, extended))
 }
 

@@ -569,6 +569,15 @@ impl<const N: usize> Model<N> {
     /// # Errors
     /// Those of [`Model::evaluate`], and those of [`crate::certificate::certify`].
     pub fn certify(&mut self, x: &[f64]) -> Result<Certificate, Error> {
+        #[cfg(feature = "rayon")]
+        if let Some(pool) = self.pool.clone() {
+            return pool.install(|| self.certify_here(x));
+        }
+        self.certify_here(x)
+    }
+
+    /// [`Model::certify`] on the current thread's pool.
+    fn certify_here(&mut self, x: &[f64]) -> Result<Certificate, Error> {
         let container = self.load(x)?;
         crate::certificate::certify(&self.bodies, &container)
     }
