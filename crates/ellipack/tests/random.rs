@@ -314,6 +314,37 @@ fn polydisperse_aligned_ellipses_jam_certified_and_fixed_ones_keep_their_order()
 }
 
 /// The scenes of docs/random.md's table parse and ask for random packings.
+/// Kanapy's documented example (`validation/peers/kanapy`: 86 grains of lognormal sizes and
+/// aspect ratios up to 3.2 in a periodic 40³ box at its fill fraction 0.64389): Kanapy's
+/// own packing overlaps (199 pairs by `verify`), and the same items pack certified at that
+/// fraction, in the same box.
+#[test]
+fn kanapys_example_items_pack_certified_at_its_fill_fraction() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../validation/peers/kanapy");
+    let dir = temp_dir("random-kanapy");
+    let out = dir.join("out");
+    succeeded(
+        &pack_into_with(&folder.join("scene.toml"), &out, &["--threads", "1"]),
+        "kanapy scene: ",
+    );
+    let summary = summary_json(&out);
+    assert_eq!(summary["items"].as_u64(), Some(86));
+    let found = summary["density"].as_f64().unwrap();
+    assert!((found - 0.6438889950839803).abs() < 1e-12, "{found}");
+    let lengths = summary["container"]["lengths"].as_array().unwrap();
+    assert!(lengths.iter().all(|l| (l.as_f64().unwrap() - 40.0).abs() < 1e-9));
+    let verified = succeeded(&ellipack().arg("verify").arg(&out).output().unwrap(), "verify");
+    assert!(verified.contains("0 overlapping pairs"), "{verified}");
+    let theirs = ellipack()
+        .arg("verify")
+        .arg(folder.join("kanapy-packing.csv"))
+        .args(["--container", "periodic", "--size", "40,40,40"])
+        .output()
+        .unwrap();
+    assert!(!theirs.status.success());
+    assert!(text(&theirs.stdout).contains("199 overlapping pairs"));
+}
+
 #[test]
 fn the_study_scenes_are_random_packings() {
     let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../validation/random");
