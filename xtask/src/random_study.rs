@@ -6,13 +6,15 @@
 //! Rows are kept by scene in `validation/random.csv` (a run replaces the rows of the scenes it
 //! ran), with each run's density after every kept compression step in
 //! `validation/random_history.csv`; the table between the markers of `docs/random.md` and the
-//! figure `docs/figures/random-density-time.{svg,png}` are drawn from every row. The
+//! figures `docs/figures/random-density-time.{svg,png}` (every row) and
+//! `docs/figures/random-time-items.{svg,png}` (the ellipsoids (1, 0.75, 0.5): wall time and
+//! peak memory against their number, at φ = 0.6 and jammed) are drawn from the rows. The
 //! scenes run in order of their item count, so that the peak memory of the process after each
 //! run (it only grows) is that run's.
 
 use crate::error::Error;
 use crate::output::Outputs;
-use crate::plot::{Figure, Kind, Series, render};
+use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::provenance::{commit, machine};
 use crate::scale::peak_rss_mib;
 use ellipack::pack::{RunOptions, run as pack_run};
@@ -130,12 +132,58 @@ pub fn run(root: &Path, options: &Options) -> Result<(), Error> {
     };
     std::fs::write(&doc, spliced).map_err(|e| study(e.to_string()))?;
     let mut outputs = Outputs::new(false);
+    let figures = root.join("docs/figures");
     render(
         &figure(&rows, &points),
-        &root.join("docs/figures"),
+        &figures,
         "random-density-time",
         &mut outputs,
-    )
+    )?;
+    render(&scaling(&rows), &figures, "random-time-items", &mut outputs)
+}
+
+/// The scenes of the scaling figure: ellipsoids (1, 0.75, 0.5), named `ellipsoids-m` (jammed)
+/// and `ellipsoids-m-060` (φ = 0.6).
+const SCALING_SCENES: &str = "ellipsoids-";
+
+/// Wall time and peak memory against the number of ellipsoids (1, 0.75, 0.5), log–log: one
+/// line at φ = 0.6, one jammed.
+fn scaling(rows: &[Row]) -> Figure {
+    let line = |jammed: bool, value: fn(&Row) -> f64, color: usize| Series {
+        name: if jammed { "jammed" } else { "φ = 0.6" }.into(),
+        points: rows
+            .iter()
+            .filter(|r| r.scene.starts_with(SCALING_SCENES) && (r.target == "jammed") == jammed)
+            .map(|r| (r.items as f64, value(r)))
+            .collect(),
+        kind: Kind::LinePoints,
+        color,
+    };
+    let panel = |title: &str, y_label: &str, value: fn(&Row) -> f64| Panel {
+        title: title.into(),
+        x_label: "ellipsoids (1, 0.75, 0.5) in a periodic cube, logarithmic".into(),
+        x_log: true,
+        y_label: y_label.into(),
+        y_log: true,
+        series: vec![line(false, value, 0), line(true, value, 1)],
+        legend: Corner::UpperLeft,
+        ..Panel::default()
+    };
+    Figure {
+        panels: vec![
+            panel(
+                "Random packings: wall time of the whole run (start, compression, certificate)",
+                "wall time (s), logarithmic",
+                |r| r.seconds,
+            ),
+            panel(
+                "Random packings: peak memory of the process",
+                "peak memory (MiB), logarithmic",
+                |r| r.peak_mib,
+            ),
+        ],
+        panel_height: 480,
+    }
 }
 
 /// Density against time of every scene's run: one line per scene, log time.
