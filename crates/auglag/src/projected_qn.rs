@@ -33,7 +33,7 @@
 //!   simplifies: no generalized Cauchy point, the active set comes from the ε-rule instead).
 
 use crate::inner::{Acceptance, InnerStatus, Iterate, Method, Smooth, line_search};
-use crate::projection::{dot, norm_inf};
+use crate::projection::{axpy_dot, dot, for_each_entry, norm_inf};
 
 /// Upper limit ε̄ of the ε-active-set rule.
 const ACTIVE_EPSILON: f64 = 1e-3;
@@ -262,7 +262,7 @@ impl LbfgsWorkspace {
                 let a = rho[slot] * sq;
                 alpha[slot] = a;
                 let next = usable.get(k + 1).map_or(y_of(slot), |&next| s_of(next));
-                sq = simd::axpy_dot(q, -a, y_of(slot), next);
+                sq = axpy_dot(q, -a, y_of(slot), next);
                 sq -= correct_at(q, next, active);
             }
             y_oldest_q = sq;
@@ -272,7 +272,7 @@ impl LbfgsWorkspace {
             let gn = norm_inf(q);
             if gn > 1.0 { 1.0 / gn } else { 1.0 }
         });
-        q.iter_mut().for_each(|qi| *qi *= gamma);
+        for_each_entry(q, |qi| *qi *= gamma);
         // Second loop, oldest to newest: βⱼ = ρⱼ yⱼᵀq, q ← q + (αⱼ − βⱼ) sⱼ.
         if !usable.is_empty() {
             let mut yq = gamma * y_oldest_q;
@@ -280,11 +280,11 @@ impl LbfgsWorkspace {
                 let slot = usable[k];
                 let c = alpha[slot] - rho[slot] * yq;
                 let next = k.checked_sub(1).map_or(s_of(slot), |k| y_of(usable[k]));
-                yq = simd::axpy_dot(q, c, s_of(slot), next);
+                yq = axpy_dot(q, c, s_of(slot), next);
                 yq -= correct_at(q, next, active);
             }
         }
-        q.iter_mut().for_each(|v| *v = -*v);
+        for_each_entry(q, |v| *v = -*v);
         !usable.is_empty()
     }
 
@@ -354,7 +354,7 @@ impl LbfgsWorkspace {
             let gn = norm_inf(q);
             if gn > 1.0 { 1.0 / gn } else { 1.0 }
         });
-        q.iter_mut().for_each(|qi| *qi *= gamma);
+        for_each_entry(q, |qi| *qi *= gamma);
         for j in (0..self.stored).rev() {
             let slot = self.slot(j);
             if self.rho[slot] == 0.0 {
@@ -369,7 +369,7 @@ impl LbfgsWorkspace {
                 *qi += c * si * fi;
             }
         }
-        self.direction.iter_mut().for_each(|v| *v = -*v);
+        for_each_entry(&mut self.direction, |v| *v = -*v);
         used
     }
 }

@@ -248,7 +248,7 @@ fn the_parallel_fold_gives_the_serial_pairs_in_order() {
             .num_threads(threads)
             .build()
             .expect("a pool");
-        let mut states: Vec<Vec<(usize, usize, [f64; 3], f64)>> = Vec::new();
+        let mut states: Vec<Reported<3>> = Vec::new();
         pool.install(|| {
             list.par_fold_close_pairs_from_into(
                 &pts,

@@ -39,7 +39,8 @@ pub struct PackArgs {
     /// Seed of the multi-start perturbations (overrides the scene's).
     #[arg(long)]
     seed: Option<u64>,
-    /// Parallel starts (overrides the scene's; 0: every core).
+    /// Threads (overrides the scene's; 0: every core): parallel starts, or the evaluations of a
+    /// random packing's one compression.
     #[arg(long)]
     threads: Option<usize>,
     /// Start from the packing already in the output folder.

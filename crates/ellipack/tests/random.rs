@@ -332,8 +332,15 @@ fn kanapys_example_items_pack_certified_at_its_fill_fraction() {
     let found = summary["density"].as_f64().unwrap();
     assert!((found - 0.6438889950839803).abs() < 1e-12, "{found}");
     let lengths = summary["container"]["lengths"].as_array().unwrap();
-    assert!(lengths.iter().all(|l| (l.as_f64().unwrap() - 40.0).abs() < 1e-9));
-    let verified = succeeded(&ellipack().arg("verify").arg(&out).output().unwrap(), "verify");
+    assert!(
+        lengths
+            .iter()
+            .all(|l| (l.as_f64().unwrap() - 40.0).abs() < 1e-9)
+    );
+    let verified = succeeded(
+        &ellipack().arg("verify").arg(&out).output().unwrap(),
+        "verify",
+    );
     assert!(verified.contains("0 overlapping pairs"), "{verified}");
     let theirs = ellipack()
         .arg("verify")

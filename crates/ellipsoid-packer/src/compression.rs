@@ -264,7 +264,7 @@ impl Schedule {
 /// whether the observer stopped one (which ends the run).
 struct Placer<'a> {
     options: auglag::Options,
-    /// Whether placements minimise the overlap energy ([`Adapter::as_energy`]) rather than
+    /// Whether placements minimise the overlap energy ([`Adapter::in_energy_mode`]) rather than
     /// solve the augmented Lagrangian of the feasibility problem.
     energy: bool,
     fixed_orientations: Vec<bool>,
@@ -324,7 +324,7 @@ impl<'a> Placer<'a> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
         let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container))
             .with_frozen_orientations(&self.fixed_orientations, x)
-            .as_energy(self.energy);
+            .in_energy_mode(self.energy);
         let mut stall = Stall::new(self.options.max_inner_iterations, self.energy);
         let mut early = None;
         // Energy placements: the next inner iteration to try the point at, and the energy

@@ -622,7 +622,7 @@ fn dilate<const N: usize>(problem: &Model<N>, x: &[f64], s: f64) -> Vec<f64> {
 
 /// The model as an [`auglag::Problem`]: objective = container measure, two equality
 /// constraints h₁ = overlap, h₂ = containment, evaluated together. In energy mode (a fixed
-/// container, [`Adapter::as_energy`]) the objective is h₁ + h₂ and there are no constraints.
+/// container, [`Adapter::in_energy_mode`]) the objective is h₁ + h₂ and there are no constraints.
 pub(crate) struct Adapter<'a, const N: usize> {
     model: RefCell<&'a mut Model<N>>,
     gradient: RefCell<ModelGradient>,
@@ -679,12 +679,12 @@ impl<'a, const N: usize> Adapter<'a, N> {
     /// the overlap energies minimised in jamming studies. On random starts of 3·10⁴ and 10⁵
     /// ellipsoids compressed to φ = 0.6 the last placement took 751 and 1 000 inner
     /// iterations against 901 and 1 297 with the Lagrangian.
-    pub(crate) fn as_energy(mut self, energy: bool) -> Self {
+    pub(crate) fn in_energy_mode(mut self, energy: bool) -> Self {
         self.energy = energy && self.fixed.is_some();
         self
     }
 
-    /// E and, when asked, ∇E (see [`Adapter::as_energy`]); NaN where the model refuses `x`.
+    /// E and, when asked, ∇E (see [`Adapter::in_energy_mode`]); NaN where the model refuses `x`.
     fn energy(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         let mut model = self.model.borrow_mut();
         let Some(g) = grad else {

@@ -87,10 +87,10 @@ pub struct RandomSettings {
     /// How each item is oriented in the random start, by item (empty: every item
     /// [`Orientation::Isotropic`]). The compression turns the items as it needs.
     pub orientations: Vec<Orientation>,
-    /// Threads of the model's evaluations with the `rayon` feature (0: rayon's global pool,
-    /// every core); the packing is the same bits on any number
-    /// ([`Model::set_threads`](implicit_packing::model::Model::set_threads)). Without the
-    /// feature the run is serial.
+    /// Threads of the run with the `rayon` feature, shared by the model's evaluations and the
+    /// solver's reductions over long vectors (0: rayon's current pool, by default every
+    /// core); the packing is the same bits on any number. Without the feature the run is
+    /// serial.
     pub threads: usize,
 }
 
@@ -150,7 +150,7 @@ pub fn random_packing<const N: usize>(
     problem: &mut Model<N>,
     container: &[f64],
     settings: &RandomSettings,
-    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+    observe: &mut (dyn FnMut(&Progress<'_>) -> bool + Send),
 ) -> Result<RandomPacking, Error> {
     random_packing_seen(problem, container, settings, observe, &mut |_| {})
 }
@@ -164,12 +164,34 @@ pub fn random_packing_seen<const N: usize>(
     problem: &mut Model<N>,
     container: &[f64],
     settings: &RandomSettings,
-    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
-    kept: &mut dyn FnMut(f64),
+    observe: &mut (dyn FnMut(&Progress<'_>) -> bool + Send),
+    kept: &mut (dyn FnMut(f64) + Send),
+) -> Result<RandomPacking, Error> {
+    // The whole run on a pool of the settings' threads: the model's evaluations and the
+    // solver's reductions over long vectors share it.
+    #[cfg(feature = "rayon")]
+    if settings.threads > 0 {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map_err(|e| implicit_packing::Error::ThreadPool {
+                threads: settings.threads,
+                reason: e.to_string(),
+            })?;
+        return pool.install(|| random_packing_here(problem, container, settings, observe, kept));
+    }
+    random_packing_here(problem, container, settings, observe, kept)
+}
+
+/// [`random_packing_seen`] on the current thread's pool.
+fn random_packing_here<const N: usize>(
+    problem: &mut Model<N>,
+    container: &[f64],
+    settings: &RandomSettings,
+    observe: &mut (dyn FnMut(&Progress<'_>) -> bool + Send),
+    kept: &mut (dyn FnMut(f64) + Send),
 ) -> Result<RandomPacking, Error> {
     let began = Instant::now();
-    #[cfg(feature = "rayon")]
-    problem.set_threads(settings.threads)?;
     let items = crate::local::item_measure(problem);
     let target_measure = Container::<N>::from_dimensions(problem.container_kind(), container)?
         .measure()

@@ -172,7 +172,12 @@ struct Verdicts {
 }
 
 impl Verdicts {
-    fn add<const N: usize>(&mut self, bodies: &[Body<N>], (a, b): (usize, usize), (i, j): (usize, usize)) {
+    fn add<const N: usize>(
+        &mut self,
+        bodies: &[Body<N>],
+        (a, b): (usize, usize),
+        (i, j): (usize, usize),
+    ) {
         self.checked += 1;
         match contact(&bodies[a], &bodies[b]) {
             Ok(c) => {
@@ -186,7 +191,11 @@ impl Verdicts {
             }
             Err(e) => {
                 let items = (i.min(j), i.max(j));
-                if self.failure.as_ref().is_none_or(|(least, _)| items < *least) {
+                if self
+                    .failure
+                    .as_ref()
+                    .is_none_or(|(least, _)| items < *least)
+                {
                     self.failure = Some((items, e));
                 }
             }
@@ -203,7 +212,10 @@ impl Verdicts {
         };
         self.overlapping.extend(other.overlapping);
         if let Some((items, e)) = other.failure
-            && self.failure.as_ref().is_none_or(|(least, _)| items < *least)
+            && self
+                .failure
+                .as_ref()
+                .is_none_or(|(least, _)| items < *least)
         {
             self.failure = Some((items, e));
         }

@@ -771,19 +771,9 @@ impl<const N: usize> Model<N> {
         #[cfg(feature = "rayon")]
         let owner = {
             let ranges = &mut self.ranges.gradients;
-            lattice.par_fold_pairs_into(
-                ranges,
-                |s| {
-                    s.kept.0 = 0.0;
-                    s.kept.1 = 0;
-                    s.kept.2.clear();
-                },
-                |s, (bodies, _), a, b| {
-                    let RangeShare { kept, queue } = s;
-                    kept.1 += 1;
-                    queue.push(bodies, a, b, &mut keep(kept));
-                },
-            )?;
+            lattice.par_fold_pairs_into(ranges, restart_terms, |s, (bodies, _), a, b| {
+                add_term(s, bodies, a, b)
+            })?;
             // Serial, in the order of the ranges: each point's force and each item's torque
             // summed in the order of the serial scan, on any number of threads.
             let (bodies, owner) = lattice.points();
@@ -949,21 +939,39 @@ fn periodic_pair_value<const N: usize>(
         lattice.par_fold_pairs_into(
             &mut ranges.values,
             |s| s.kept = (0.0, 0, ()),
-            |s, (bodies, _), a, b| {
-                let RangeShare { kept, queue } = s;
-                kept.1 += 1;
-                queue.push(bodies, a, b, &mut |_, _, &f| kept.0 += f);
-            },
+            |s, (bodies, _), a, b| add_value(s, bodies, a, b),
         )?;
-        let bodies = lattice.points().0;
-        let (mut sum, mut count) = (0.0, 0);
-        for RangeShare { kept, queue } in &mut ranges.values {
-            queue.flush(bodies, &mut |_, _, &f| kept.0 += f);
-            sum += kept.0;
-            count += kept.1;
-        }
-        Ok((sum, count))
+        Ok(summed_values(&mut ranges.values, lattice.points().0))
     }
+}
+
+/// A range's share of a value-only pair sum after one more pair.
+#[cfg(feature = "rayon")]
+fn add_value<const N: usize>(
+    share: &mut RangeShare<(f64, usize, ()), N, ValueOnly>,
+    bodies: &[Body<N>],
+    i: usize,
+    j: usize,
+) {
+    let RangeShare { kept, queue } = share;
+    kept.1 += 1;
+    queue.push(bodies, i, j, &mut |_, _, &f| kept.0 += f);
+}
+
+/// Σf and the pair count of the ranges' shares, each queue flushed, in the order of the
+/// ranges (each queue's last pairs after its others: the order of the serial scan).
+#[cfg(feature = "rayon")]
+fn summed_values<const N: usize>(
+    shares: &mut [RangeShare<(f64, usize, ()), N, ValueOnly>],
+    bodies: &[Body<N>],
+) -> (f64, usize) {
+    let (mut sum, mut count) = (0.0, 0);
+    for RangeShare { kept, queue } in shares {
+        queue.flush(bodies, &mut |_, _, &f| kept.0 += f);
+        sum += kept.0;
+        count += kept.1;
+    }
+    (sum, count)
 }
 
 /// The model's error for a failure of the neighbour search.
@@ -1020,22 +1028,10 @@ fn pair_sum_value<const N: usize>(
         centres,
         &mut ranges.values,
         |s| s.kept = (0.0, 0, ()),
-        |s, i, j, _, _| {
-            let RangeShare { kept, queue } = s;
-            kept.1 += 1;
-            queue.push(bodies, i, j, &mut |_, _, &f| kept.0 += f);
-        },
+        |s, i, j, _, _| add_value(s, bodies, i, j),
     )
     .map_err(grid_error)?;
-    // In the order of the ranges, each queue's last pairs after its others: the order of
-    // the serial scan.
-    let (mut sum, mut count) = (0.0, 0);
-    for RangeShare { kept, queue } in &mut ranges.values {
-        queue.flush(bodies, &mut |_, _, &f| kept.0 += f);
-        sum += kept.0;
-        count += kept.1;
-    }
-    Ok((sum, count))
+    Ok(summed_values(&mut ranges.values, bodies))
 }
 
 /// Bodies per task of [`body_terms`]: fixed, so that its sums are grouped the same way on
@@ -1207,16 +1203,8 @@ fn pair_sum_gradient<const N: usize>(
         list.par_fold_close_pairs_into(
             centres,
             &mut ranges.gradients,
-            |s| {
-                s.kept.0 = 0.0;
-                s.kept.1 = 0;
-                s.kept.2.clear();
-            },
-            |s, i, j, _, _| {
-                let RangeShare { kept, queue } = s;
-                kept.1 += 1;
-                queue.push(bodies, i, j, &mut keep(kept));
-            },
+            restart_terms,
+            |s, i, j, _, _| add_term(s, bodies, i, j),
         )
         .map_err(grid_error)?;
         // Serial, in the order of the ranges (each queue's last pairs after its others): the
@@ -1267,6 +1255,28 @@ struct RangeWork<const N: usize> {
 /// A range's `Σf`, pair count and non-zero terms, in the order of its pairs.
 #[cfg(feature = "rayon")]
 type Kept<const N: usize> = (f64, usize, Vec<(usize, usize, PairGradient<N>)>);
+
+/// A range's share of a pair sum with gradients, emptied for the next evaluation (its
+/// vector keeps its memory).
+#[cfg(feature = "rayon")]
+fn restart_terms<const N: usize>(share: &mut RangeShare<Kept<N>, N, WithGradient>) {
+    share.kept.0 = 0.0;
+    share.kept.1 = 0;
+    share.kept.2.clear();
+}
+
+/// A range's share of a pair sum with gradients after one more pair.
+#[cfg(feature = "rayon")]
+fn add_term<const N: usize>(
+    share: &mut RangeShare<Kept<N>, N, WithGradient>,
+    bodies: &[Body<N>],
+    i: usize,
+    j: usize,
+) {
+    let RangeShare { kept, queue } = share;
+    kept.1 += 1;
+    queue.push(bodies, i, j, &mut keep(kept));
+}
 
 /// Adds the terms a queue emits to a range's share.
 #[cfg(feature = "rayon")]

@@ -364,7 +364,10 @@ impl<const N: usize> Lattice<N> {
         let point = |e: usize| {
             let b = &bodies[images.owner[e] as usize];
             let c = to_cartesian(cell, &images.fractional(e, fractional));
-            (Body::from_parts_unchecked(c, b.semi_axes(), b.rotation()), c)
+            (
+                Body::from_parts_unchecked(c, b.semi_axes(), b.rotation()),
+                c,
+            )
         };
         #[cfg(feature = "rayon")]
         {
