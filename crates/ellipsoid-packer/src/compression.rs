@@ -121,10 +121,10 @@ pub const TARGET_OVERSHOOT: f64 = 0.03;
 /// [`compression`] that stops as soon as the container's area or volume is at most `target`
 /// (`None`: compression to the end, a jammed packing). Each step is cut so that it aims no
 /// further than `target·(1 − TARGET_OVERSHOOT)`, and a step aimed past the target places the
-/// items by minimising the overlap energy (overlap plus containment, unconstrained) until its point dilated to
-/// the target certifies. The packing returned may be denser than the target, and a caller
-/// wanting the target exactly dilates it (a dilation by s ≥ 1 keeps a packing one: μ² grows
-/// by s², PW85 theory eq. (7)). Whether the target was reached is
+/// items by minimising the overlap energy (overlap plus containment, unconstrained) until its
+/// point dilated to the target certifies. The packing returned may be denser than the target,
+/// and a caller wanting the target exactly dilates it (a dilation by s ≥ 1 keeps a packing
+/// one: μ² grows by s², PW85 theory eq. (7)). Whether the target was reached is
 /// `result.objective <= target`.
 ///
 /// # Errors
@@ -634,6 +634,18 @@ mod tests {
         assert!(both.certificate.is_feasible());
         assert!(both.density >= alone.density);
         assert!(both.report.inner_iterations > alone.report.inner_iterations);
+    }
+
+    /// A step past the target is accepted where its dilated point lands on the target; any
+    /// other keeps KEPT_FRACTION of the step.
+    #[test]
+    fn a_step_past_the_target_is_accepted_where_it_lands_on_it() {
+        // From volume 1, δ = 0.1 leaves 0.729 in 3D.
+        let s = enough_dilation::<3>(0.1, 1.0, Some(0.8));
+        assert!((0.729 * s.powi(3) - 0.8).abs() < 1e-12, "{s}");
+        let kept = (1.0 - KEPT_FRACTION * 0.1) / 0.9;
+        assert_eq!(enough_dilation::<3>(0.1, 1.0, Some(0.7)), kept);
+        assert_eq!(enough_dilation::<3>(0.1, 1.0, None), kept);
     }
 
     #[test]

@@ -930,6 +930,52 @@ mod tests {
     use super::*;
     use crate::starts::lattice_start;
 
+    /// In energy mode the objective is overlap + containment with its gradient (against
+    /// central differences), the Lagrangian the same scaled, and there are no constraints.
+    #[test]
+    fn energy_mode_is_the_overlap_energy_without_constraints() {
+        use auglag::Problem;
+        let mut model = Model::<2>::new(vec![[2.0, 1.0]; 6], ContainerShape::Ellipsoid).unwrap();
+        let mut x = lattice_start(&model);
+        let n = x.len();
+        // Centres (and angles) drawn together, the container shrunk more: overlaps and items
+        // sticking out.
+        for (k, v) in x.iter_mut().enumerate() {
+            *v *= if k >= n - 2 { 0.7 } else { 0.8 };
+        }
+        let e = model.evaluate(&x, None).unwrap();
+        assert!(e.overlap > 0.0 && e.containment > 0.0, "{e:?}");
+        let container = x[n - 2..].to_vec();
+        let adapter = Adapter::new(&mut model, 1e3, Some(container)).in_energy_mode(true);
+        assert_eq!(adapter.n_eq(), 0);
+        let mut g = vec![0.0; n];
+        assert_eq!(
+            adapter.objective(&x, Some(&mut g)),
+            e.overlap + e.containment
+        );
+        let phr = Phr::new(10.0, 0, 0.5, &[], &[]);
+        let mut gl = vec![0.0; n];
+        assert_eq!(
+            adapter.lagrangian(&x, &phr, Some(&mut gl)),
+            Some(0.5 * (e.overlap + e.containment))
+        );
+        let h = 1e-6;
+        for k in 0..n - 2 {
+            let at = |t: f64| {
+                let mut y = x.clone();
+                y[k] += t;
+                adapter.objective(&y, None)
+            };
+            let fd = (at(h) - at(-h)) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() <= 1e-5 * (1.0 + g[k].abs()),
+                "{k}: {fd} {}",
+                g[k]
+            );
+            assert_eq!(gl[k], 0.5 * g[k]);
+        }
+    }
+
     /// The adapter's exact Hessian products against central differences of its own fused
     /// gradient, on an overlapping point, for ellipses and ellipsoids.
     #[test]
