@@ -171,13 +171,7 @@ pub fn random_packing_seen<const N: usize>(
     // solver's reductions over long vectors share it.
     #[cfg(feature = "rayon")]
     if settings.threads > 0 {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(settings.threads)
-            .build()
-            .map_err(|e| implicit_packing::Error::ThreadPool {
-                threads: settings.threads,
-                reason: e.to_string(),
-            })?;
+        let pool = implicit_packing::model::thread_pool(settings.threads)?;
         return pool.install(|| random_packing_here(problem, container, settings, observe, kept));
     }
     random_packing_here(problem, container, settings, observe, kept)

@@ -202,15 +202,7 @@ impl<const N: usize> Model<N> {
     pub fn set_threads(&mut self, threads: usize) -> Result<(), Error> {
         self.pool = match threads {
             0 => None,
-            n => Some(std::sync::Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .map_err(|e| Error::ThreadPool {
-                        threads: n,
-                        reason: e.to_string(),
-                    })?,
-            )),
+            n => Some(std::sync::Arc::new(thread_pool(n)?)),
         };
         Ok(())
     }
@@ -1287,6 +1279,22 @@ fn keep<const N: usize>(acc: &mut Kept<N>) -> impl FnMut(usize, usize, &Term<N>)
             acc.2.push((i, j, *g));
         }
     }
+}
+
+/// A rayon pool of `threads` threads, for work that is to share them with the model's
+/// evaluations.
+///
+/// # Errors
+/// [`Error::ThreadPool`] when the threads cannot be started.
+#[cfg(feature = "rayon")]
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Error> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::ThreadPool {
+            threads,
+            reason: e.to_string(),
+        })
 }
 
 /// The bodies and spins of the items, `body_of((i, l_i))` each, appended in order: on
