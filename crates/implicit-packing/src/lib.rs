@@ -49,6 +49,8 @@ pub mod periodic;
 pub mod projection;
 #[cfg(not(feature = "internals"))]
 mod projection;
+#[cfg(feature = "rayon")]
+pub(crate) mod scatter;
 pub mod shape;
 pub(crate) mod trig;
 

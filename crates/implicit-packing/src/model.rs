@@ -30,10 +30,11 @@
 //! first call no memory is allocated unless `m` grows or a rebuild of the list finds more pairs
 //! than any before. With the `rayon` feature the list's rows are cut into ranges of about equal
 //! numbers of pairs, one task each; a range keeps its non-zero pair gradients in a vector of its
-//! own (kept from call to call), and they are added to the gradient serially in the order of the
-//! pairs, so the gradient has the same bits on any number of threads. The per-body pass (torques
-//! to angle derivatives, containment) runs in fixed groups of 2048 bodies, summed in
-//! order. A value-only call does no gradient work.
+//! own (kept from call to call), and they are added to the gradient with the items cut into one
+//! block per thread, each block taking the terms that land on it in the order of the pairs
+//! (module `scatter`), so the gradient has the same bits on any number of threads. The per-body
+//! pass (torques to angle derivatives, containment; in a periodic cell the ghosts' forces and
+//! the cell's derivatives) runs in fixed groups of 2048 bodies, summed in order. A value-only call does no gradient work.
 //! Pairs are skipped at once when their enclosing balls are apart (the list's exact test) or the
 //! plane orthogonal to the centre line separates them with a margin (an exact certificate: the pair
 //! term is then exactly zero, value and gradient, see
@@ -59,7 +60,9 @@ use crate::derivatives::{
 };
 use crate::error::Error;
 use crate::pair::overlap_measure;
-use crate::periodic::{Lattice, entry};
+use crate::periodic::{ImageSet, Lattice, entry};
+#[cfg(feature = "rayon")]
+use crate::scatter::Entry;
 use crate::shape::{
     Body, MAX_MAGNITUDE, angles_from_rotation, angular_velocities_3d, check_semi_axes, rotation_2d,
     rotation_and_velocities_3d,
@@ -685,6 +688,7 @@ impl<const N: usize> PeriodicSums<'_, N> {
     }
 
     /// The forces of a pair term on its two points, its torques on their owners.
+    #[cfg(not(feature = "rayon"))]
     fn add_gradient(&mut self, owner: &[u32], a: usize, b: usize, g: &PairGradient<N>) {
         for k in 0..N {
             self.forces[a][k] += g.centre_i[k];
@@ -750,7 +754,7 @@ impl<const N: usize> Model<N> {
         acc.torques.clear();
         acc.torques.resize(m, [0.0; 3]);
         #[cfg(not(feature = "rayon"))]
-        let owner = {
+        {
             let mut queue = KernelQueue::<N, WithGradient>::default();
             lattice.for_each_pair(|(bodies, owner), a, b| {
                 *pairs += 1;
@@ -758,47 +762,29 @@ impl<const N: usize> Model<N> {
             })?;
             let (bodies, owner) = lattice.points();
             queue.flush(bodies, &mut |a, b, t| acc.add(owner, a, b, t));
-            owner
-        };
+        }
         #[cfg(feature = "rayon")]
-        let owner = {
+        {
             let ranges = &mut self.ranges.gradients;
             lattice.par_fold_pairs_into(ranges, restart_terms, |s, (bodies, _), a, b| {
                 add_term(s, bodies, a, b)
             })?;
-            // Serial, in the order of the ranges: each point's force and each item's torque
-            // summed in the order of the serial scan, on any number of threads.
-            let (bodies, owner) = lattice.points();
+            let bodies = lattice.points().0;
             for RangeShare { kept, queue } in ranges.iter_mut() {
                 queue.flush(bodies, &mut keep(kept));
-                for (a, b, g) in &kept.2 {
-                    acc.add_gradient(owner, *a, *b, g);
-                }
                 acc.sum += kept.0;
                 *pairs += kept.1;
             }
-            owner
-        };
-        // ∂/∂s_i = Hᵀ Σ_e F_e and ∂/∂H_ab = Σ_e F_e,a u_e,b (module `periodic`).
-        let mut item_force = vec![[0.0; N]; m];
-        let mut dcell = [[0.0; N]; N];
-        for (e, f) in acc.forces.iter().enumerate() {
-            let o = owner[e] as usize;
-            let u = lattice.images.fractional(e, &lattice.fractional);
-            for a in 0..N {
-                item_force[o][a] += f[a];
-                for b in a..N {
-                    dcell[a][b] += f[a] * u[b];
-                }
-            }
+            let lists: Vec<&[Entry<N>]> = ranges.iter().map(|s| s.kept.2.as_slice()).collect();
+            crate::scatter::add_to_points(&lists, &lattice.images, &mut acc.forces, acc.torques);
         }
-        let sum = acc.sum;
-        for (i, b) in self.bodies.iter().enumerate() {
-            let spin = spin_rows(b, self.spins[i]);
-            let ds: [f64; N] =
-                std::array::from_fn(|k| (0..=k).map(|r| cell[r][k] * item_force[i][r]).sum());
-            scatter_force_torque(out, i, &ds, &self.torques[i], &spin);
-        }
+        let PeriodicSums { sum, forces, .. } = acc;
+        let dcell = cell_gradient(
+            (cell, &lattice.images, &lattice.fractional),
+            (&forces, &self.torques),
+            (&self.bodies, &self.spins),
+            &mut out[..m * Self::vars_per_body()],
+        );
         let nb = m * Self::vars_per_body();
         for k in 0..N * (N + 1) / 2 {
             let (r, c) = entry::<N>(k);
@@ -1107,6 +1093,77 @@ fn body_terms<const N: usize>(
     (r_sum, dc)
 }
 
+/// The cell's part of the periodic gradient, the items' part added to `out` (their
+/// variables): with `F_e` the summed pair forces on point `e` (an item or a ghost, at
+/// fractional position `u_e`) and `τ_i` the torques on item `i`,
+///
+/// ```text
+/// ∂/∂s_i  = Hᵀ Σ_{e of i} F_e        ∂/∂α_i = ω_α · τ_i        ∂/∂H_ab = Σ_e F_e,a u_e,b
+/// ```
+///
+/// (module `periodic`; `s_i` the fractional centre, `H` the upper-triangular cell). Items are
+/// taken in fixed groups of [`BODIES_PER_TASK`] (on rayon's pool with the `rayon` feature, one
+/// task per group), each item with its ghosts; the groups' `∂/∂H` are summed in order, so the
+/// result does not depend on the number of threads.
+fn cell_gradient<const N: usize>(
+    (cell, images, fractional): (&[[f64; N]; N], &ImageSet<N>, &[[f64; N]]),
+    (forces, torques): (&[[f64; N]], &[[f64; 3]]),
+    (bodies, spins): (&[Body<N>], &[[f64; 2]]),
+    out: &mut [f64],
+) -> [[f64; N]; N] {
+    let stride = Model::<N>::vars_per_body();
+    let group = |first: usize, out: &mut [f64]| {
+        let mut dcell = [[0.0; N]; N];
+        let mut ghost = images.first_ghost(first);
+        for (k, vars) in out.chunks_exact_mut(stride).enumerate() {
+            let i = first + k;
+            let mut force = [0.0; N];
+            let mut add_point = |e: usize| {
+                let (f, u) = (forces[e], images.fractional(e, fractional));
+                for a in 0..N {
+                    force[a] += f[a];
+                    for b in a..N {
+                        dcell[a][b] += f[a] * u[b];
+                    }
+                }
+            };
+            add_point(i);
+            while images.owner.get(ghost).is_some_and(|&o| o as usize == i) {
+                add_point(ghost);
+                ghost += 1;
+            }
+            let spin = spin_rows(&bodies[i], spins[i]);
+            let ds: [f64; N] =
+                std::array::from_fn(|c| (0..=c).map(|r| cell[r][c] * force[r]).sum());
+            scatter_force_torque(vars, 0, &ds, &torques[i], &spin);
+        }
+        dcell
+    };
+    let width = BODIES_PER_TASK * stride;
+    #[cfg(feature = "rayon")]
+    let groups: Vec<[[f64; N]; N]> = {
+        use rayon::prelude::*;
+        out.par_chunks_mut(width)
+            .enumerate()
+            .map(|(t, vars)| group(t * BODIES_PER_TASK, vars))
+            .collect()
+    };
+    #[cfg(not(feature = "rayon"))]
+    let groups = out
+        .chunks_mut(width)
+        .enumerate()
+        .map(|(t, vars)| group(t * BODIES_PER_TASK, vars));
+    let mut dcell = [[0.0; N]; N];
+    for d in groups {
+        for a in 0..N {
+            for b in a..N {
+                dcell[a][b] += d[a][b];
+            }
+        }
+    }
+    dcell
+}
+
 /// Adds a force and a torque on body `b` to `out`: the force on its centre, and on its angle
 /// `α` the derivative `ω_α · τ` (`spin` holds the rows `ω_α`, precomputed by `load`).
 #[inline(always)]
@@ -1130,6 +1187,7 @@ fn scatter_force_torque<const N: usize>(
 
 /// Adds a pair gradient to `out` (centres) and `torques` (per body, turned into angle
 /// derivatives once all pairs are summed, see [`Model::evaluate`]).
+#[cfg(not(feature = "rayon"))]
 #[inline(always)]
 fn add_pair<const N: usize>(
     out: &mut [f64],
@@ -1199,18 +1257,20 @@ fn pair_sum_gradient<const N: usize>(
             |s, i, j, _, _| add_term(s, bodies, i, j),
         )
         .map_err(grid_error)?;
-        // Serial, in the order of the ranges (each queue's last pairs after its others): the
-        // gradient is added in the order of the serial scan, the same bits as the serial
-        // path's whatever the scheduling; Σf is summed range by range.
+        // Σf range by range; the gradient terms item by item in the order of the serial scan
+        // (module `scatter`): the same bits as the serial path's whatever the scheduling.
         let (mut sum, mut count) = (0.0, 0);
         for RangeShare { kept, queue } in &mut ranges.gradients {
             queue.flush(bodies, &mut keep(kept));
-            for (i, j, g) in &kept.2 {
-                add_pair(out, torques, *i, *j, g);
-            }
             sum += kept.0;
             count += kept.1;
         }
+        let lists: Vec<&[Entry<N>]> = ranges
+            .gradients
+            .iter()
+            .map(|s| s.kept.2.as_slice())
+            .collect();
+        crate::scatter::add_to_items(&lists, Model::<N>::vars_per_body(), out, torques);
         Ok((sum, count))
     }
 }

@@ -264,6 +264,12 @@ impl<const N: usize> ImageSet<N> {
         Ok(set)
     }
 
+    /// The index of the first ghost of item `i` or of a later item (the ghosts follow the
+    /// items, grouped by owner in item order).
+    pub(crate) fn first_ghost(&self, i: usize) -> usize {
+        self.items + self.owner[self.items..].partition_point(|&o| (o as usize) < i)
+    }
+
     /// Fractional position of point `e`: its owner's `s` plus its shift.
     pub(crate) fn fractional(&self, e: usize, fractional: &[[f64; N]]) -> [f64; N] {
         let s = &fractional[self.owner[e] as usize];

@@ -109,49 +109,80 @@ fn grid_sum_equals_all_pairs_sum() {
 }
 
 /// With the `rayon` feature the pair sums run in ranges of the pair list on rayon's pool:
-/// the gradient is scattered in the order of the pairs, and `Σf` summed range by range over
-/// ranges cut from the list alone, so one and two threads give the same bits (and the
-/// serial sum to rounding).
+/// the gradient terms are added item by item in the order of the pairs (the items cut into
+/// one block per thread), and `Σf` summed range by range over ranges cut from the list alone,
+/// so one, two and three threads give the same bits (and the serial sum to rounding), in a
+/// container and in a periodic cell.
 #[cfg(feature = "rayon")]
 #[test]
 fn two_threads_give_the_gradient_of_one() {
     let mut rng = Rng::new(5);
-    let (axes, x) = config3(&mut rng, 4000, 0.6, ContainerShape::Ball);
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let mut p = Model::<3>::new(axes.clone(), ContainerShape::Ball).unwrap();
-            let mut g = ModelGradient::default();
-            // Twice on one model: the second call reuses the ranges' vectors.
-            let first = p.evaluate(&x, Some(&mut g)).unwrap();
-            let first_g = g.overlap.clone();
-            let again = p.evaluate(&x, Some(&mut g)).unwrap();
-            assert_eq!(first, again);
-            assert_eq!(first_g, g.overlap);
-            let value = p.evaluate(&x, None).unwrap();
-            (again, g, value, p.overlap_all_pairs(&x).unwrap())
-        })
-    };
-    let (one, g1, v1, all) = run(1);
-    let (two, g2, v2, _) = run(2);
-    assert!(
-        one.pairs > 20_000,
-        "{} pairs: too few for several ranges",
-        one.pairs
-    );
-    assert_eq!(one, two);
-    assert_eq!(v1, v2);
-    assert_eq!(g1.overlap, g2.overlap);
-    assert_eq!(g1.containment, g2.containment);
-    for ev in [one, two, v1, v2] {
+    let (axes, in_ball) = config3(&mut rng, 4000, 0.6, ContainerShape::Ball);
+    let (_, in_box) = config3(&mut rng, 4000, 0.6, ContainerShape::Box);
+    // The box's centres as fractions of the periodic cube of the same side.
+    let side = in_box[in_box.len() - 2] / 0.5;
+    let mut in_cell: Vec<f64> = in_box[..in_box.len() - 3].to_vec();
+    for item in in_cell.chunks_mut(6) {
+        for c in &mut item[..3] {
+            *c = *c / side + 0.5;
+        }
+    }
+    in_cell.extend_from_slice(&[side, side, side, 0.0, 0.0, 0.0]);
+    for (kind, x) in [
+        (ContainerShape::Ball, in_ball),
+        (ContainerShape::Periodic, in_cell),
+    ] {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut p = Model::<3>::new(axes.clone(), kind).unwrap();
+                let mut g = ModelGradient::default();
+                // Twice on one model: the second call reuses the ranges' vectors.
+                let first = p.evaluate(&x, Some(&mut g)).unwrap();
+                let first_g = g.overlap.clone();
+                let again = p.evaluate(&x, Some(&mut g)).unwrap();
+                assert_eq!(first, again);
+                assert_eq!(first_g, g.overlap);
+                let value = p.evaluate(&x, None).unwrap();
+                (again, g, value)
+            })
+        };
+        let (one, g1, v1) = run(1);
         assert!(
-            (ev.overlap - all).abs() <= 1e-13 * all,
-            "{} {all}",
-            ev.overlap
+            one.pairs > 20_000,
+            "{kind:?}: {} pairs: too few for several ranges",
+            one.pairs
         );
+        assert!(
+            g1.overlap.iter().filter(|&&d| d != 0.0).count() > 10_000,
+            "{kind:?}: too few overlapping items to test the scatter"
+        );
+        for threads in [2, 3] {
+            let (more, g, v) = run(threads);
+            assert_eq!(one, more, "{kind:?} on {threads} threads");
+            assert_eq!(v1, v, "{kind:?} on {threads} threads");
+            assert_eq!(g1.overlap, g.overlap, "{kind:?} on {threads} threads");
+            assert_eq!(
+                g1.containment, g.containment,
+                "{kind:?} on {threads} threads"
+            );
+        }
+        if kind == ContainerShape::Ball {
+            let all = Model::<3>::new(axes.clone(), kind)
+                .unwrap()
+                .overlap_all_pairs(&x)
+                .unwrap();
+            for ev in [one, v1] {
+                assert!(
+                    (ev.overlap - all).abs() <= 1e-13 * all,
+                    "{} {all}",
+                    ev.overlap
+                );
+            }
+        }
     }
 }
 
