@@ -3,7 +3,9 @@
 //! report back to the outer loop. A solver itself ([`Method`]) only picks directions and keeps
 //! its memory.
 
-use crate::projection::{all_finite, clamp, norm_inf, projected_gradient_norm, step_dot};
+use crate::projection::{
+    all_finite, clamp, copy, map_blocks, norm_inf, projected_gradient_norm, step_dot,
+};
 use crate::report::Control;
 
 /// A smooth function on the box, evaluated with its gradient.
@@ -198,8 +200,8 @@ pub(crate) fn minimize(
         };
         method.accept(k, x, grad, new_value);
         let (x_trial, g_trial) = method.trial();
-        x.copy_from_slice(x_trial);
-        grad.copy_from_slice(g_trial);
+        copy(x, x_trial);
+        copy(grad, g_trial);
         value = new_value;
         pg = projected_gradient_norm(x, grad, lower, upper);
         k += 1;
@@ -253,10 +255,14 @@ pub(crate) fn line_search<S: Smooth + ?Sized>(
         if f.evaluations() >= at.settings.max_evaluations {
             return Err(InnerStatus::MaxEvaluations);
         }
-        for (i, t) in x_trial.iter_mut().enumerate() {
-            // Rounding in x + αd may step a hair outside the box; the clamp keeps feasibility exact.
-            *t = clamp(x[i] + alpha * direction[i], lower[i], upper[i]);
-        }
+        map_blocks(x_trial, |start, t| {
+            for (k, t) in t.iter_mut().enumerate() {
+                let i = start + k;
+                // Rounding in x + αd may step a hair outside the box; the clamp keeps
+                // feasibility exact.
+                *t = clamp(x[i] + alpha * direction[i], lower[i], upper[i]);
+            }
+        });
         let decrease = step_dot(grad, x_trial, x);
         let f_trial = f.value_grad(x_trial, g_trial);
         last_finite = f_trial.is_finite() && all_finite(g_trial);

@@ -33,7 +33,7 @@
 //!   simplifies: no generalized Cauchy point, the active set comes from the ε-rule instead).
 
 use crate::inner::{Acceptance, InnerStatus, Iterate, Method, Smooth, line_search};
-use crate::projection::{axpy_dot, dot, for_each_entry, norm_inf};
+use crate::projection::{axpy_dot, dot, for_each_entry, map_blocks, norm_inf};
 
 /// Upper limit ε̄ of the ε-active-set rule.
 const ACTIVE_EPSILON: f64 = 1e-3;
@@ -121,12 +121,15 @@ impl LbfgsWorkspace {
     fn push_pair(&mut self, x: &[f64], g: &[f64]) {
         let n = self.n;
         let slot = self.next_slot();
-        let s = &mut self.s[slot * n..(slot + 1) * n];
-        let y = &mut self.y[slot * n..(slot + 1) * n];
-        for i in 0..n {
-            s[i] = self.x_trial[i] - x[i];
-            y[i] = self.g_trial[i] - g[i];
-        }
+        let difference = |to: &mut [f64], a: &[f64], b: &[f64]| {
+            map_blocks(to, |start, to| {
+                for (k, t) in to.iter_mut().enumerate() {
+                    *t = a[start + k] - b[start + k];
+                }
+            });
+        };
+        difference(&mut self.s[slot * n..(slot + 1) * n], &self.x_trial, x);
+        difference(&mut self.y[slot * n..(slot + 1) * n], &self.g_trial, g);
         self.keep_if_curved(slot);
     }
 
@@ -401,13 +404,22 @@ pub(crate) fn mark_free(
     pg: f64,
 ) -> bool {
     let eps = ACTIVE_EPSILON.min(pg);
-    let mut all_free = true;
-    for (((fr, &xi), &gi), (&l, &u)) in free.iter_mut().zip(x).zip(g).zip(lower.iter().zip(upper)) {
-        let active = (xi - l <= eps && gi > 0.0) || (u - xi <= eps && gi < 0.0);
-        *fr = if active { 0.0 } else { 1.0 };
-        all_free &= !active;
-    }
-    all_free
+    let blocks = map_blocks(free, |start, free| {
+        let mut all_free = true;
+        for (k, fr) in free.iter_mut().enumerate() {
+            let (xi, gi, l, u) = (
+                x[start + k],
+                g[start + k],
+                lower[start + k],
+                upper[start + k],
+            );
+            let active = (xi - l <= eps && gi > 0.0) || (u - xi <= eps && gi < 0.0);
+            *fr = if active { 0.0 } else { 1.0 };
+            all_free &= !active;
+        }
+        all_free
+    });
+    blocks.into_iter().all(|b| b)
 }
 
 /// Completes a direction on the free variables: each ε-active variable is sent to its bound
@@ -422,18 +434,21 @@ pub(crate) fn complete_direction(
     (x, g): (&[f64], &[f64]),
     (lower, upper): (&[f64], &[f64]),
 ) {
-    for (i, d) in direction.iter_mut().enumerate() {
-        if free[i] == 0.0 {
-            *d = if g[i] > 0.0 {
-                lower[i] - x[i]
-            } else {
-                upper[i] - x[i]
-            };
+    map_blocks(direction, |start, direction| {
+        for (k, d) in direction.iter_mut().enumerate() {
+            let i = start + k;
+            if free[i] == 0.0 {
+                *d = if g[i] > 0.0 {
+                    lower[i] - x[i]
+                } else {
+                    upper[i] - x[i]
+                };
+            }
+            if (x[i] <= lower[i] && *d < 0.0) || (x[i] >= upper[i] && *d > 0.0) {
+                *d = 0.0;
+            }
         }
-        if (x[i] <= lower[i] && *d < 0.0) || (x[i] >= upper[i] && *d > 0.0) {
-            *d = 0.0;
-        }
-    }
+    });
 }
 
 impl Method for LbfgsWorkspace {

@@ -22,18 +22,27 @@ pub(crate) fn clamp(v: f64, lower: f64, upper: f64) -> f64 {
 
 /// Projects `x` onto the box in place.
 pub(crate) fn project(x: &mut [f64], lower: &[f64], upper: &[f64]) {
-    for ((xi, &l), &u) in x.iter_mut().zip(lower).zip(upper) {
-        *xi = clamp(*xi, l, u);
-    }
+    map_blocks(x, |start, x| {
+        let bounds = lower[start..].iter().zip(&upper[start..]);
+        for (xi, (&l, &u)) in x.iter_mut().zip(bounds) {
+            *xi = clamp(*xi, l, u);
+        }
+    });
 }
 
-/// ‖P(x − g) − x‖∞.
+/// ‖P(x − g) − x‖∞ (a maximum: the same by blocks).
 pub(crate) fn projected_gradient_norm(x: &[f64], g: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
-    x.iter()
-        .zip(g)
-        .zip(lower.iter().zip(upper))
-        .map(|((&xi, &gi), (&l, &u))| (clamp(xi - gi, l, u) - xi).abs())
-        .fold(0.0, f64::max)
+    let n = x.len().min(g.len()).min(lower.len()).min(upper.len());
+    blocked(n, |r| {
+        let (x, g) = (&x[r.clone()], &g[r.clone()]);
+        x.iter()
+            .zip(g)
+            .zip(lower[r.clone()].iter().zip(&upper[r]))
+            .map(|((&xi, &gi), (&l, &u))| (clamp(xi - gi, l, u) - xi).abs())
+            .fold(0.0, f64::max)
+    })
+    .into_iter()
+    .fold(0.0, f64::max)
 }
 
 /// Entries per block of the reductions over long vectors: a vector longer than this is
@@ -44,20 +53,53 @@ pub(crate) fn projected_gradient_norm(x: &[f64], g: &[f64], lower: &[f64], upper
 /// thirty passes over such vectors per iteration.
 pub(crate) const BLOCK: usize = 1 << 14;
 
+/// `part(block)` for the blocks of `0..n` of [`BLOCK`] indices, in the order of the blocks (on
+/// rayon's pool with the `rayon` feature).
+fn blocked<R: Send>(n: usize, part: impl Fn(std::ops::Range<usize>) -> R + Sync + Send) -> Vec<R> {
+    let block = |b: usize| part(b * BLOCK..((b + 1) * BLOCK).min(n));
+    #[cfg(feature = "rayon")]
+    if n > BLOCK {
+        use rayon::prelude::*;
+        return (0..n.div_ceil(BLOCK)).into_par_iter().map(block).collect();
+    }
+    (0..n.div_ceil(BLOCK).max(1)).map(block).collect()
+}
+
 /// Σ over the blocks of `0..n` of `part(block)`, in the order of the blocks.
 fn blocked_sum(n: usize, part: impl Fn(std::ops::Range<usize>) -> f64 + Sync + Send) -> f64 {
     if n <= BLOCK {
         return part(0..n);
     }
-    let block = |b: usize| part(b * BLOCK..((b + 1) * BLOCK).min(n));
+    blocked(n, part).into_iter().fold(0.0, |sum, p| sum + p)
+}
+
+/// `f(start, chunk)` for the consecutive chunks of [`BLOCK`] entries of `v`, `start` the index
+/// of the chunk's first entry, on rayon's pool with the `rayon` feature: element-wise updates
+/// of `v` that read other vectors at the same indices. The chunks' results, in order.
+pub(crate) fn map_blocks<T: Send, R: Send>(
+    v: &mut [T],
+    f: impl Fn(usize, &mut [T]) -> R + Sync + Send,
+) -> Vec<R> {
     #[cfg(feature = "rayon")]
-    let parts: Vec<f64> = {
+    if v.len() > BLOCK {
         use rayon::prelude::*;
-        (0..n.div_ceil(BLOCK)).into_par_iter().map(block).collect()
-    };
-    #[cfg(not(feature = "rayon"))]
-    let parts = (0..n.div_ceil(BLOCK)).map(block);
-    parts.into_iter().fold(0.0, |sum, p| sum + p)
+        return v
+            .par_chunks_mut(BLOCK)
+            .enumerate()
+            .map(|(b, c)| f(b * BLOCK, c))
+            .collect();
+    }
+    v.chunks_mut(BLOCK)
+        .enumerate()
+        .map(|(b, c)| f(b * BLOCK, c))
+        .collect()
+}
+
+/// `to ← from`, by blocks as [`map_blocks`].
+pub(crate) fn copy(to: &mut [f64], from: &[f64]) {
+    map_blocks(to, |start, to| {
+        to.copy_from_slice(&from[start..start + to.len()])
+    });
 }
 
 /// Euclidean inner product: eight partial sums in a fixed order ([`simd::dot`]) per block of
@@ -136,7 +178,9 @@ pub(crate) fn for_each_entry(v: &mut [f64], f: impl Fn(&mut f64) + Sync + Send) 
 /// True if every entry is finite.
 #[inline]
 pub(crate) fn all_finite(a: &[f64]) -> bool {
-    a.iter().all(|v| v.is_finite())
+    blocked(a.len(), |r| a[r].iter().all(|v| v.is_finite()))
+        .into_iter()
+        .all(|b| b)
 }
 
 #[cfg(test)]
@@ -170,6 +214,35 @@ mod tests {
         assert_eq!(norm_inf(&peak), 99.0);
         for_each_entry(&mut peak, |v| *v = -*v);
         assert_eq!(peak[2 * BLOCK + 5], 99.0);
+    }
+
+    /// The element-wise passes by blocks see each entry once, at its own index.
+    #[test]
+    fn blocks_see_every_entry_at_its_index() {
+        let n = 2 * BLOCK + 3;
+        let from: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let mut to = vec![-1.0; n];
+        copy(&mut to, &from);
+        assert_eq!(to, from);
+        let starts = map_blocks(&mut to, |start, chunk| {
+            chunk.iter_mut().for_each(|v| *v -= start as f64);
+            start
+        });
+        assert_eq!(starts, [0, BLOCK, 2 * BLOCK]);
+        assert_eq!(to[BLOCK + 4], 4.0);
+        let (lower, upper) = (vec![2.0; n], vec![f64::INFINITY; n]);
+        let mut x = from.clone();
+        x[2 * BLOCK + 1] = -5.0;
+        assert_eq!(
+            projected_gradient_norm(&x, &vec![0.0; n], &lower, &upper),
+            7.0
+        );
+        project(&mut x, &lower, &upper);
+        assert_eq!(x[2 * BLOCK + 1], 2.0);
+        assert_eq!(x[BLOCK], BLOCK as f64);
+        assert!(all_finite(&x));
+        x[2 * BLOCK + 2] = f64::NAN;
+        assert!(!all_finite(&x));
     }
 
     #[test]

@@ -207,4 +207,64 @@ fn main() {
         per_body[2] * 1e9,
         per_body[2] / per_body[0]
     );
+    #[cfg(feature = "rayon")]
+    for m in [10_000, 100_000] {
+        threads::compare(m);
+    }
+}
+
+/// Value and gradient on pools of one and two threads, in a box and in the periodic cube of
+/// the same side, the two pools timed in turn (best of 12 rounds), with the check that both
+/// give the same bits.
+#[cfg(feature = "rayon")]
+mod threads {
+    use super::*;
+
+    /// The box configuration's centres as fractions of the periodic cube of its side.
+    fn periodic(x: &[f64]) -> Vec<f64> {
+        let side = 2.0 * x[x.len() - 1];
+        let mut cell: Vec<f64> = x[..x.len() - 3].to_vec();
+        for item in cell.chunks_mut(6) {
+            for c in &mut item[..3] {
+                *c = *c / side + 0.5;
+            }
+        }
+        cell.extend_from_slice(&[side, side, side, 0.0, 0.0, 0.0]);
+        cell
+    }
+
+    pub(super) fn compare(m: usize) {
+        let (axes, x) = configuration(m, 0.6);
+        let xp = periodic(&x);
+        for (kind, x) in [(ContainerShape::Box, x), (ContainerShape::Periodic, xp)] {
+            let pools = [1, 2].map(|t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .expect("pool")
+            });
+            let mut models = [0, 1].map(|_| Model::<3>::new(axes.clone(), kind).expect("valid"));
+            let mut grads = [0, 1].map(|_| ModelGradient::default());
+            let mut best_t = [f64::INFINITY; 2];
+            let passes = (20_000 / m).max(1);
+            for _ in 0..12 {
+                for k in 0..2 {
+                    let (model, g) = (&mut models[k], &mut grads[k]);
+                    let t = pools[k].install(|| {
+                        best(passes, || {
+                            black_box(model.evaluate(&x, Some(g)).expect("evaluates"));
+                        })
+                    });
+                    best_t[k] = best_t[k].min(t);
+                }
+            }
+            let same = grads[0].overlap == grads[1].overlap;
+            println!(
+                "m = {m:6}, {kind:?}: value+gradient on 1 thread {:.0} ns, on 2 threads {:.0} ns per ellipsoid: {:.2}x; same bits: {same}",
+                best_t[0] * 1e9 / m as f64,
+                best_t[1] * 1e9 / m as f64,
+                best_t[0] / best_t[1]
+            );
+        }
+    }
 }

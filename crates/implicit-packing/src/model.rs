@@ -99,8 +99,10 @@ impl ModelGradient {
             &mut self.containment,
             &mut self.objective,
         ] {
-            v.clear();
             v.resize(n, 0.0);
+            let (blocks, rest) = v.as_chunks_mut::<1>();
+            debug_assert!(rest.is_empty());
+            zero(blocks);
         }
     }
 }
@@ -123,6 +125,8 @@ pub struct Model<const N: usize> {
     // of the nine of ω: at m = 1e5 this array is written and read on every evaluation.
     spins: Vec<[f64; 2]>,
     torques: Vec<[f64; 3]>,
+    // The summed pair forces on a periodic cell's points (items and ghosts).
+    forces: Vec<[f64; N]>,
     // The candidate pairs: a Verlet list over the grid (cell edge 2R plus the skin), rebuilt
     // only when an ellipsoid has moved more than half the skin since the last build.
     pairs: cell_grid::PairList<N>,
@@ -187,6 +191,7 @@ impl<const N: usize> Model<N> {
             centres: Vec::new(),
             spins: Vec::new(),
             torques: Vec::new(),
+            forces: Vec::new(),
             pairs,
             ranges: RangeWork::default(),
             #[cfg(feature = "rayon")]
@@ -244,17 +249,9 @@ impl<const N: usize> Model<N> {
     fn load(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
         let n = self.var_count();
         Error::check_length("variables", n, x.len())?;
-        for (index, &value) in x.iter().enumerate() {
-            let limit = if index < self.len() * Self::vars_per_body()
-                && (index % Self::vars_per_body()) < N
-            {
-                MAX_MAGNITUDE
-            } else {
-                f64::INFINITY
-            };
-            if !(value.is_finite() && value.abs() <= limit) {
-                return Err(Error::NonFiniteVariable { index, value });
-            }
+        if let Some(index) = first_bad_variable::<N>(x, self.len()) {
+            let value = x[index];
+            return Err(Error::NonFiniteVariable { index, value });
         }
         let container =
             Container::from_dimensions(self.kind, &x[self.len() * Self::vars_per_body()..])?;
@@ -264,17 +261,7 @@ impl<const N: usize> Model<N> {
         let stride = Self::vars_per_body();
         if let (Some(lattice), Container::Periodic { cell }) = (&mut self.lattice, container) {
             // The centre variables are fractional coordinates: the body sits at H s.
-            lattice.fractional.clear();
-            for i in 0..self.semi_axes.len() {
-                let s: [f64; N] = std::array::from_fn(|k| x[i * stride + k]);
-                if let Some(k) = (0..N).find(|&k| s[k].abs() > MAX_CELLS) {
-                    return Err(Error::FractionalOutOfRange {
-                        index: i * stride + k,
-                        value: s[k],
-                    });
-                }
-                lattice.fractional.push(s);
-            }
+            fractional_centres(x, self.semi_axes.len(), &mut lattice.fractional)?;
             let fractional = &lattice.fractional;
             let body_at = |(i, l): (usize, &[f64; N])| {
                 let mut vars = [0.0; 6];
@@ -674,7 +661,7 @@ impl<const N: usize> Model<N> {
 /// image) and the torque on every item.
 struct PeriodicSums<'a, const N: usize> {
     sum: f64,
-    forces: Vec<[f64; N]>,
+    forces: &'a mut Vec<[f64; N]>,
     torques: &'a mut Vec<[f64; 3]>,
 }
 
@@ -746,13 +733,16 @@ impl<const N: usize> Model<N> {
         let m = self.len();
         let lattice = self.lattice.as_mut().ok_or(Error::Empty)?;
         // Forces per point (item or image), torques per item.
+        let forces = &mut self.forces;
+        forces.resize(lattice.images.owner.len(), [0.0; N]);
+        zero(forces);
+        self.torques.resize(m, [0.0; 3]);
+        zero(&mut self.torques);
         let mut acc = PeriodicSums {
             sum: 0.0,
-            forces: vec![[0.0; N]; lattice.images.owner.len()],
+            forces,
             torques: &mut self.torques,
         };
-        acc.torques.clear();
-        acc.torques.resize(m, [0.0; 3]);
         #[cfg(not(feature = "rayon"))]
         {
             let mut queue = KernelQueue::<N, WithGradient>::default();
@@ -776,12 +766,12 @@ impl<const N: usize> Model<N> {
                 *pairs += kept.1;
             }
             let lists: Vec<&[Entry<N>]> = ranges.iter().map(|s| s.kept.2.as_slice()).collect();
-            crate::scatter::add_to_points(&lists, &lattice.images, &mut acc.forces, acc.torques);
+            crate::scatter::add_to_points(&lists, &lattice.images, acc.forces, acc.torques);
         }
-        let PeriodicSums { sum, forces, .. } = acc;
+        let sum = acc.sum;
         let dcell = cell_gradient(
             (cell, &lattice.images, &lattice.fractional),
-            (&forces, &self.torques),
+            (&self.forces, &self.torques),
             (&self.bodies, &self.spins),
             &mut out[..m * Self::vars_per_body()],
         );
@@ -1141,12 +1131,14 @@ fn cell_gradient<const N: usize>(
     };
     let width = BODIES_PER_TASK * stride;
     #[cfg(feature = "rayon")]
-    let groups: Vec<[[f64; N]; N]> = {
+    let groups: Vec<[[f64; N]; N]> = if out.len() > width {
         use rayon::prelude::*;
         out.par_chunks_mut(width)
             .enumerate()
             .map(|(t, vars)| group(t * BODIES_PER_TASK, vars))
             .collect()
+    } else {
+        vec![group(0, out)]
     };
     #[cfg(not(feature = "rayon"))]
     let groups = out
@@ -1234,8 +1226,8 @@ fn pair_sum_gradient<const N: usize>(
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
 ) -> Result<(f64, usize), Error> {
-    torques.clear();
     torques.resize(bodies.len(), [0.0; 3]);
+    zero(torques);
     #[cfg(not(feature = "rayon"))]
     {
         let mut sum = 0.0;
@@ -1355,6 +1347,110 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Error> {
             threads,
             reason: e.to_string(),
         })
+}
+
+/// The first variable of `x` (`m` items, then the container) that is NaN or infinite, or a
+/// centre coordinate beyond [`MAX_MAGNITUDE`]; in tasks of [`BODIES_PER_TASK`] items on
+/// rayon's pool with the feature.
+fn first_bad_variable<const N: usize>(x: &[f64], m: usize) -> Option<usize> {
+    let stride = Model::<N>::vars_per_body();
+    let (items, container) = x.split_at(m * stride);
+    let in_group = |(g, vars): (usize, &[f64])| {
+        vars.iter().enumerate().find_map(|(k, &v)| {
+            let limit = if k % stride < N {
+                MAX_MAGNITUDE
+            } else {
+                f64::INFINITY
+            };
+            (!(v.is_finite() && v.abs() <= limit)).then_some(g * BODIES_PER_TASK * stride + k)
+        })
+    };
+    let chunks = items.chunks(BODIES_PER_TASK * stride);
+    #[cfg(feature = "rayon")]
+    let bad = if chunks.len() > 1 {
+        use rayon::prelude::*;
+        items
+            .par_chunks(BODIES_PER_TASK * stride)
+            .enumerate()
+            .find_map_first(in_group)
+    } else {
+        chunks.enumerate().find_map(in_group)
+    };
+    #[cfg(not(feature = "rayon"))]
+    let bad = chunks.enumerate().find_map(in_group);
+    bad.or_else(|| {
+        let k = container.iter().position(|v| !v.is_finite())?;
+        Some(m * stride + k)
+    })
+}
+
+/// The fractional centres `s_i` of the `m` items of a periodic cell's variables `x`, written to
+/// `out`.
+///
+/// # Errors
+/// [`Error::FractionalOutOfRange`] for the first coordinate beyond [`MAX_CELLS`] cells.
+fn fractional_centres<const N: usize>(
+    x: &[f64],
+    m: usize,
+    out: &mut Vec<[f64; N]>,
+) -> Result<(), Error> {
+    let stride = Model::<N>::vars_per_body();
+    let centre = |vars: &[f64]| -> [f64; N] { std::array::from_fn(|k| vars[k]) };
+    let far = |s: &[f64; N]| s.iter().any(|v| v.abs() > MAX_CELLS);
+    #[cfg(feature = "rayon")]
+    let first = if m > BODIES_PER_TASK {
+        use rayon::prelude::*;
+        x[..m * stride]
+            .par_chunks(stride)
+            .with_min_len(BODIES_PER_TASK)
+            .map(centre)
+            .collect_into_vec(out);
+        out.par_iter()
+            .with_min_len(BODIES_PER_TASK)
+            .position_first(far)
+    } else {
+        serial_centres(x, m, centre, out, far)
+    };
+    #[cfg(not(feature = "rayon"))]
+    let first = serial_centres(x, m, centre, out, far);
+    match first {
+        Some(i) => {
+            let k = (0..N).find(|&k| out[i][k].abs() > MAX_CELLS).unwrap_or(0);
+            Err(Error::FractionalOutOfRange {
+                index: i * stride + k,
+                value: out[i][k],
+            })
+        }
+        None => Ok(()),
+    }
+}
+
+/// [`fractional_centres`] on the current thread: the centres written to `out`, the first
+/// that is `far`.
+fn serial_centres<const N: usize>(
+    x: &[f64],
+    m: usize,
+    centre: impl Fn(&[f64]) -> [f64; N],
+    out: &mut Vec<[f64; N]>,
+    far: impl Fn(&[f64; N]) -> bool,
+) -> Option<usize> {
+    out.clear();
+    let stride = Model::<N>::vars_per_body();
+    out.extend(x[..m * stride].chunks(stride).map(centre));
+    out.iter().position(far)
+}
+
+/// Sets every entry of `v` to zero (by blocks on rayon's pool with the feature).
+fn zero<const K: usize>(v: &mut [[f64; K]]) {
+    #[cfg(feature = "rayon")]
+    const CHUNK: usize = 1 << 14;
+    #[cfg(feature = "rayon")]
+    if v.len() > CHUNK {
+        use rayon::prelude::*;
+        v.par_chunks_mut(CHUNK).for_each(|c| c.fill([0.0; K]));
+        return;
+    }
+    v.fill([0.0; K]);
 }
 
 /// The bodies and spins of the items, `body_of((i, l_i))` each, appended in order: on

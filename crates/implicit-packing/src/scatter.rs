@@ -24,14 +24,19 @@ use rayon::prelude::*;
 /// A kept pair term's gradient: the pair `(i, j)`, `i < j`, and its derivatives.
 pub(crate) type Entry<const N: usize> = (usize, usize, PairGradient<N>);
 
-/// Item indices `0 = b_0 ≤ b_1 ≤ … ≤ b_T = items` cutting the items into `blocks` blocks of
-/// about equal scatter work for the terms `lists` (in order, ascending `i`).
-pub(crate) fn block_bounds<const N: usize>(
-    lists: &[&[Entry<N>]],
-    items: usize,
-    blocks: usize,
-) -> Vec<usize> {
+/// Fewer terms than this are added on the calling thread: waking the pool would cost more.
+const TERMS_PER_TASK: usize = 4096;
+
+/// Item indices `0 = b_0 ≤ b_1 ≤ … ≤ b_T = items` cutting the items into blocks of about equal
+/// scatter work for the terms `lists` (in order, ascending `i`): one block per thread of the
+/// current pool, one when there are few terms.
+fn block_bounds<const N: usize>(lists: &[&[Entry<N>]], items: usize) -> Vec<usize> {
     let total: usize = lists.iter().map(|l| l.len()).sum();
+    let blocks = if total < 2 * TERMS_PER_TASK {
+        1
+    } else {
+        rayon::current_num_threads().min(total / TERMS_PER_TASK)
+    };
     let mut bounds = Vec::with_capacity(blocks + 1);
     bounds.push(0);
     for t in 1..blocks {
@@ -72,6 +77,15 @@ fn scan_until<const N: usize>(
     }
 }
 
+/// `f` on every block: on rayon's pool when there are several.
+fn for_each_block<T: Send>(blocks: Vec<T>, f: impl Fn(T) + Sync + Send) {
+    if blocks.len() == 1 {
+        blocks.into_iter().for_each(f);
+    } else {
+        blocks.into_par_iter().for_each(f);
+    }
+}
+
 /// Splits `v` at the item bounds `bounds`, `width` entries per item.
 fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize], width: usize) -> Vec<&'a mut [T]> {
     let mut out = Vec::with_capacity(bounds.len());
@@ -93,33 +107,32 @@ pub(crate) fn add_to_items<const N: usize>(
     torques: &mut [[f64; 3]],
 ) {
     let items = torques.len();
-    let bounds = block_bounds(lists, items, rayon::current_num_threads());
+    let bounds = block_bounds(lists, items);
     let outs = split_at_bounds(&mut out[..items * stride], &bounds, stride);
     let taus = split_at_bounds(torques, &bounds, 1);
-    let blocks: Vec<_> = bounds.windows(2).map(|w| w[0]..w[1]).collect();
-    blocks
-        .into_par_iter()
+    let blocks: Vec<_> = (bounds.windows(2).map(|w| w[0]..w[1]))
         .zip(outs)
         .zip(taus)
-        .for_each(|((block, out), tau)| {
-            let mut add = |item: usize, centre: &[f64; N], torque: &[f64; 3]| {
-                let k = item - block.start;
-                for (o, c) in out[k * stride..k * stride + N].iter_mut().zip(centre) {
-                    *o += c;
-                }
-                for (t, c) in tau[k].iter_mut().zip(torque) {
-                    *t += c;
-                }
-            };
-            scan_until(lists, block.end, |i, j, g| {
-                if i >= block.start {
-                    add(i, &g.centre_i, &g.torque_i);
-                }
-                if block.contains(&j) {
-                    add(j, &g.centre_j, &g.torque_j);
-                }
-            });
+        .collect();
+    for_each_block(blocks, |((block, out), tau)| {
+        let mut add = |item: usize, centre: &[f64; N], torque: &[f64; 3]| {
+            let k = item - block.start;
+            for (o, c) in out[k * stride..k * stride + N].iter_mut().zip(centre) {
+                *o += c;
+            }
+            for (t, c) in tau[k].iter_mut().zip(torque) {
+                *t += c;
+            }
+        };
+        scan_until(lists, block.end, |i, j, g| {
+            if i >= block.start {
+                add(i, &g.centre_i, &g.torque_i);
+            }
+            if block.contains(&j) {
+                add(j, &g.centre_j, &g.torque_j);
+            }
         });
+    });
 }
 
 /// Adds the terms `lists` of a periodic cell's points (`i` an item, `j` an item or a ghost) to
@@ -132,7 +145,7 @@ pub(crate) fn add_to_points<const N: usize>(
     torques: &mut [[f64; 3]],
 ) {
     let items = owners.items;
-    let bounds = block_bounds(lists, items, rayon::current_num_threads());
+    let bounds = block_bounds(lists, items);
     let (item_forces, ghost_forces) = forces.split_at_mut(items);
     let ghost_bounds: Vec<usize> = bounds
         .iter()
@@ -141,32 +154,31 @@ pub(crate) fn add_to_points<const N: usize>(
     let fi = split_at_bounds(item_forces, &bounds, 1);
     let fg = split_at_ghost_bounds(ghost_forces, &ghost_bounds);
     let taus = split_at_bounds(torques, &bounds, 1);
-    let blocks: Vec<_> = bounds
-        .windows(2)
-        .zip(ghost_bounds.windows(2))
+    let blocks: Vec<_> = (bounds.windows(2).zip(ghost_bounds.windows(2)))
         .map(|(w, g)| (w[0]..w[1], items + g[0]))
+        .zip(fi)
+        .zip(fg)
+        .zip(taus)
         .collect();
-    blocks.into_par_iter().zip(fi).zip(fg).zip(taus).for_each(
-        |((((block, ghost0), fi), fg), tau)| {
-            let lo = block.start;
-            scan_until(lists, block.end, |a, b, g| {
-                if a >= lo {
-                    add(&mut fi[a - lo], &g.centre_i);
-                    add(&mut tau[a - lo], &g.torque_i);
-                }
-                let o = owners.owner[b] as usize;
-                if block.contains(&o) {
-                    let f = if b < items {
-                        &mut fi[b - lo]
-                    } else {
-                        &mut fg[b - ghost0]
-                    };
-                    add(f, &g.centre_j);
-                    add(&mut tau[o - lo], &g.torque_j);
-                }
-            });
-        },
-    );
+    for_each_block(blocks, |((((block, ghost0), fi), fg), tau)| {
+        let lo = block.start;
+        scan_until(lists, block.end, |a, b, g| {
+            if a >= lo {
+                add(&mut fi[a - lo], &g.centre_i);
+                add(&mut tau[a - lo], &g.torque_i);
+            }
+            let o = owners.owner[b] as usize;
+            if block.contains(&o) {
+                let f = if b < items {
+                    &mut fi[b - lo]
+                } else {
+                    &mut fg[b - ghost0]
+                };
+                add(f, &g.centre_j);
+                add(&mut tau[o - lo], &g.torque_j);
+            }
+        });
+    });
 }
 
 /// Splits `v` at the (ghost) point bounds `bounds`.

@@ -249,6 +249,45 @@ fn model_gradient_matches_finite_differences() {
     fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
 }
 
+/// Among several bad variables of a large model (checked in groups of items, in parallel with
+/// the `rayon` feature) the first is named: a centre beyond 1e30 in a late group, a NaN angle
+/// in an earlier one, an infinite container dimension.
+#[test]
+fn the_first_bad_variable_of_many_items_is_named() {
+    let m = 10_000;
+    let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.25]; m], ContainerShape::Box).unwrap();
+    let mut x = vec![0.0; p.var_count()];
+    let n = x.len();
+    // Apart, on a cubic lattice of spacing 3.
+    for (i, item) in x[..6 * m].chunks_mut(6).enumerate() {
+        item[..3].copy_from_slice(&[(i % 22) as f64, (i / 22 % 22) as f64, (i / 484) as f64]);
+        item[..3].iter_mut().for_each(|c| *c = 3.0 * *c - 30.0);
+    }
+    x[n - 3..].copy_from_slice(&[100.0, 100.0, 100.0]);
+    assert!(p.evaluate(&x, None).is_ok());
+    x[n - 2] = f64::INFINITY;
+    assert!(matches!(
+        p.evaluate(&x, None),
+        Err(Error::NonFiniteVariable { index, .. }) if index == n - 2
+    ));
+    x[6 * 9_000 + 1] = 2e30;
+    x[6 * 4_000 + 4] = f64::NAN;
+    assert!(matches!(
+        p.evaluate(&x, None),
+        Err(Error::NonFiniteVariable { index, .. }) if index == 6 * 4_000 + 4
+    ));
+    x[6 * 4_000 + 4] = 0.0;
+    assert!(matches!(
+        p.evaluate(&x, None),
+        Err(Error::NonFiniteVariable { index, .. }) if index == 6 * 9_000 + 1
+    ));
+    // An angle may be large: only centres are bounded.
+    x[6 * 9_000 + 1] = 0.0;
+    x[n - 2] = 100.0;
+    x[6 * 7_000 + 5] = 2e30;
+    assert!(p.evaluate(&x, None).is_ok());
+}
+
 #[test]
 fn bad_variables_are_reported_by_index() {
     let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.25]; 3], ContainerShape::Ball).unwrap();
