@@ -143,7 +143,7 @@ pub fn fill<const N: usize>(
         let found = AtomicBool::new(false);
         let shared: &dyn Observer = &*observer;
         let (found, out_of_time) = (&found, &out_of_time);
-        let results = in_parallel(&starts, |x| {
+        let results = in_parallel(&starts, threads, |x| {
             let r = minimise_start(&semi_axes, kind, x, &settings.local, shared, || {
                 found.load(Ordering::Relaxed) || shared.should_stop() || out_of_time()
             });

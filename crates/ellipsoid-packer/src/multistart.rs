@@ -438,7 +438,7 @@ pub fn multistart<const N: usize>(
                 }
             })
             .collect();
-        let results = in_parallel(&starts, |x| {
+        let results = in_parallel(&starts, threads, |x| {
             minimise_start(semi_axes, kind, x, &settings.local, shared, || {
                 shared.should_stop() || out_of_time()
             })
@@ -555,18 +555,40 @@ impl Chain {
 }
 
 /// `minimise` on every start, one thread each, in the order of the starts; a thread that
-/// panicked gives [`Error::StartPanicked`].
+/// panicked gives [`Error::StartPanicked`]. With the `rayon` feature the `threads` are shared
+/// out: each start runs inside a pool of `threads / starts` threads of its own (at least one),
+/// which its model's evaluations use — one start of a round alone gets all of them, and a
+/// start with one thread evaluates inline, without handing work to another thread. The
+/// evaluations are the same bits on any number of threads, so the results do not depend on
+/// the share.
 pub(crate) fn in_parallel<T: Sync>(
     starts: &[T],
+    threads: usize,
     minimise: impl Fn(&T) -> Result<LocalResult, Error> + Sync,
 ) -> Vec<Result<LocalResult, Error>> {
+    let each = (threads / starts.len().max(1)).max(1);
     std::thread::scope(|scope| {
-        let handles: Vec<_> = starts.iter().map(|x| scope.spawn(|| minimise(x))).collect();
+        let handles: Vec<_> = starts
+            .iter()
+            .map(|x| scope.spawn(|| on_threads(each, || minimise(x))))
+            .collect();
         handles
             .into_iter()
             .map(|h| h.join().unwrap_or(Err(Error::StartPanicked)))
             .collect()
     })
+}
+
+/// `f` inside a pool of `threads` threads of its own with the `rayon` feature; on the calling
+/// thread without it.
+fn on_threads<R: Send>(
+    #[cfg_attr(not(feature = "rayon"), allow(unused_variables))] threads: usize,
+    f: impl FnOnce() -> Result<R, Error> + Send,
+) -> Result<R, Error> {
+    #[cfg(feature = "rayon")]
+    return implicit_packing::model::thread_pool(threads)?.install(f);
+    #[cfg(not(feature = "rayon"))]
+    f()
 }
 
 /// The local minimisation of start `x` on a model of its own: each iteration goes to

@@ -38,7 +38,6 @@ use implicit_packing::containment::{Container, containment_residual};
 use implicit_packing::model::Model;
 use implicit_packing::periodic::{to_cartesian, to_fractional, widths};
 use implicit_packing::shape::Body;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// The packing fraction of the random start in 2D unless the settings say otherwise: well
@@ -319,7 +318,7 @@ pub fn sequential_addition_oriented<const N: usize>(
     let mut order: Vec<usize> = (0..axes.len()).collect();
     let radius = |i: usize| axes[i].iter().fold(0.0_f64, |a, &b| a.max(b));
     order.sort_by(|&a, &b| radius(b).total_cmp(&radius(a)).then(a.cmp(&b)));
-    let mut grid = Buckets::new(&shape, 2.0 * reach);
+    let mut grid = Buckets::new(&shape, 2.0 * reach, axes.len());
     let mut placed: Vec<Option<Body<N>>> = vec![None; axes.len()];
     let mut rng = SplitMix64::stream(seed, u64::MAX);
     for (count, &i) in order.iter().enumerate() {
@@ -670,15 +669,32 @@ pub fn draw_semi_axes<const N: usize>(
 }
 
 /// Placed items by bucket: cells of edge at least the largest enclosing diameter, so that
-/// items within reach of each other lie in the same or adjacent buckets. In a periodic cell the
-/// buckets divide the fractional coordinates, `n_k = ⌊w_k / edge⌋` of them along axis k (`w_k`
-/// the cell's width across its lattice planes): a Cartesian distance d has |Δs_k|·w_k ≤ d, so
-/// the same argument holds with indices taken modulo `n_k`.
+/// items within reach of each other lie in the same or adjacent buckets. In a container the
+/// buckets divide its bounding box; in a periodic cell they divide the fractional coordinates,
+/// `n_k = ⌊w_k / edge⌋` of them along axis k (`w_k` the cell's width across its lattice
+/// planes): a Cartesian distance d has |Δs_k|·w_k ≤ d, so the same argument holds with
+/// indices taken modulo `n_k`. The buckets are a dense array of linked lists (first item per
+/// bucket, next item per item); the edge grows when the container would need more than
+/// [`BUCKETS_PER_ITEM`] buckets per item.
 struct Buckets<const N: usize> {
     edge: f64,
+    /// The grid's lower corner (a container's bounding box; unused in a periodic cell).
+    lower: [f64; N],
     periodic: Option<Cell<N>>,
-    items: HashMap<[i64; N], Vec<u32>>,
+    /// Buckets along each axis.
+    counts: [i64; N],
+    /// The last item put in each bucket ([`NO_ITEM`]: none).
+    first: Vec<u32>,
+    /// The item put in the same bucket before each item.
+    next: Vec<u32>,
 }
+
+/// The end of a bucket's list.
+const NO_ITEM: u32 = u32::MAX;
+
+/// Largest number of buckets per item: a container much larger than its items gets coarser
+/// buckets rather than an array mostly empty.
+const BUCKETS_PER_ITEM: f64 = 8.0;
 
 /// A periodic cell as the buckets see it.
 struct Cell<const N: usize> {
@@ -686,39 +702,55 @@ struct Cell<const N: usize> {
     matrix: [[f64; N]; N],
     /// Its widths across lattice planes.
     widths: [f64; N],
-    /// Buckets along each axis.
-    counts: [i64; N],
 }
 
 impl<const N: usize> Buckets<N> {
-    fn new(container: &Container<N>, edge: f64) -> Self {
-        let periodic = match *container {
+    /// Buckets for `items` items in `container`, of edge at least `edge`.
+    fn new(container: &Container<N>, edge: f64, items: usize) -> Self {
+        let (extent, periodic) = match *container {
             Container::Periodic { cell } => {
                 let w = widths(&cell);
-                let counts = std::array::from_fn(|k| ((w[k] / edge).floor() as i64).max(1));
-                Some(Cell {
+                let periodic = Cell {
                     matrix: cell,
                     widths: w,
-                    counts,
-                })
+                };
+                (w, Some(periodic))
             }
-            _ => None,
+            Container::Ball { radius } => ([2.0 * radius; N], None),
+            Container::Ellipsoid { semi_axes } => (semi_axes.map(|a| 2.0 * a), None),
+            Container::Box { half_sides } => (half_sides.map(|h| 2.0 * h), None),
         };
+        let volume: f64 = extent.iter().product();
+        let fine = (volume / (BUCKETS_PER_ITEM * items.max(1) as f64)).powf(1.0 / N as f64);
+        let edge = edge.max(fine);
+        let counts: [i64; N] = std::array::from_fn(|k| {
+            let n = extent[k] / edge;
+            // Fractional buckets must not be narrower than the edge; a container's must cover it.
+            (if periodic.is_some() {
+                n.floor()
+            } else {
+                n.ceil()
+            } as i64)
+                .max(1)
+        });
+        let total = counts.iter().product::<i64>() as usize;
         Self {
             edge,
+            lower: extent.map(|e| -0.5 * e),
             periodic,
-            items: HashMap::new(),
+            counts,
+            first: vec![NO_ITEM; total],
+            next: vec![NO_ITEM; items],
         }
     }
 
     fn key(&self, centre: &[f64; N]) -> [i64; N] {
+        let counts = &self.counts;
         match &self.periodic {
-            None => std::array::from_fn(|k| (centre[k] / self.edge).floor() as i64),
-            Some(Cell {
-                matrix: cell,
-                counts,
-                ..
-            }) => {
+            None => std::array::from_fn(|k| {
+                (((centre[k] - self.lower[k]) / self.edge).floor() as i64).clamp(0, counts[k] - 1)
+            }),
+            Some(Cell { matrix: cell, .. }) => {
                 let s = to_fractional(cell, centre);
                 std::array::from_fn(|k| {
                     let f = s[k] - s[k].floor();
@@ -728,29 +760,54 @@ impl<const N: usize> Buckets<N> {
         }
     }
 
-    fn insert(&mut self, item: usize, body: &Body<N>) {
-        let key = self.key(&body.centre());
-        self.items.entry(key).or_default().push(item as u32);
+    fn slot(&self, key: &[i64; N]) -> usize {
+        key.iter()
+            .zip(&self.counts)
+            .rev()
+            .fold(0, |slot, (&k, &n)| slot * n as usize + k as usize)
     }
 
-    /// The keys of the bucket of `key` and its neighbours, each once.
-    fn around(&self, key: [i64; N]) -> Vec<[i64; N]> {
-        let mut keys: Vec<[i64; N]> = Vec::with_capacity(3usize.pow(N as u32));
-        for code in 0..3usize.pow(N as u32) {
+    fn insert(&mut self, item: usize, body: &Body<N>) {
+        let slot = self.slot(&self.key(&body.centre()));
+        self.next[item] = self.first[slot];
+        self.first[slot] = item as u32;
+    }
+
+    /// Calls `f` on the keys of the bucket of `key` and its neighbours, each once, until it
+    /// returns true; returns whether it did.
+    fn any_around(
+        &self,
+        key: [i64; N],
+        mut f: impl FnMut([i64; N]) -> Result<bool, Error>,
+    ) -> Result<bool, Error> {
+        let mut seen = [[0i64; N]; 27];
+        let mut len = 0;
+        // Only a periodic axis of fewer than three buckets wraps a neighbour onto another.
+        let wraps = self.periodic.is_some() && self.counts.iter().any(|&n| n < 3);
+        'keys: for code in 0..3usize.pow(N as u32) {
             let mut k = key;
             let mut c = code;
             for (axis, v) in k.iter_mut().enumerate() {
                 *v += (c % 3) as i64 - 1;
                 c /= 3;
-                if let Some(cell) = &self.periodic {
-                    *v = v.rem_euclid(cell.counts[axis]);
+                if self.periodic.is_some() {
+                    *v = v.rem_euclid(self.counts[axis]);
+                } else if !(0..self.counts[axis]).contains(v) {
+                    continue 'keys;
                 }
             }
-            if !keys.contains(&k) {
-                keys.push(k);
+            if wraps {
+                if seen[..len].contains(&k) {
+                    continue;
+                }
+                seen[len] = k;
+                len += 1;
+            }
+            if f(k)? {
+                return Ok(true);
             }
         }
-        keys
+        Ok(false)
     }
 
     /// Whether `body` overlaps a placed item (in a periodic cell: any image of one, or an
@@ -759,16 +816,18 @@ impl<const N: usize> Buckets<N> {
         if self.overlaps_own_images(body)? {
             return Ok(true);
         }
-        for key in self.around(self.key(&body.centre())) {
-            for &j in self.items.get(&key).map_or(&[][..], Vec::as_slice) {
+        self.any_around(self.key(&body.centre()), |key| {
+            let mut j = self.first[self.slot(&key)];
+            while j != NO_ITEM {
                 if let Some(other) = &placed[j as usize]
                     && self.pair_overlaps(body, other)?
                 {
                     return Ok(true);
                 }
+                j = self.next[j as usize];
             }
-        }
-        Ok(false)
+            Ok(false)
+        })
     }
 
     /// PW85 on `a` and every image of `b` within reach (the body itself in a container).
