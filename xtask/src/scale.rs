@@ -14,8 +14,10 @@
 //! figure `docs/figures/scale.{svg,png}` and the table between the markers of
 //! `docs/packing.md` are drawn from every row.
 //!
-//! Threads: the model's pair sums run on rayon's pool when xtask is built with its `rayon`
-//! feature (`cargo run --release -p xtask --features rayon -- scale`), one thread otherwise.
+//! Threads: the local minimisation runs inside a pool of `RAYON_NUM_THREADS` threads (every
+//! core by default) when xtask is built with its `rayon` feature
+//! (`cargo run --release -p xtask --features rayon -- scale`), as a multi-start runs a start
+//! alone; on the calling thread otherwise.
 
 use crate::error::Error;
 use crate::output::{Outputs, Stability};
@@ -207,8 +209,16 @@ fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
         stopped |= elapsed >= budget;
         stopped
     };
-    let result = local_minimisation(&mut problem, &x0, &settings, &mut observe)
-        .map_err(|e| study(format!("m = {m}, {solver}: {e}")))?;
+    // Inside a pool of the threads, as the packer runs a start: with one thread the model's
+    // evaluations run inline, without handing work to another thread.
+    #[cfg(feature = "rayon")]
+    let result = implicit_packing::model::on_threads(threads(), || {
+        local_minimisation(&mut problem, &x0, &settings, &mut observe)
+    })
+    .map_err(|e| study(format!("m = {m}, {solver}: {e}")))?;
+    #[cfg(not(feature = "rayon"))]
+    let result = local_minimisation(&mut problem, &x0, &settings, &mut observe);
+    let result = result.map_err(|e| study(format!("m = {m}, {solver}: {e}")))?;
     let seconds = start.elapsed().as_secs_f64();
     tally.close();
     let stop = if stopped {

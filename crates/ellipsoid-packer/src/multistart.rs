@@ -586,7 +586,7 @@ fn on_threads<R: Send>(
     f: impl FnOnce() -> Result<R, Error> + Send,
 ) -> Result<R, Error> {
     #[cfg(feature = "rayon")]
-    return implicit_packing::model::thread_pool(threads)?.install(f);
+    return implicit_packing::model::on_threads(threads, f)?;
     #[cfg(not(feature = "rayon"))]
     f()
 }

@@ -166,13 +166,13 @@ pub fn random_packing_seen<const N: usize>(
     observe: &mut (dyn FnMut(&Progress<'_>) -> bool + Send),
     kept: &mut (dyn FnMut(f64) + Send),
 ) -> Result<RandomPacking, Error> {
-    // The whole run on a pool of the settings' threads: the model's evaluations and the
-    // solver's reductions over long vectors share it.
+    // The whole run inside a pool of the settings' threads: the model's evaluations and the
+    // solver's passes over long vectors share it.
     #[cfg(feature = "rayon")]
-    if settings.threads > 0 {
-        let pool = implicit_packing::model::thread_pool(settings.threads)?;
-        return pool.install(|| random_packing_here(problem, container, settings, observe, kept));
-    }
+    return implicit_packing::model::on_threads(settings.threads, || {
+        random_packing_here(problem, container, settings, observe, kept)
+    })?;
+    #[cfg(not(feature = "rayon"))]
     random_packing_here(problem, container, settings, observe, kept)
 }
 

@@ -1349,6 +1349,28 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Error> {
         })
 }
 
+/// `f` run inside a rayon pool of `threads` threads, so that every parallel step of the
+/// model (and of whatever else `f` does on rayon) is a task of that pool rather than a job
+/// handed to it from outside, which costs a wake-up each time. `threads = 0`: in place when the
+/// caller already runs in a pool, else in a new pool of as many threads as rayon's global
+/// one (every core by default). The model's values are the same bits on any number of
+/// threads.
+///
+/// # Errors
+/// [`Error::ThreadPool`] when the threads cannot be started.
+#[cfg(feature = "rayon")]
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> Result<R, Error> {
+    if threads == 0 && rayon::current_thread_index().is_some() {
+        return Ok(f());
+    }
+    let n = if threads == 0 {
+        rayon::current_num_threads()
+    } else {
+        threads
+    };
+    Ok(thread_pool(n)?.install(f))
+}
+
 /// The first variable of `x` (`m` items, then the container) that is NaN or infinite, or a
 /// centre coordinate beyond [`MAX_MAGNITUDE`]; in tasks of [`BODIES_PER_TASK`] items on
 /// rayon's pool with the feature.

@@ -550,3 +550,28 @@ fn centres_along_a_short_axis_give_finite_overlaps() {
         assert!(v.iter().all(|o| o.is_finite() && *o > 0.0), "{name}: {v:?}");
     }
 }
+
+/// A run on the model's threads is a task of a pool: of the number asked, of the caller's pool
+/// when it runs in one and asks for 0, of rayon's global pool's size otherwise.
+#[cfg(feature = "rayon")]
+#[test]
+fn runs_are_placed_inside_a_pool_of_the_threads_asked() {
+    use implicit_packing::model::on_threads;
+    let inside = || {
+        (
+            rayon::current_thread_index().is_some(),
+            rayon::current_num_threads(),
+        )
+    };
+    assert_eq!(on_threads(3, inside).unwrap(), (true, 3));
+    assert_eq!(
+        on_threads(0, inside).unwrap(),
+        (true, rayon::current_num_threads())
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let nested = pool.install(|| on_threads(0, inside).unwrap());
+    assert_eq!(nested, (true, 2));
+}
