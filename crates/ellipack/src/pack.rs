@@ -1113,7 +1113,7 @@ mod tests {
     fn a_small_scene_packs_certified_and_verify_agrees() {
         let scene = Scene::from_toml_str(
             "dimension = 2\nseed = 3\n[container]\nkind = \"circle\"\n[[shapes]]\ncount = 5\n\
-             semi_axes = [1.5, 1.0]\n[solver]\ntime_limit = 20.0\nlocal_minimisations = 2\n\
+             semi_axes = [1.5, 1.0]\n[solver]\ntime_limit = 600.0\nlocal_minimisations = 2\n\
              threads = 1\n",
             "t.toml",
         )

@@ -132,7 +132,7 @@ fn measure_accepts_both_reference_files_as_they_are() {
 /// Six ellipsoids in a ball, two local minimisations on one thread.
 const SIX_IN_A_BALL: &str = "dimension = 3\nseed = 2\n[container]\nkind = \"ball\"\n\
     [[shapes]]\ncount = 6\nsemi_axes = [1.0, 0.75, 0.5]\n\
-    [solver]\ntime_limit = 30.0\nlocal_minimisations = 2\nthreads = 1\n";
+    [solver]\ntime_limit = 600.0\nlocal_minimisations = 2\nthreads = 1\n";
 
 /// A scene whose semi-axis on line 6 is negative.
 const NEGATIVE_SEMI_AXIS: &str = "dimension = 2\n[container]\nkind = \"ellipse\"\n\

@@ -80,7 +80,7 @@ fn an_impossible_fraction_ends_not_reached_with_the_unfinished_folder_only() {
         .and_then(|(_, rest)| rest.split_once(" s"))
         .and_then(|(number, _)| number.parse().ok())
         .unwrap_or_else(|| panic!("no fraction and time in {stderr}"));
-    assert!((2.0..30.0).contains(&seconds), "{stderr}");
+    assert!(seconds >= 2.0, "{stderr}");
     assert!(stderr.contains("overlapping pairs"), "{stderr}");
     assert!(stderr.contains("unfinished"), "{stderr}");
     assert!(!out.join("packing.csv").exists());

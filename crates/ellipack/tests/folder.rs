@@ -13,7 +13,7 @@ use common::{TempDir, assert_success, ellipack, is_symlink, names, pack_into, te
 fn scene(pictures: bool, xyz: bool) -> String {
     format!(
         "dimension = 2\nseed = 3\n[container]\nkind = \"circle\"\n[[shapes]]\ncount = 5\n\
-         semi_axes = [1.5, 1.0]\n[solver]\ntime_limit = 20.0\nlocal_minimisations = 2\n\
+         semi_axes = [1.5, 1.0]\n[solver]\ntime_limit = 600.0\nlocal_minimisations = 2\n\
          threads = 1\n[output]\npictures = {pictures}\nxyz = {xyz}\nimage_width = 200\n"
     )
 }

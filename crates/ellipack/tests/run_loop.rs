@@ -345,7 +345,7 @@ fn a_scene_with_the_compression_method_packs_and_certifies() {
     let scene = scene(
         &dir,
         30,
-        60.0,
+        600.0,
         "local_minimisations = 3\nmethod = \"compression\"\n",
     );
     let out = dir.join("out");

@@ -8,7 +8,7 @@ use std::process::Output;
 
 /// Six ellipses in a circle, three local minimisations per shard, no pictures.
 const SCENE: &str = "dimension = 2\nseed = 5\n[container]\nkind = \"circle\"\n[[shapes]]\n\
-                     count = 6\nsemi_axes = [2.0, 1.0]\n[solver]\ntime_limit = 60.0\n\
+                     count = 6\nsemi_axes = [2.0, 1.0]\n[solver]\ntime_limit = 600.0\n\
                      local_minimisations = 3\nthreads = 1\n[output]\npictures = false\n";
 
 fn pack_shard(scene: &Path, shard: &str, out: &Path) -> Output {
