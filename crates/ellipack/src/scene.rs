@@ -56,8 +56,9 @@
 //! feasibility_tolerance = 1e-4        # ε_feas, as in the paper's Section 6
 //! optimality_tolerance = 1e-4         # ε_opt
 //! time_limit = 60.0                   # seconds of wall clock (--time-limit overrides it)
-//! threads = 0                         # 0: every core (--threads overrides it): parallel
-//!                                     # starts; a random packing's evaluations (same bits)
+//! threads = 0                         # 0: every core (--threads overrides it): shared by
+//!                                     # the starts of a round (one start alone gets all);
+//!                                     # the same bits on any number
 //! # local_minimisations = 50          # cap on multi-start local minimisations (default: none)
 //! inner_solver = "projected-lbfgs"    # or "spg", "truncated-newton"
 //! method = "lagrangian"               # or "compression", "compression-lagrangian" (large m)
