@@ -163,16 +163,9 @@ pub(crate) fn axpy_dot(q: &mut [f64], a: f64, y: &[f64], s: &[f64]) -> f64 {
     parts.into_iter().fold(0.0, |sum, p| sum + p)
 }
 
-/// Applies `f` to every entry of `v` (by blocks on rayon's pool with the feature).
+/// Applies `f` to every entry of `v` (by blocks as [`map_blocks`]).
 pub(crate) fn for_each_entry(v: &mut [f64], f: impl Fn(&mut f64) + Sync + Send) {
-    #[cfg(feature = "rayon")]
-    if v.len() > BLOCK {
-        use rayon::prelude::*;
-        v.par_chunks_mut(BLOCK)
-            .for_each(|chunk| chunk.iter_mut().for_each(&f));
-        return;
-    }
-    v.iter_mut().for_each(f);
+    map_blocks(v, |_, chunk| chunk.iter_mut().for_each(&f));
 }
 
 /// True if every entry is finite.

@@ -34,7 +34,8 @@
 //! block per thread, each block taking the terms that land on it in the order of the pairs
 //! (module `scatter`), so the gradient has the same bits on any number of threads. The per-body
 //! pass (torques to angle derivatives, containment; in a periodic cell the ghosts' forces and
-//! the cell's derivatives) runs in fixed groups of 2048 bodies, summed in order. A value-only call does no gradient work.
+//! the cell's derivatives) runs in fixed groups of 2048 bodies, summed in order. A value-only
+//! call does no gradient work.
 //! Pairs are skipped at once when their enclosing balls are apart (the list's exact test) or the
 //! plane orthogonal to the centre line separates them with a margin (an exact certificate: the pair
 //! term is then exactly zero, value and gradient, see
@@ -100,9 +101,7 @@ impl ModelGradient {
             &mut self.objective,
         ] {
             v.resize(n, 0.0);
-            let (blocks, rest) = v.as_chunks_mut::<1>();
-            debug_assert!(rest.is_empty());
-            zero(blocks);
+            fill(v, 0.0);
         }
     }
 }
@@ -735,9 +734,9 @@ impl<const N: usize> Model<N> {
         // Forces per point (item or image), torques per item.
         let forces = &mut self.forces;
         forces.resize(lattice.images.owner.len(), [0.0; N]);
-        zero(forces);
+        fill(forces, [0.0; N]);
         self.torques.resize(m, [0.0; 3]);
-        zero(&mut self.torques);
+        fill(&mut self.torques, [0.0; 3]);
         let mut acc = PeriodicSums {
             sum: 0.0,
             forces,
@@ -1227,7 +1226,7 @@ fn pair_sum_gradient<const N: usize>(
     out: &mut [f64],
 ) -> Result<(f64, usize), Error> {
     torques.resize(bodies.len(), [0.0; 3]);
-    zero(torques);
+    fill(torques, [0.0; 3]);
     #[cfg(not(feature = "rayon"))]
     {
         let mut sum = 0.0;
@@ -1462,17 +1461,17 @@ fn serial_centres<const N: usize>(
     out.iter().position(far)
 }
 
-/// Sets every entry of `v` to zero (by blocks on rayon's pool with the feature).
-fn zero<const K: usize>(v: &mut [[f64; K]]) {
+/// Sets every entry of `v` to `value` (by blocks on rayon's pool with the feature).
+fn fill<T: Copy + Send + Sync>(v: &mut [T], value: T) {
     #[cfg(feature = "rayon")]
     const CHUNK: usize = 1 << 14;
     #[cfg(feature = "rayon")]
     if v.len() > CHUNK {
         use rayon::prelude::*;
-        v.par_chunks_mut(CHUNK).for_each(|c| c.fill([0.0; K]));
+        v.par_chunks_mut(CHUNK).for_each(|c| c.fill(value));
         return;
     }
-    v.fill([0.0; K]);
+    v.fill(value);
 }
 
 /// The bodies and spins of the items, `body_of((i, l_i))` each, appended in order: on
