@@ -273,9 +273,7 @@ impl<const D: usize> PairList<D> {
             self.start[i] = self.start[i - 1];
         }
         self.start[0] = 0;
-        for i in 0..m {
-            self.partner[self.start[i]..self.start[i + 1]].sort_unstable();
-        }
+        sort_rows(&self.start, &mut self.partner);
         self.reference.clear();
         self.reference.extend_from_slice(points);
         self.grid = Some(grid);
@@ -443,6 +441,37 @@ fn moved_within<const D: usize>(
 /// Points per rayon task of the displacement test (two tasks' worth at least to split).
 #[cfg(feature = "rayon")]
 const POINTS_PER_TASK: usize = 8192;
+
+/// Sorts each row `partner[start[i]..start[i + 1]]`; with `rayon`, blocks of
+/// [`POINTS_PER_TASK`] rows on the pool's threads (the rows are disjoint, so the list is the
+/// same on any number of threads). Most of a rebuild's own time is these short sorts.
+fn sort_rows(start: &[usize], partner: &mut [u32]) {
+    #[cfg(feature = "rayon")]
+    if start.len() > 2 * POINTS_PER_TASK {
+        let m = start.len() - 1;
+        use rayon::prelude::*;
+        let mut blocks = Vec::with_capacity(m.div_ceil(POINTS_PER_TASK));
+        let mut rest = partner;
+        for first in (0..m).step_by(POINTS_PER_TASK) {
+            let end = (first + POINTS_PER_TASK).min(m);
+            let (block, tail) = std::mem::take(&mut rest).split_at_mut(start[end] - start[first]);
+            blocks.push((&start[first..=end], block));
+            rest = tail;
+        }
+        blocks
+            .into_par_iter()
+            .for_each(|(rows, block)| sort_rows_here(rows, block));
+        return;
+    }
+    sort_rows_here(start, partner);
+}
+
+/// [`sort_rows`] on the calling thread, for `partner` beginning at row `start[0]`.
+fn sort_rows_here(start: &[usize], partner: &mut [u32]) {
+    for row in start.windows(2) {
+        partner[row[0] - start[0]..row[1] - start[0]].sort_unstable();
+    }
+}
 
 /// Buffered candidates per scan before `f` runs.
 const BATCH: usize = 64;

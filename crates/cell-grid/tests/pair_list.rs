@@ -123,9 +123,21 @@ fn a_periodic_box_uses_the_minimum_image() {
 
 #[test]
 fn the_list_is_the_pairs_in_ascending_order_with_the_grids_bits() {
-    let mut rng = Rng::new(10);
-    let pts = cloud::<3>(&mut rng, 2000, 12.0);
-    let radii: Vec<f64> = (0..2000).map(|_| rng.range(0.2, 0.5)).collect();
+    list_matches_the_grid(2000, 12.0, 10);
+}
+
+/// Enough rows for the rows to be sorted by blocks on several threads (feature `rayon`).
+#[test]
+fn a_long_list_sorted_by_blocks_of_rows_is_the_same() {
+    list_matches_the_grid(40_000, 35.0, 11);
+}
+
+/// The list of `n` random balls in a cube of edge `side` has the fresh grid's pairs, sorted,
+/// with their bits.
+fn list_matches_the_grid(n: usize, side: f64, seed: u64) {
+    let mut rng = Rng::new(seed);
+    let pts = cloud::<3>(&mut rng, n, side);
+    let radii: Vec<f64> = (0..n).map(|_| rng.range(0.2, 0.5)).collect();
     let mut list = PairList::new(GridBuilder::with_radii(&radii), 0.1).expect("valid skin");
     let got = reported(&mut list, &pts);
     let grid = Grid::<3>::with_radii(&radii).build(&pts).expect("valid");

@@ -14,7 +14,8 @@
 //! and halves otherwise. A step that is not denser is dropped and δ halves. The run ends when
 //! δ falls below [`LAST_STEP`] or after [`JAMMED_AFTER`] steps in a row dropped or given up.
 //! A start that is no packing is placed in its own container first (or, failing that,
-//! dilated).
+//! dilated). A placement that minimises the overlap energy pulls apart the few pairs it
+//! merged into one another (pulled to the distance of their enclosing balls).
 //!
 //! A placement in a container that still admits a packing is a zero-residual problem: its
 //! infeasibility falls by orders of magnitude per outer iteration once the penalty has grown.
@@ -313,73 +314,132 @@ impl<'a> Placer<'a> {
     /// single long outer iteration would otherwise run to its cap, also at inner iterations
     /// 10, 20, 32, … (a fifth more each time, so that the certificates cost a few percent of
     /// the placement) and whenever the energy has halved since the last try (it falls by
-    /// orders of magnitude in a placement's last tenth). A placement the observer stopped
-    /// is returned as it is, solved.
+    /// orders of magnitude in a placement's last tenth). An energy placement whose point has
+    /// a few pairs merged into one another ([`merged`](crate::merged)) pulls them apart and
+    /// goes on from there with the rest of its inner iterations, [`PULLS_PER_PLACEMENT`]
+    /// times at most. A placement the observer stopped is returned as it is, solved.
     fn place<const N: usize>(
         &mut self,
         problem: &mut Model<N>,
         x: &[f64],
         enough: Option<f64>,
     ) -> Option<Placed> {
+        let mut x = x.to_vec();
+        let mut total = crate::local::empty_report();
+        let mut pulls = 0;
+        loop {
+            let inner = self.options.max_inner_iterations - total.inner_iterations;
+            let run = self.run(problem, &x, enough, inner, self.energy)?;
+            add_counts(&mut total, &run.solution.report);
+            let left = total.inner_iterations < self.options.max_inner_iterations;
+            let pull = !run.merged.is_empty() && pulls < PULLS_PER_PLACEMENT;
+            if pull && left && !self.interrupted {
+                x = crate::merged::pulled_apart(problem, &run.solution.x, &run.merged)?;
+                pulls += 1;
+                continue;
+            }
+            add_counts(&mut self.total, &total);
+            let packing = match run.early {
+                Some((x, repaired)) => {
+                    certified_as(problem, auglag::Solution { x, ..run.solution }, repaired)
+                }
+                None => certified(problem, run.solution),
+            };
+            let packing = packing.ok()?.result;
+            return Some(if run.stalled {
+                Placed::Stalled(packing)
+            } else {
+                Placed::Solved(packing)
+            });
+        }
+    }
+
+    /// One minimisation of a placement from `x` with at most `inner` inner iterations (see
+    /// [`Placer::place`]); with `pull`, stopped at a point with merged pairs. `None` when the
+    /// solver refused `x`.
+    fn run<const N: usize>(
+        &mut self,
+        problem: &mut Model<N>,
+        x: &[f64],
+        enough: Option<f64>,
+        inner: usize,
+        pull: bool,
+    ) -> Option<Run> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
         let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container))
             .with_frozen_orientations(&self.fixed_orientations, x)
             .in_energy_mode(self.energy);
-        let mut stall = Stall::new(self.options.max_inner_iterations, self.energy);
+        let options = self.options.clone().with_max_inner_iterations(inner);
+        let mut stall = Stall::new(options.max_inner_iterations, self.energy);
         let mut early = None;
+        let (mut merged, mut seen_merged) = (Vec::new(), Vec::new());
         // Energy placements: the next inner iteration to try the point at, and the energy
         // at the last try.
         let mut next_check = self.energy.then_some((FIRST_INNER_CHECK, f64::INFINITY));
         let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
-        let solution =
-            auglag::minimize_with_callback(&adapter, x, &self.options, |p: &Progress<'_>| {
-                *interrupted |= observe(p);
-                if *interrupted {
-                    return Control::Stop;
+        let solution = auglag::minimize_with_callback(&adapter, x, &options, |p: &Progress<'_>| {
+            *interrupted |= observe(p);
+            if *interrupted {
+                return Control::Stop;
+            }
+            // A point good enough is kept even where the fall would say stall.
+            let check = match (p.event, next_check.as_mut()) {
+                (Event::Outer { .. }, _) => true,
+                (Event::Inner { merit, .. }, Some((next, at)))
+                    if p.total_inner_iterations >= *next || merit <= 0.5 * *at =>
+                {
+                    *next = p.total_inner_iterations + (p.total_inner_iterations / 5).max(10);
+                    *at = merit;
+                    true
                 }
-                // A point good enough is kept even where the fall would say stall.
-                let check = match (p.event, next_check.as_mut()) {
-                    (Event::Outer { .. }, _) => true,
-                    (Event::Inner { merit, .. }, Some((next, at)))
-                        if p.total_inner_iterations >= *next || merit <= 0.5 * *at =>
-                    {
-                        *next = p.total_inner_iterations + (p.total_inner_iterations / 5).max(10);
-                        *at = merit;
-                        true
-                    }
-                    _ => false,
-                };
-                if let (Some(limit), true) = (enough, check) {
-                    early = adapter
-                        .with_model(|m| repaired_within(m, p.x, limit))
-                        .map(|r| (p.x.to_vec(), r));
-                    if early.is_some() {
+                _ => false,
+            };
+            if let (Some(limit), true) = (enough, check) {
+                match adapter.with_model(|m| tried(m, p.x, limit, pull)) {
+                    Tried::Packing(repaired) => {
+                        early = Some((p.x.to_vec(), repaired));
                         return Control::Stop;
                     }
+                    // Pairs merged at two tries in a row are stuck; others are still
+                    // being pushed through one another and apart.
+                    Tried::Merged(pairs) if pairs == seen_merged => {
+                        merged = pairs;
+                        return Control::Stop;
+                    }
+                    Tried::Merged(pairs) => seen_merged = pairs,
+                    Tried::Neither => seen_merged.clear(),
                 }
-                if stall.stalled(p) {
-                    Control::Stop
-                } else {
-                    Control::Continue
-                }
-            })
-            .ok()?;
-        drop(adapter);
-        add_counts(&mut self.total, &solution.report);
-        let stalled = stall.stalled && early.is_none();
-        let packing = match early {
-            Some((x, repaired)) => {
-                certified_as(problem, auglag::Solution { x, ..solution }, repaired)
             }
-            None => certified(problem, solution),
-        };
-        let packing = packing.ok()?.result;
-        Some(if stalled {
-            Placed::Stalled(packing)
-        } else {
-            Placed::Solved(packing)
+            if stall.stalled(p) {
+                Control::Stop
+            } else {
+                Control::Continue
+            }
+        })
+        .ok()?;
+        Some(Run {
+            solution,
+            stalled: (stall.stalled && early.is_none()) || !merged.is_empty(),
+            early,
+            merged,
         })
     }
+}
+
+/// Pulls of merged pairs in one placement at most: a placement whose pairs merge again after
+/// as many pulls is given up there, as stalled (its container is too small for this path).
+pub const PULLS_PER_PLACEMENT: usize = 2;
+
+/// One minimisation of a placement ([`Placer::run`]) and how it ended.
+struct Run {
+    solution: auglag::Solution,
+    /// Stopped early at a point that a small enough dilation makes a packing: the point and
+    /// its repair.
+    early: Option<(Vec<f64>, Repaired)>,
+    /// Stopped at a point with these pairs merged.
+    merged: Vec<(usize, usize)>,
+    /// Given up as stalled.
+    stalled: bool,
 }
 
 /// The first inner iteration of an energy placement at which its point is tried.
@@ -402,26 +462,47 @@ impl Placed {
     }
 }
 
-/// The repair of `x` ([`repair`], its two exact steps only) when its factor is at most
-/// `limit`; `None` otherwise or when the model refuses `x`. One certificate rejects most
-/// points: each overlapping pair asks for a dilation of at least 1/μ.
-fn repaired_within<const N: usize>(
-    problem: &mut Model<N>,
-    x: &[f64],
-    limit: f64,
-) -> Option<(Vec<f64>, f64, Certificate)> {
-    let certificate = problem.certify(x).ok()?;
+/// A point made a packing: its variables, the factor s of its repair and its certificate.
+type Repaired = (Vec<f64>, f64, Certificate);
+
+/// What a try of a placement's point found.
+enum Tried {
+    /// The repair of the point ([`repair`], its two exact steps only), its factor at most the
+    /// limit.
+    Packing(Repaired),
+    /// A few pairs merged into one another ([`merged`](crate::merged)).
+    Merged(Vec<(usize, usize)>),
+    /// Neither: the placement goes on.
+    Neither,
+}
+
+/// Tries the point `x` of a placement: its repair when its factor is at most `limit`; else,
+/// with `pull`, its merged pairs. One certificate rejects most points: each overlapping pair
+/// asks for a dilation of at least 1/μ. A point the model refuses is [`Tried::Neither`].
+fn tried<const N: usize>(problem: &mut Model<N>, x: &[f64], limit: f64, pull: bool) -> Tried {
+    let Ok(certificate) = problem.certify(x) else {
+        return Tried::Neither;
+    };
     let pairs_ask_too_much = certificate
         .overlapping
         .iter()
         .any(|o| !(o.mu2 > 0.0 && 1.0 / o.mu2.sqrt() <= limit));
     if pairs_ask_too_much {
-        return None;
+        let merged = if pull {
+            crate::merged::merged_pairs(&certificate, problem.len(), limit)
+        } else {
+            Vec::new()
+        };
+        return if merged.is_empty() {
+            Tried::Neither
+        } else {
+            Tried::Merged(merged)
+        };
     }
-    separated_then_held(problem, x, &certificate)
-        .ok()
-        .flatten()
-        .filter(|(_, s, _)| *s <= limit)
+    match separated_then_held(problem, x, &certificate) {
+        Ok(Some(repaired)) if repaired.1 <= limit => Tried::Packing(repaired),
+        _ => Tried::Neither,
+    }
 }
 
 /// The infeasibilities at the ends of a placement's outer iterations, and whether it fell by
@@ -543,13 +624,29 @@ mod tests {
         let x = vec![
             -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
         ];
-        assert!(repaired_within(&mut p, &x, 1.3).is_none());
-        let (y, s, cert) = repaired_within(&mut p, &x, 1.34).unwrap();
+        for pull in [false, true] {
+            // 1/μ = 4/3: beyond the limit, but no merged pair.
+            assert!(matches!(tried(&mut p, &x, 1.3, pull), Tried::Neither));
+        }
+        let Tried::Packing((y, s, cert)) = tried(&mut p, &x, 1.34, true) else {
+            panic!("repaired within 1.34")
+        };
         assert!(cert.is_feasible() && (s - 4.0 / 3.0).abs() < 1e-9);
         assert!((y[6] - y[0] - 2.0).abs() < 1e-9);
         // A packing needs nothing.
-        let (_, s, _) = repaired_within(&mut p, &y, 1.0).unwrap();
+        let Tried::Packing((_, s, _)) = tried(&mut p, &y, 1.0, false) else {
+            panic!("a packing")
+        };
         assert_eq!(s, 1.0);
+        // Centres 0.1 apart ask for 1/μ = 20: merged, pulled apart only when asked.
+        let x = vec![
+            -0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
+        ];
+        assert!(matches!(tried(&mut p, &x, 1.3, false), Tried::Neither));
+        let Tried::Merged(pairs) = tried(&mut p, &x, 1.3, true) else {
+            panic!("merged")
+        };
+        assert_eq!(pairs, vec![(0, 1)]);
     }
 
     /// 20 ellipsoids cannot be placed in a container smaller than their volume: the placement

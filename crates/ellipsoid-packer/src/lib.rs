@@ -50,6 +50,7 @@ pub mod compression;
 mod error;
 pub mod fixed;
 pub mod local;
+mod merged;
 pub mod multistart;
 pub mod random;
 pub mod starts;
