@@ -567,10 +567,8 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
          (`lagrangian`: the paper's augmented Lagrangian with the container among the \
          variables; `compression-lagrangian`: compression of the container first, then the \
          augmented Lagrangian from its packing; `cargo xtask paper-tables --method`). Each row \
-         ran with the code of its commit (the repository's HEAD when it ran; for rows run \
-         before the table had the column, the commit that landed the packing): rows of commits before 343b876 began from lattice \
-         starts of a Kronecker sequence instead of the tightest cuts, unturned, and those before \
-         5c399ac ran a single chain. The paper's figures are the best of a 48-hour multi-start \
+         ran with the code of the commit in its row, which may differ from today's: `cargo \
+         xtask paper-tables` runs the rows again with the code of the checkout. The paper's figures are the best of a 48-hour multi-start \
          on an Intel i7-3770 (Birgin, Lobato, Martínez, Section 6; `≈` where the paper gives a \
          radius only). The packings are in `validation/paper-packings/<instance>/` (`ellipack \
          verify` re-checks them, `ellipack pack --instance <instance> --resume --out <that \

@@ -6,8 +6,9 @@
 //! hoomd-rs is compiled only with the `peer` feature of xtask
 //! (`cargo xtask --features peer periodic-peer` does not parse: the alias ends in `--`; use
 //! `cargo run --release -p xtask --features peer -- periodic-peer`). Every packing fraction the
-//! study records for the peer is certified by [`certify_periodic`] — PW85 on every pair under
-//! the minimum-image convention — not by the peer's own test.
+//! study records for the peer is certified by [`certify_periodic`] — implicit-packing's
+//! certificate, the one every packing of ellipack passes: PW85 on every pair image within
+//! reach — not by the peer's own test.
 //!
 //! Writes `validation/periodic_peer.csv` (the density–time points),
 //! `validation/periodic_peer_runs.csv` (one row per run), `validation/periodic_peer_overlap.csv`
@@ -22,6 +23,9 @@ use crate::provenance::{commit, machine};
 use ellipack::pack::{RunOptions, run as pack_run};
 use ellipack::scene::Scene;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
+use implicit_packing::certificate;
+use implicit_packing::containment::Container;
+use implicit_packing::shape::Body;
 use pw85::Sym3;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -235,48 +239,34 @@ impl Cell {
     /// Volume (absolute value of the determinant).
     pub fn volume(&self) -> f64 {
         let [a, b, c] = self.lattice;
-        dot(a, cross(b, c)).abs()
+        let cross = [
+            b[1] * c[2] - b[2] * c[1],
+            b[2] * c[0] - b[0] * c[2],
+            b[0] * c[1] - b[1] * c[0],
+        ];
+        (a[0] * cross[0] + a[1] * cross[1] + a[2] * cross[2]).abs()
     }
 
-    /// The reciprocal rows: `dual[k]·lattice[l] = δ_kl`, so `dual[k]·d` is the k-th
-    /// fractional coordinate of d. `None` for a degenerate cell.
-    fn dual(&self) -> Option<[[f64; 3]; 3]> {
-        let [a, b, c] = self.lattice;
-        let det = dot(a, cross(b, c));
-        if !(det.is_finite() && det.abs() > 0.0) {
-            return None;
+    /// The container of implicit-packing: the cell matrix with the lattice vectors as its
+    /// columns (upper triangular for the cells of hoomd-rs and LAMMPS).
+    fn container(&self) -> Container<3> {
+        let l = self.lattice;
+        Container::Periodic {
+            cell: std::array::from_fn(|r| std::array::from_fn(|c| l[c][r])),
         }
-        let s = 1.0 / det;
-        Some([
-            cross(b, c).map(|x| x * s),
-            cross(c, a).map(|x| x * s),
-            cross(a, b).map(|x| x * s),
-        ])
     }
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// The verdict of [`certify_periodic`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeriodicCertificate {
-    /// Pairs (i < j) with at least one overlapping image.
+    /// Pairs (i ≤ j: an item may meet its own image) with at least one overlapping image.
     pub overlapping_pairs: usize,
-    /// The first overlapping pair found, if any.
+    /// The first overlapping pair, if any.
     pub first_overlap: Option<(usize, usize)>,
     /// Pair images whose enclosing balls meet (the ones PW85 decided).
     pub images_tested: usize,
-    /// Smallest μ² over those images, when asked for.
+    /// Smallest μ² over those images.
     pub min_mu2: Option<f64>,
 }
 
@@ -287,118 +277,48 @@ impl PeriodicCertificate {
     }
 }
 
-/// Checks a periodic configuration with PW85: every pair (i < j), every image of j within
-/// reach of i (the minimum image and, where the cell is small or sheared enough for another
-/// image to come within reach, its 26 neighbours), each pair image whose enclosing balls
-/// (radius `radii`) meet decided by `pw85::overlap`; with `with_mu2`, also the smallest
-/// μ² over them (`pw85::contact_function`).
-///
-/// An item cannot meet its own images, and no image beyond the 26 neighbours can come within
-/// reach, as long as every distance between lattice planes exceeds the largest reach
-/// 2 max(radii); a smaller cell is an error.
+/// Checks a periodic configuration with implicit-packing's certificate
+/// ([`implicit_packing::certificate::certify`]): every pair image within reach, an item's
+/// own images included, whose enclosing balls meet decided by PW85.
 ///
 /// # Errors
-/// [`Error::Study`] for a degenerate or too small cell or mismatched lengths, [`Error::Pw85`]
-/// for an invalid form.
+/// [`Error::Study`] for mismatched lengths, an invalid orientation or cell, or a pair PW85
+/// refuses.
 pub fn certify_periodic(
     cell: &Cell,
     centres: &[[f64; 3]],
-    forms: &[Sym3],
-    radii: &[f64],
-    with_mu2: bool,
+    quaternions: &[[f64; 4]],
 ) -> Result<PeriodicCertificate, Error> {
     let study = |message: String| Error::Study {
-        context: "minimum-image certificate".into(),
+        context: "periodic certificate".into(),
         message,
     };
-    if centres.len() != forms.len() || centres.len() != radii.len() {
+    if centres.len() != quaternions.len() {
         return Err(study(format!(
-            "{} centres, {} forms and {} radii",
+            "{} centres and {} orientations",
             centres.len(),
-            forms.len(),
-            radii.len()
+            quaternions.len()
         )));
     }
-    let dual = cell
-        .dual()
-        .ok_or_else(|| study(format!("degenerate cell {:?}", cell.lattice)))?;
-    let spacing = dual
+    let bodies = centres
         .iter()
-        .map(|d| 1.0 / dot(*d, *d).sqrt())
-        .fold(f64::INFINITY, f64::min);
-    let reach = 2.0 * radii.iter().copied().fold(0.0, f64::max);
-    if spacing.is_nan() || spacing <= reach {
-        return Err(study(format!(
-            "the cell's planes are {spacing:.6} apart, not more than the largest reach {reach:.6}: \
-             images beyond the nearest 27 would matter"
-        )));
-    }
-    let mut certificate = PeriodicCertificate {
-        overlapping_pairs: 0,
-        first_overlap: None,
-        images_tested: 0,
-        min_mu2: None,
-    };
-    let lattice = cell.lattice;
-    let image = |s: [f64; 3]| -> [f64; 3] {
-        std::array::from_fn(|i| s[0] * lattice[0][i] + s[1] * lattice[1][i] + s[2] * lattice[2][i])
-    };
-    for i in 0..centres.len() {
-        for j in i + 1..centres.len() {
-            let d: [f64; 3] = std::array::from_fn(|k| centres[j][k] - centres[i][k]);
-            let s = dual.map(|row| {
-                let t = dot(row, d);
-                t - t.round()
-            });
-            let r0 = image(s);
-            let cutoff = radii[i] + radii[j];
-            let n0 = dot(r0, r0).sqrt();
-            // Any other image is at least `spacing` − |r0| away (|L n| ≥ spacing for n ≠ 0).
-            let others = n0 + cutoff > spacing;
-            if n0 >= cutoff && !others {
-                continue;
-            }
-            let mut overlaps = false;
-            let shifts: &[[f64; 3]] = if others { &NEIGHBOURS } else { &[[0.0; 3]] };
-            for shift in shifts {
-                let r = image([s[0] + shift[0], s[1] + shift[1], s[2] + shift[2]]);
-                if dot(r, r) >= cutoff * cutoff {
-                    continue;
-                }
-                certificate.images_tested += 1;
-                let context = || format!("items {i} and {j} at {r:?}");
-                if with_mu2 {
-                    let c = pw85::contact_function(&r, &forms[i], &forms[j])
-                        .map_err(error::pw85(context()))?;
-                    certificate.min_mu2 = Some(certificate.min_mu2.map_or(c.mu2, |m| m.min(c.mu2)));
-                }
-                if pw85::overlap(&r, &forms[i], &forms[j]).map_err(error::pw85(context()))? {
-                    overlaps = true;
-                }
-            }
-            if overlaps {
-                certificate.overlapping_pairs += 1;
-                certificate.first_overlap.get_or_insert((i, j));
-            }
-        }
-    }
-    Ok(certificate)
+        .zip(quaternions)
+        .enumerate()
+        .map(|(i, (&c, &q))| {
+            Body::from_quaternion(c, SEMI_AXES, q).map_err(|e| study(format!("item {i}: {e}")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let certificate =
+        certificate::certify(&bodies, &cell.container()).map_err(|e| study(e.to_string()))?;
+    let mut pairs = certificate.overlapping_pairs();
+    pairs.dedup();
+    Ok(PeriodicCertificate {
+        overlapping_pairs: pairs.len(),
+        first_overlap: pairs.first().copied(),
+        images_tested: certificate.pairs_checked,
+        min_mu2: certificate.min_mu2,
+    })
 }
-
-/// The 27 lattice shifts {−1, 0, 1}³.
-const NEIGHBOURS: [[f64; 3]; 27] = {
-    let mut out = [[0.0; 3]; 27];
-    let mut k = 0;
-    while k < 27 {
-        out[k] = [
-            (k % 3) as f64 - 1.0,
-            ((k / 3) % 3) as f64 - 1.0,
-            (k / 9) as f64 - 1.0,
-        ];
-        k += 1;
-    }
-    out
-};
 
 /// One random pair of the overlap-test comparison: the first ellipsoid at the origin.
 #[derive(Clone, Copy, Debug)]
@@ -1242,20 +1162,17 @@ fn section(points: &[Point], runs: &[RunRow], overlap: Option<&OverlapRow>) -> S
 mod tests {
     use super::*;
 
-    fn sphere() -> Sym3 {
-        [1.0, 0.0, 0.0, 1.0, 0.0, 1.0]
-    }
-
-    /// The certificate of two unit spheres at `a` and `b` in `cell`.
-    fn two_spheres(cell: &Cell, a: [f64; 3], b: [f64; 3], with_mu2: bool) -> PeriodicCertificate {
-        certify_periodic(cell, &[a, b], &[sphere(), sphere()], &[1.0, 1.0], with_mu2).unwrap()
+    /// The certificate of two items (1, 0.75, 0.5), unturned, at `a` and `b` in `cell`.
+    fn two_items(cell: &Cell, a: [f64; 3], b: [f64; 3]) -> PeriodicCertificate {
+        certify_periodic(cell, &[a, b], &[[1.0, 0.0, 0.0, 0.0]; 2]).unwrap()
     }
 
     #[test]
-    fn spheres_overlap_across_the_boundary_and_not_when_far_apart() {
+    fn items_overlap_across_the_boundary_and_not_when_far_apart() {
         let cell = Cell::orthorhombic([10.0, 10.0, 10.0]);
-        // 0.8 apart through the face x = 0 / x = 10, 9.2 apart inside the box.
-        let across = two_spheres(&cell, [0.5, 5.0, 5.0], [9.7, 5.0, 5.0], true);
+        // 0.8 apart along their long axes through the face x = 0 / x = 10, 9.2 apart inside
+        // the box.
+        let across = two_items(&cell, [0.5, 5.0, 5.0], [9.7, 5.0, 5.0]);
         assert_eq!(across.overlapping_pairs, 1);
         assert_eq!(across.first_overlap, Some((0, 1)));
         let mu2 = across.min_mu2.unwrap();
@@ -1264,48 +1181,42 @@ mod tests {
             "μ² = (0.8 / 2)² = 0.16, got {mu2}"
         );
         // The same pair with the second centre given three boxes farther out.
-        let unwrapped = two_spheres(&cell, [0.5, 5.0, 5.0], [29.7, -15.0, 5.0], true);
+        let unwrapped = two_items(&cell, [0.5, 5.0, 5.0], [29.7, -15.0, 5.0]);
         assert_eq!(unwrapped.overlapping_pairs, 1);
         assert!((unwrapped.min_mu2.unwrap() - 0.16).abs() < 1e-12);
 
-        let far = two_spheres(&cell, [2.0, 5.0, 5.0], [7.0, 5.0, 5.0], true);
+        let far = two_items(&cell, [2.0, 5.0, 5.0], [7.0, 5.0, 5.0]);
         assert!(far.is_certified());
         assert_eq!(far.images_tested, 0);
-        // Across a corner: 0.6 apart along each axis through three faces (|r| ≈ 1.04).
-        let corner = two_spheres(&cell, [0.3, 0.3, 0.3], [9.7, 9.7, 9.7], false);
+        // Across a corner: 0.4 apart along each axis through three faces.
+        let corner = two_items(&cell, [0.2, 0.2, 0.2], [9.8, 9.8, 9.8]);
         assert_eq!(corner.overlapping_pairs, 1);
     }
 
     #[test]
-    fn sheared_cells_use_the_nearest_image_not_the_rounded_one() {
+    fn sheared_cells_use_the_nearest_image() {
         // Lattice a = (4.5, 0, 0), b = (4, 4.5, 0), c = (0, 0, 4.5). The nearest image of the
-        // second centre is v = (−1.2, 1.4, 0), |v| ≈ 1.84; its fractional coordinates
-        // (−0.54, 0.31) round to the image v + a, 3.6 away: only the neighbour images find
-        // the overlap.
+        // second centre is v = (−1.2, 0.3, 0) + … : items (1, 0.75, 0.5) along x, v along the
+        // axis of the lattice vector b − a = (−0.5, 4.5, 0) shifted: the centres 0.4 apart
+        // along y through the face, μ² = (0.4 / 1.5)².
         let cell = Cell {
             lattice: [[4.5, 0.0, 0.0], [4.0, 4.5, 0.0], [0.0, 0.0, 4.5]],
         };
-        let c = two_spheres(&cell, [0.0, 0.0, 0.0], [-1.2, 1.4, 0.0], true);
+        let c = two_items(&cell, [0.0, 0.0, 0.0], [4.0, 4.1, 0.0]);
         assert_eq!(c.overlapping_pairs, 1);
         let mu2 = c.min_mu2.unwrap();
-        assert!((mu2 - 0.85).abs() < 1e-12, "μ² = 3.4 / 4, got {mu2}");
-        // v = (−1.3, 1.7, 0), |v| ≈ 2.14, and every other image farther: no overlap.
-        let apart = two_spheres(&cell, [0.0, 0.0, 0.0], [-1.3, 1.7, 0.0], false);
+        assert!((mu2 - (0.4_f64 / 1.5).powi(2)).abs() < 1e-12, "got {mu2}");
+        let apart = two_items(&cell, [0.0, 0.0, 0.0], [4.0, 2.5, 0.0]);
         assert!(apart.is_certified());
     }
 
     #[test]
-    fn a_cell_too_small_for_the_nearest_images_is_an_error() {
+    fn an_item_that_meets_its_own_image_is_no_packing() {
+        // The long axis (2 across) in a cell 1.5 wide.
         let cell = Cell::orthorhombic([1.5, 10.0, 10.0]);
-        let e = certify_periodic(
-            &cell,
-            &[[0.0; 3], [5.0, 5.0, 5.0]],
-            &[sphere(), sphere()],
-            &[1.0, 1.0],
-            false,
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("planes are 1.500000 apart"), "{e}");
+        let c = two_items(&cell, [0.0; 3], [0.5, 5.0, 5.0]);
+        assert_eq!(c.first_overlap, Some((0, 0)));
+        assert_eq!(c.overlapping_pairs, 2);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! rotation sweeps at temperature 1).
 
 use super::{Cell, PeerMoves, Point, RandomPair, RunRow, SEMI_AXES, certify_periodic, item_volume};
-use crate::error::{self, Error};
+use crate::error::Error;
 use crate::provenance::{commit, machine};
 use hoomd_geometry::{
     Convex, IntersectsAtGlobal, Volume,
@@ -21,7 +21,6 @@ use hoomd_simulation::macrostate::Isothermal;
 use hoomd_spatial::VecCell;
 use hoomd_utility::valid::PositiveReal;
 use hoomd_vector::{Cartesian, Quaternion, Versor};
-use pw85::Sym3;
 use std::time::{Duration, Instant};
 
 type Site = OrientedPoint<Cartesian<3>, Versor>;
@@ -67,27 +66,28 @@ fn versor(q: [f64; 4]) -> Result<Versor, Error> {
 struct Snapshot {
     cell: Cell,
     centres: Vec<[f64; 3]>,
-    forms: Vec<Sym3>,
+    quaternions: Vec<[f64; 4]>,
 }
 
-fn snapshot(state: &State) -> Result<Snapshot, Error> {
+fn snapshot(state: &State) -> Snapshot {
     let cell = Cell::orthorhombic(state.boundary().shape().edge_lengths.map(|l| l.get()));
-    let mut centres = Vec::with_capacity(state.sites().len());
-    let mut forms = Vec::with_capacity(state.sites().len());
-    for site in state.sites() {
-        centres.push(site.properties.position.coordinates);
-        let q = site.properties.orientation.get();
-        let v = q.vector.coordinates;
-        forms.push(
-            pw85::shape::from_axes_quaternion(&SEMI_AXES, &[q.scalar, v[0], v[1], v[2]])
-                .map_err(error::pw85("a hoomd-rs orientation"))?,
-        );
-    }
-    Ok(Snapshot {
+    let (centres, quaternions) = state
+        .sites()
+        .iter()
+        .map(|site| {
+            let q = site.properties.orientation.get();
+            let v = q.vector.coordinates;
+            (
+                site.properties.position.coordinates,
+                [q.scalar, v[0], v[1], v[2]],
+            )
+        })
+        .unzip();
+    Snapshot {
         cell,
         centres,
-        forms,
-    })
+        quaternions,
+    }
 }
 
 /// Runs hoomd-rs on `n` ellipsoids for `seconds` of its own wall time and returns the
@@ -145,7 +145,6 @@ pub fn run_peer(
         r_cut: range,
     });
     let temperature = Isothermal { temperature: 1.0 };
-    let radii = vec![SEMI_AXES[0]; n];
 
     let budget = Duration::from_secs_f64(seconds);
     let start = Instant::now();
@@ -178,9 +177,8 @@ pub fn run_peer(
         let pause = Instant::now();
         if hamiltonian.total_energy(&state) == 0.0 {
             checks += 1;
-            let snap = snapshot(&state)?;
-            let certificate =
-                certify_periodic(&snap.cell, &snap.centres, &snap.forms, &radii, false)?;
+            let snap = snapshot(&state);
+            let certificate = certify_periodic(&snap.cell, &snap.centres, &snap.quaternions)?;
             if certificate.is_certified() {
                 certified_volume = volume;
                 let fraction = items_volume / volume;
@@ -213,7 +211,7 @@ pub fn run_peer(
             format!("no overlap-free configuration of {n} ellipsoids within {seconds} s"),
         )
     })?;
-    let final_check = certify_periodic(&best.cell, &best.centres, &best.forms, &radii, true)?;
+    let final_check = certify_periodic(&best.cell, &best.centres, &best.quaternions)?;
     if !final_check.is_certified() {
         return Err(study_error(
             "final configuration",
