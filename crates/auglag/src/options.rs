@@ -80,7 +80,9 @@ pub struct Options {
 }
 
 /// `with_*` methods setting one field each and returning the settings, for chained
-/// construction of `#[non_exhaustive]` settings.
+/// construction of `#[non_exhaustive]` settings (this crate's and the packer's).
+#[doc(hidden)]
+#[macro_export]
 macro_rules! with_setters {
     ($ty:ty: $($(#[$doc:meta])* $name:ident => $field:ident: $t:ty),* $(,)?) => {
         impl $ty { $($(#[$doc])* #[must_use] pub fn $name(mut self, value: $t) -> Self { self.$field = value; self })* }

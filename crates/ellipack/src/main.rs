@@ -294,29 +294,17 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             ellipack::say!("{}", ellipack::instances::listing().trim_end());
             ExitCode::SUCCESS
         }
-        other => run_table(other)?,
+        Command::Contact {
+            input,
+            output,
+            criterion,
+        } => contact(input, output, criterion)?,
+        Command::Measure { input, output } => measure(input, output)?,
     })
 }
 
 /// Exit status of `contact` and `measure` when some rows failed and the others were written.
 const ROWS_FAILED: u8 = 3;
-
-fn run_table(command: Command) -> Result<ExitCode, Error> {
-    match command {
-        Command::Contact {
-            input,
-            output,
-            criterion,
-        } => contact(input, output, criterion),
-        Command::Measure { input, output } => measure(input, output),
-        Command::Pack { .. }
-        | Command::Verify { .. }
-        | Command::Merge { .. }
-        | Command::Convert { .. }
-        | Command::Analyse { .. }
-        | Command::Instances => Ok(ExitCode::SUCCESS),
-    }
-}
 
 fn open_input(path: &Path) -> Result<BufReader<File>, Error> {
     File::open(path)

@@ -37,15 +37,6 @@
 #![deny(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
-/// `with_*` methods setting one field each and returning the settings, for chained
-/// construction of the `#[non_exhaustive]` settings.
-macro_rules! with_setters {
-    ($ty:ty: $($(#[$doc:meta])* $name:ident => $field:ident: $t:ty),* $(,)?) => {
-        impl $ty { $($(#[$doc])* #[must_use] pub fn $name(mut self, value: $t) -> Self { self.$field = value; self })* }
-    };
-}
-pub(crate) use with_setters;
-
 pub mod compression;
 mod error;
 pub mod fixed;

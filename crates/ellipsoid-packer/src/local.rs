@@ -99,7 +99,7 @@ pub enum LocalMethod {
 /// fraction the solver sees by a factor (1 + margin)ᴺ (0.3 % in 3D).
 pub const FIXED_MARGIN: f64 = 1e-3;
 
-crate::with_setters!(LocalSettings:
+auglag::with_setters!(LocalSettings:
     /// Sets [`LocalSettings::feasibility_tolerance`].
     with_feasibility_tolerance => feasibility_tolerance: f64,
     /// Sets [`LocalSettings::optimality_tolerance`].

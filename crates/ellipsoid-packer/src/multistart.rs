@@ -148,7 +148,7 @@ impl MultiStartSettings {
     }
 }
 
-crate::with_setters!(MultiStartSettings:
+auglag::with_setters!(MultiStartSettings:
     /// Sets [`MultiStartSettings::local`].
     with_local => local: LocalSettings,
     /// Sets [`MultiStartSettings::perturbation`].

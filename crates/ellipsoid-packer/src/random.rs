@@ -101,7 +101,7 @@ pub struct RandomSettings {
     pub threads: usize,
 }
 
-crate::with_setters!(RandomSettings:
+auglag::with_setters!(RandomSettings:
     /// Sets [`RandomSettings::target`].
     with_target => target: Target,
     /// Sets [`RandomSettings::start_fraction`].
