@@ -11,7 +11,7 @@
 //! - [`local`] — one local minimisation with its polish, certificate and repair.
 //! - [`compression`] — the container made small by placements in shrinking fixed containers,
 //!   for thousands of items.
-//! - [`multistart`] — the multi-start with chains, parallel rounds, a time limit, progress
+//! - [`multistart`](mod@multistart) — the multi-start with chains, parallel rounds, a time limit, progress
 //!   and cancellation.
 //! - [`fixed`] — the multi-start in a container of given size: no minimisation, only
 //!   placement, ending at the first certified packing.
@@ -19,8 +19,8 @@
 //!   fraction or until jammed.
 //!
 //! ```
-//! use ellipsoid_packer::{local::{LocalSettings, local_minimisation}, starts::lattice_start};
-//! use implicit_packing::{containment::ContainerShape, model::Model};
+//! use ellipsoid_packer::{LocalSettings, local_minimisation, starts::lattice_start};
+//! use implicit_packing::{ContainerShape, Model};
 //!
 //! // Five ellipses (2, 1) in the smallest disc the solver finds from the paper's start.
 //! let mut problem = Model::<2>::new(vec![[2.0, 1.0]; 5], ContainerShape::Ball)?;
@@ -48,3 +48,7 @@ pub mod starts;
 pub mod tiling;
 
 pub use error::Error;
+pub use fixed::fill;
+pub use local::{LocalResult, LocalSettings, local_minimisation};
+pub use multistart::{MultiStartResult, MultiStartSettings, multistart};
+pub use random::{RandomPacking, RandomSettings, Target, random_packing};

@@ -54,6 +54,9 @@ pub(crate) mod scatter;
 pub mod shape;
 pub(crate) mod trig;
 
+pub use certificate::Certificate;
+pub use containment::{Container, ContainerShape};
 pub use error::Error;
+pub use model::Model;
 pub use pair::{PairTerm, Route, epsilon, overlap_measure, pair_term, pair_term_by};
 pub use shape::{Body, Ellipse, Ellipsoid};
