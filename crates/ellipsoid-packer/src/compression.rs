@@ -329,7 +329,7 @@ impl<'a> Placer<'a> {
         let mut pulls = 0;
         loop {
             let inner = self.options.max_inner_iterations - total.inner_iterations;
-            let run = self.run(problem, &x, enough, inner, self.energy)?;
+            let run = self.run(problem, &x, enough, inner)?;
             add_counts(&mut total, &run.solution.report);
             let left = total.inner_iterations < self.options.max_inner_iterations;
             let pull = !run.merged.is_empty() && pulls < PULLS_PER_PLACEMENT;
@@ -355,15 +355,14 @@ impl<'a> Placer<'a> {
     }
 
     /// One minimisation of a placement from `x` with at most `inner` inner iterations (see
-    /// [`Placer::place`]); with `pull`, stopped at a point with merged pairs. `None` when the
-    /// solver refused `x`.
+    /// [`Placer::place`]); in energy mode, stopped at a point with merged pairs. `None` when
+    /// the solver refused `x`.
     fn run<const N: usize>(
         &mut self,
         problem: &mut Model<N>,
         x: &[f64],
         enough: Option<f64>,
         inner: usize,
-        pull: bool,
     ) -> Option<Run> {
         let container = x[problem.len() * Model::<N>::vars_per_body()..].to_vec();
         let adapter = Adapter::new(problem, centre_bound::<N>(x), Some(container))
@@ -376,7 +375,7 @@ impl<'a> Placer<'a> {
         // Energy placements: the next inner iteration to try the point at, and the energy
         // at the last try.
         let mut next_check = self.energy.then_some((FIRST_INNER_CHECK, f64::INFINITY));
-        let (observe, interrupted) = (&mut self.observe, &mut self.interrupted);
+        let (observe, interrupted, pull) = (&mut self.observe, &mut self.interrupted, self.energy);
         let solution = auglag::minimize_with_callback(&adapter, x, &options, |p: &Progress<'_>| {
             *interrupted |= observe(p);
             if *interrupted {
