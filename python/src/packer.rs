@@ -3,9 +3,7 @@
 //! packing object, reading a packing folder and verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
-use ellipack::pack::{
-    History, MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of,
-};
+use ellipack::pack::{MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of};
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
 use ellipack::scene::Scene;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -269,12 +267,10 @@ impl PyPacking {
 struct Relay<'a> {
     progress: mpsc::Sender<MultiStartProgress>,
     stop: &'a AtomicBool,
-    history: History,
 }
 
 impl Observer for Relay<'_> {
     fn finished(&mut self, p: &MultiStartProgress) {
-        self.history.record(p);
         // The calling thread has stopped listening only when it is about to return.
         let _ = self.progress.send(*p);
     }
@@ -323,16 +319,14 @@ pub fn _pack(
     let relay = Relay {
         progress: sender,
         stop: &stop,
-        history: History::new(),
     };
     let mut interrupted = false;
     let mut pending: Option<PyErr> = None;
-    let (result, history) = std::thread::scope(|s| {
+    let result = std::thread::scope(|s| {
         let (scene, options) = (&scene, &options);
         let worker = s.spawn(move || {
             let mut relay = relay;
-            let result = run(scene, options, &mut relay);
-            (result, relay.history.into_text())
+            run(scene, options, &mut relay)
         });
         let mut receiver = receiver;
         let mut stop_with = |e: PyErr, py: Python<'_>| {
@@ -376,12 +370,12 @@ pub fn _pack(
     }
     let outcome = match result {
         Ok(outcome) => outcome,
-        Err(e) => return Err(pack_error(py, e, history, interrupted)),
+        Err(e) => return Err(pack_error(py, e, interrupted)),
     };
     Ok(PyPacking {
         packing: outcome.packing,
         summary: outcome.summary,
-        history: Some(history),
+        history: Some(outcome.history.into_text()),
         interrupted: interrupted || outcome.interrupted,
     })
 }
@@ -389,7 +383,7 @@ pub fn _pack(
 /// The exception of a run that failed: [`NotReached`] with the least overlapping
 /// configuration as its `packing` for a fixed container that was not filled, ValueError
 /// otherwise.
-fn pack_error(py: Python<'_>, e: PackError, history: String, interrupted: bool) -> PyErr {
+fn pack_error(py: Python<'_>, e: PackError, interrupted: bool) -> PyErr {
     let message = e.to_string();
     let PackError::NotReached(unfinished) = e else {
         return value_error(message);
@@ -403,7 +397,7 @@ fn pack_error(py: Python<'_>, e: PackError, history: String, interrupted: bool) 
     let packing = PyPacking {
         packing: unfinished.packing,
         summary: unfinished.summary,
-        history: Some(history),
+        history: Some(unfinished.history.into_text()),
         interrupted: stopped,
     };
     match Py::new(py, packing).and_then(|p| err.value(py).setattr("packing", p)) {

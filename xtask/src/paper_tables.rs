@@ -14,7 +14,7 @@ use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
 use ellipack::instances::{INSTANCES, Instance, by_name, names};
 use ellipack::output::write_atomically;
-use ellipack::pack::{History, RunOptions, run};
+use ellipack::pack::{RunOptions, run};
 use ellipack::packing::write_files;
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
 use ellipack::scene::MethodName;
@@ -135,12 +135,10 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             ..RunOptions::default()
         };
         let mut best = 0.0;
-        let mut history = History::new();
         let outcome = run(
             &scene,
             &run_options,
             &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-                history.record(p);
                 if p.best_density > best {
                     best = p.best_density;
                     eprintln!(
@@ -155,7 +153,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         .map_err(|e| format!("{}: {e}", instance.name))?;
         // Every run's history is kept, also of a run whose packing is not kept: the figure
         // shows how the code of the latest run gets to its density.
-        let history = history.into_text();
+        let history = outcome.history.clone().into_text();
         let runs = root.join(RUNS_DIR);
         std::fs::create_dir_all(&runs).map_err(|e| format!("{}: {e}", runs.display()))?;
         write_atomically(

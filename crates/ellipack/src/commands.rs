@@ -3,7 +3,7 @@
 use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{
-    History, MultiStartProgress, Observer, PackError, RunOptions, UNFINISHED_DIR, Unfinished,
+    MultiStartProgress, Observer, PackError, RunOptions, UNFINISHED_DIR, Unfinished,
     probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
@@ -113,20 +113,19 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     let mut terminal = Terminal {
         bar: bar.clone(),
         best: AtomicU64::new(0f64.to_bits()),
-        history: History::new(),
         interrupted: Arc::clone(&interrupted),
     };
     let started = std::time::Instant::now();
     let outcome = run(&scene, &options, &mut terminal);
-    let history = terminal.history.into_text();
     bar.finish_and_clear();
     let outcome = match outcome {
         Ok(outcome) => outcome,
         Err(PackError::NotReached(unfinished)) => {
-            return not_reached(&scene, &out, &unfinished, &history);
+            return not_reached(&scene, &out, &unfinished);
         }
         Err(e) => return Err(e.into()),
     };
+    let history = outcome.history.clone().into_text();
 
     // The whole set is written into a staging folder and swapped in, so that the folder never
     // holds a mix of this run's files and the previous run's; an error (or a kill) before the
@@ -301,8 +300,8 @@ fn not_reached(
     scene: &Scene,
     out: &Path,
     unfinished: &Unfinished,
-    history: &str,
 ) -> Result<ExitCode, Box<dyn Error>> {
+    let history = unfinished.history.clone().into_text();
     let dir = out.join(UNFINISHED_DIR);
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let staging = Staging::begin(&dir)?;
@@ -649,18 +648,16 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
 }
 
 /// The run as the terminal shows it: a spinner with the solver's objective and infeasibility
-/// (worker threads) and the best certified density (known between local minimisations), the
-/// rows of history.csv, and Ctrl-C, SIGTERM or SIGHUP as the request to stop.
+/// (worker threads) and the best certified density (known between local minimisations), and
+/// Ctrl-C, SIGTERM or SIGHUP as the request to stop.
 struct Terminal {
     bar: ProgressBar,
     best: AtomicU64,
-    history: History,
     interrupted: Arc<AtomicBool>,
 }
 
 impl Observer for Terminal {
     fn finished(&mut self, p: &MultiStartProgress) {
-        self.history.record(p);
         self.best.store(p.best_density.to_bits(), Ordering::Relaxed);
         // A fixed container's runs report no best density until their first packing.
         let best = if p.best_density > 0.0 {

@@ -1,30 +1,27 @@
-//! A packing run: scene → model → multi-start → certified packing and its summary; and the
-//! independent check of a packing read back from files.
+//! A packing run as the command line and the files see it: the scene mapped once to the
+//! packer's problem and settings ([`ellipsoid_packer::run`]), the packer's certified outcome
+//! mapped once to a [`Packing`] and its [`Summary`]; and the independent check of a packing read
+//! back from files ([`implicit_packing::certificate::certify_items`] on its items as stated).
 //!
-//! The numerical work lives in `ellipsoid-packer` (starts, local minimisation with repair, the
-//! multi-start) on the model of `implicit-packing`; this module translates between the scene and
-//! file formats of the command line and the model's variables `[c_1, Ω_1, …, c_m, Ω_m, dims]`
-//! (Ω = θ in 2D, the angles [φ, θ, ψ] of eq. 2 in 3D), with containers centred at the origin.
+//! Containers are centred at the origin in the packer; a packing's items are its items
+//! relative to its container's centre.
 
 use crate::packing::{
     CertificateCounts, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
     PackingError, Summary,
 };
 use crate::scene::{RandomGoal, Scene};
-use ellipsoid_packer::compression::compression_seen;
+use ellipsoid_packer::Target;
 use ellipsoid_packer::local::{LocalMethod, LocalSettings};
+use ellipsoid_packer::multistart::MultiStartSettings;
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
-use ellipsoid_packer::multistart::{MultiStartSettings, multistart};
-use ellipsoid_packer::random::{RandomPacking, RandomSettings, Target, random_packing_seen};
-use ellipsoid_packer::starts::{LatticeStart, fill_start, lattice_start};
-use implicit_packing::Body;
-use implicit_packing::certificate::shown_mu2;
-use implicit_packing::containment::{
-    Container as SizedContainer, ContainerShape as ModelContainer,
+use ellipsoid_packer::run::{
+    Configuration, Goal, Outcome, Packed, Packer, Problem, Settings, Unfilled,
 };
-use implicit_packing::model::Model;
+use implicit_packing::certificate::{bodies_of as stated_bodies, certify_items, shown_mu2};
+use implicit_packing::{Body, Container as SizedContainer, ContainerShape, Item, Orientation};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Why a run or a check failed.
 #[derive(Debug, thiserror::Error)]
@@ -70,9 +67,6 @@ pub enum PackError {
         /// The scene's title.
         scene: String,
     },
-    /// The packing to resume from is not a certified packing.
-    #[error("cannot resume: the packing to resume from is not certified: {0}")]
-    StartNotCertified(StartDefects),
     /// The output folder cannot be created or written to.
     #[error("the output folder {path} is not writable: {source}")]
     OutputFolder {
@@ -133,55 +127,12 @@ pub struct Unfinished {
     pub infeasibility: f64,
     /// Whether the run was stopped by a signal rather than by its time limit.
     pub interrupted: bool,
+    /// The run's history.csv.
+    pub history: History,
 }
 
 /// The folder inside the output folder that holds [`Unfinished`] configurations.
 pub const UNFINISHED_DIR: &str = "unfinished";
-
-/// What makes a packing to resume from uncertified: the items that overlap and those that
-/// stick out (ids are the rows' ids in `packing.csv`, counted from 0).
-#[derive(Clone, Debug, PartialEq)]
-pub struct StartDefects {
-    /// Overlapping pairs `(i, j, μ²)` (μ² < 1).
-    pub overlapping: Vec<(usize, usize, f64)>,
-    /// Items outside the container, each with the factor by which the container would have
-    /// to grow about its centre to hold it.
-    pub outside: Vec<(usize, f64)>,
-}
-
-/// How many overlapping pairs and items outside a message lists before it says "and n more".
-const LISTED: usize = 8;
-
-impl std::fmt::Display for StartDefects {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let mut parts = Vec::new();
-        if !self.overlapping.is_empty() {
-            let list = listed(&self.overlapping, |&(i, j, m)| {
-                format!("{i} and {j} (μ² = {})", shown_mu2(m, 6))
-            });
-            let n = self.overlapping.len();
-            parts.push(format!("{n} overlapping pairs: items {list}"));
-        }
-        if !self.outside.is_empty() {
-            let list = listed(&self.outside, |&(i, s)| {
-                format!("{i} (the container would have to grow by {:.3e})", s - 1.0)
-            });
-            let n = self.outside.len();
-            parts.push(format!("{n} items outside the container: {list}"));
-        }
-        write!(f, "{}", parts.join("; "))
-    }
-}
-
-/// The first [`LISTED`] of `items`, shown by `show` and separated by commas, and how many more
-/// there are.
-fn listed<T>(items: &[T], show: impl Fn(&T) -> String) -> String {
-    let mut list: Vec<String> = items.iter().take(LISTED).map(show).collect();
-    if items.len() > LISTED {
-        list.push(format!("and {} more", items.len() - LISTED));
-    }
-    list.join(", ")
-}
 
 /// Converts a time limit in seconds, refusing what is not positive or beyond a [`Duration`]
 /// (which would otherwise panic).
@@ -261,38 +212,28 @@ pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, PackError> 
 /// The table written beside a run's packing as history.csv: one row per finished local
 /// minimisation (its number, the seconds since the start, its density and the best certified
 /// density so far).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct History(String);
 
 impl History {
-    /// The table with its header and no rows.
-    pub fn new() -> Self {
-        Self(String::from(
-            "local_minimisation,seconds,density,best_density
-",
-        ))
-    }
-
-    /// Adds the row of a finished local minimisation.
-    pub fn record(&mut self, p: &MultiStartProgress) {
-        self.0.push_str(&format!(
-            "{},{:.3},{:.9},{:.9}\n",
-            p.local_minimisations,
-            p.elapsed.as_secs_f64(),
-            p.last_density,
-            p.best_density
-        ));
+    /// The table of a run's rows.
+    pub fn of(rows: &[MultiStartProgress]) -> Self {
+        let mut text = String::from("local_minimisation,seconds,density,best_density\n");
+        for p in rows {
+            text.push_str(&format!(
+                "{},{:.3},{:.9},{:.9}\n",
+                p.local_minimisations,
+                p.elapsed.as_secs_f64(),
+                p.last_density,
+                p.best_density
+            ));
+        }
+        History(text)
     }
 
     /// The CSV text.
     pub fn into_text(self) -> String {
         self.0
-    }
-}
-
-impl Default for History {
-    fn default() -> Self {
-        Self::new()
     }
 }
 
@@ -334,12 +275,14 @@ pub struct RunOutcome {
     pub start_density: Option<f64>,
     /// Whether the packing is the start itself: no local minimisation found a denser one.
     pub start_kept: bool,
+    /// The run's history.csv.
+    pub history: History,
 }
 
-/// Packs the scene's items: the paper's lattice start (or `options.resume_from`), then the
-/// multi-start until the time limit or the cap on local minimisations, then the certificate.
-/// A scene that gives its container's size ([`Scene::fixed_container`]) is filled instead,
-/// from a lattice start dilated into that container, until the first certified packing.
+/// Packs the scene's items with the packer ([`Packer::run`]): the scene and the options mapped
+/// to its problem and settings, its certified packing mapped to the files' form. A scene that
+/// gives its container's size ([`Scene::fixed_container`]) is filled until the first certified
+/// packing; a random scene ([`Scene::random_goal`]) is compressed from a random start.
 ///
 /// # Errors
 /// [`PackError`] when the model refuses the items or the resume packing does not match;
@@ -352,181 +295,73 @@ pub fn run(
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
     match (scene.ellipse_axes(), scene.ellipsoid_axes()) {
-        (Some(axes), _) => run_n::<2>(scene, &axes, options, observer),
-        (_, Some(axes)) => run_n::<3>(scene, &axes, options, observer),
+        (Some(axes), _) => run_n::<2>(scene, axes, options, observer),
+        (_, Some(axes)) => run_n::<3>(scene, axes, options, observer),
         _ => Err(PackError::Mismatch("the scene has no items".into())),
     }
 }
 
 fn run_n<const N: usize>(
     scene: &Scene,
-    axes: &[[f64; N]],
+    semi_axes: Vec<[f64; N]>,
     options: &RunOptions,
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
-    if let Some(goal) = scene.random_goal() {
-        return run_random::<N>(scene, axes, goal, options, observer);
-    }
-    let kind = model_container(scene.container);
-    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
-    let fixed = scene.fixed_container().map(|c| model_dimensions(&c, kind));
-    let x0 = match &options.resume_from {
-        Some(packing) => resumed_start(&mut problem, packing, scene, fixed.as_deref(), axes)?,
-        None => match &fixed {
-            Some(dims) => fill_start(&mut problem, &LatticeStart::centred(), dims)?,
-            None => lattice_start(&problem),
+    let shape = model_container(scene.container);
+    let goal = match (scene.random_goal(), scene.fixed_container()) {
+        (Some(RandomGoal::Fraction(c)), _) => Goal::Random {
+            target: Target::Fraction,
+            container: sized::<N>(&c, shape)?,
         },
+        (Some(RandomGoal::Jammed(c)), _) => Goal::Random {
+            target: Target::Jammed,
+            container: sized::<N>(&c, shape)?,
+        },
+        (None, Some(c)) => Goal::Fill(sized::<N>(&c, shape)?),
+        (None, None) => Goal::Densest,
     };
-    let threads = match options.threads.unwrap_or(scene.solver.threads) {
-        0 => std::thread::available_parallelism().map_or(1, usize::from),
-        n => n,
+    let resume = match &options.resume_from {
+        Some(packing) => Some(configuration_of::<N>(packing)?),
+        None => None,
     };
-    let mut local = local_settings(scene);
-    local.fixed_container = fixed.is_some();
+    let problem = Problem {
+        semi_axes,
+        shape,
+        goal,
+        resume,
+    };
+    let settings = settings_of(scene, options, N);
+    let seed = settings.multistart.seed;
+    let outcome = Packer::new(problem, settings)
+        .and_then(|packer| packer.run(observer))
+        .map_err(as_scene_says)?;
+    match outcome {
+        Outcome::Packed(packed) => packed_outcome(packed, scene.container, options, seed),
+        Outcome::Unfilled(unfilled) => Err(not_reached(unfilled, scene.container)?),
+    }
+}
+
+/// The packer's settings of the scene, with the command line's overrides.
+fn settings_of(scene: &Scene, options: &RunOptions, n: usize) -> Settings {
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
-    let mut settings = MultiStartSettings::paper(N, options.seed.unwrap_or(scene.seed));
-    settings.local = local;
-    settings.perturbation = scene.solver.perturbation;
-    // A resumed run continues from its packing; its lattice starts were tried before.
-    settings.lattice_starts = if options.resume_from.is_some() {
-        0
-    } else {
-        count(scene.solver.lattice_starts)
-    };
-    settings.from_best = scene.solver.from_best;
-    settings.perturbation_levels = scene.solver.perturbation_levels;
-    settings.fresh_lattice_every = count(scene.solver.fresh_lattice_every);
-    settings.restart_after = count(scene.solver.restart_after);
-    settings.threads = threads;
-    settings.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
-    let time_limit = options.time_limit.unwrap_or(scene.solver.time_limit);
-    // A variable periodic cell of identical items also starts from its densest small cell
-    // tiled (ellipsoid_packer::tiling) when that is denser than the lattice start; the time
-    // it takes counts in the run's.
-    let prelude = Instant::now();
-    let x0 = if fixed.is_none() && options.resume_from.is_none() {
-        // An eighth of the run per small cell, at most 8 s: three cells take a fraction of it.
-        let per_cell = (time_limit / 8).min(Duration::from_secs(8));
-        let tiled =
-            ellipsoid_packer::tiling::tiled_start(&mut problem, &settings, per_cell, &*observer)?;
-        let lattice = problem.evaluate(&x0, None)?.objective;
-        match tiled {
-            Some((y, density))
-                if density > ellipsoid_packer::local::item_measure(&problem) / lattice =>
-            {
-                y
-            }
-            _ => x0,
-        }
-    } else {
-        x0
-    };
-    let prelude = prelude.elapsed();
-    settings.time_limit = Some(time_limit.saturating_sub(prelude));
-    settings.shard = options.shard.unwrap_or(Shard::WHOLE);
-    let mut shifted = Shifted {
-        inner: observer,
-        by: prelude,
-    };
-    let result = match multistart(axes, kind, &x0, &settings, &mut shifted) {
-        Ok(result) => result,
-        Err(ellipsoid_packer::Error::NotReached(u)) => {
-            return Err(not_reached(&mut problem, &u, scene.container));
-        }
-        Err(e) => return Err(e.into()),
-    };
-    let written = written_packing::<N>(
-        &mut problem,
-        &result.best.x,
-        scene.container,
-        fixed.is_none(),
-    )?;
-    let packing = written.packing;
-    let mut summary = Summary::new(
-        &packing,
-        written.objective,
-        (result.wall_time + prelude).as_secs_f64(),
-        result.local_minimisations as u64,
-        written.certificate,
-    );
-    // A fixed container is never repaired: its packings are certified as the solver left them.
-    let repair_factor = result.best.repair_factor * written.dilation;
-    summary.repair = fixed.is_none().then_some(crate::packing::Repair {
-        dilation: repair_factor,
-        density_before: result.best.density_before_repair,
-    });
-    summary.start_kept = result.start_kept;
-    summary.fixed_container = fixed.is_some();
-    summary.shard = options.shard.map(|shard| crate::packing::ShardOrigin {
-        index: shard.index(),
-        count: shard.count(),
-        seed: settings.seed,
-    });
-    Ok(RunOutcome {
-        packing,
-        summary,
-        density_before_repair: result.best.density_before_repair,
-        repair_factor,
-        seconds_to_best: (result.time_to_best + prelude).as_secs_f64(),
-        interrupted: result.interrupted,
-        failed_starts: result.failed_starts,
-        restarts: result.restarts,
-        start_density: result.start_density,
-        start_kept: result.start_kept,
-    })
-}
-
-/// The variables of a packing to resume from, checked against the scene: its fixed container
-/// (`fixed`, the model's variables), its container kind, its items; and certified, since a
-/// resumed run keeps its start as the packing to beat.
-fn resumed_start<const N: usize>(
-    problem: &mut Model<N>,
-    packing: &Packing,
-    scene: &Scene,
-    fixed: Option<&[f64]>,
-    axes: &[[f64; N]],
-) -> Result<Vec<f64>, PackError> {
-    let kind = problem.container_kind();
-    if let Some(expected) = fixed {
-        check_fixed_size(packing, expected, kind)?;
+    let mut multistart = MultiStartSettings::paper(n, options.seed.unwrap_or(scene.seed));
+    multistart.local = local_settings(scene);
+    if scene.random_goal().is_some() {
+        multistart.local.fixed_orientations = scene.item_fixed_orientations();
     }
-    if packing.container().kind() != scene.container {
-        return Err(PackError::Mismatch(format!(
-            "the packing's container is {}, the scene's {}",
-            packing.container().kind(),
-            scene.container
-        )));
-    }
-    let x0 = variables_of::<N>(packing, axes, kind)?;
-    let certificate = problem
-        .certify(&x0)
-        .map_err(|e| named::<N>(e, axes.len(), kind))?;
-    if !certificate.is_feasible() {
-        return Err(PackError::StartNotCertified(start_defects(&certificate)));
-    }
-    Ok(x0)
-}
-
-/// Refuses a packing to resume from whose container is not the scene's fixed container
-/// `expected` (its variables, to 1e-12 relative).
-fn check_fixed_size(
-    packing: &Packing,
-    expected: &[f64],
-    kind: ModelContainer,
-) -> Result<(), PackError> {
-    let found = model_dimensions(packing.container(), kind);
-    let same = found.len() == expected.len()
-        && found
-            .iter()
-            .zip(expected)
-            .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
-    if same {
-        Ok(())
-    } else {
-        Err(PackError::FixedSizeMismatch {
-            found,
-            expected: expected.to_vec(),
-        })
+    multistart.perturbation = scene.solver.perturbation;
+    multistart.lattice_starts = count(scene.solver.lattice_starts);
+    multistart.from_best = scene.solver.from_best;
+    multistart.perturbation_levels = scene.solver.perturbation_levels;
+    multistart.fresh_lattice_every = count(scene.solver.fresh_lattice_every);
+    multistart.restart_after = count(scene.solver.restart_after);
+    multistart.threads = options.threads.unwrap_or(scene.solver.threads);
+    multistart.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
+    multistart.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
+    multistart.shard = options.shard.unwrap_or(Shard::WHOLE);
+    Settings {
+        multistart,
+        orientations: scene.item_orientations(),
     }
 }
 
@@ -550,231 +385,100 @@ fn local_settings(scene: &Scene) -> LocalSettings {
     local
 }
 
-/// The error of a fixed-container run that found no packing, with its least overlapping
-/// configuration as the files hold it.
-fn not_reached<const N: usize>(
-    problem: &mut Model<N>,
-    u: &ellipsoid_packer::fixed::Unfinished,
-    kind: ContainerKind,
-) -> PackError {
-    let mut unfinished = || -> Result<PackError, PackError> {
-        let packing = packing_of::<N>(problem, &u.x, kind)?;
-        let objective = problem.evaluate(&u.x, None)?.objective;
-        let mut summary = Summary::new(
-            &packing,
-            objective,
-            u.wall_time.as_secs_f64(),
-            u.local_minimisations as u64,
-            certificate_of(&u.certificate),
-        );
-        summary.not_reached = true;
-        summary.fixed_container = true;
-        Ok(PackError::NotReached(Box::new(Unfinished {
-            packing,
-            summary,
-            infeasibility: u.infeasibility,
-            interrupted: u.interrupted,
-        })))
-    };
-    unfinished().unwrap_or_else(|e| e)
+/// The packer's refusals of a packing to resume from, said as the scene's (the packer knows
+/// a problem, the user wrote a scene).
+fn as_scene_says(e: ellipsoid_packer::Error) -> PackError {
+    use ellipsoid_packer::Error as E;
+    match e {
+        E::ResumeItems { found, expected } => PackError::Mismatch(format!(
+            "the packing has {found} items, the scene {expected}"
+        )),
+        E::ResumeSemiAxes {
+            item,
+            found,
+            expected,
+        } => PackError::Mismatch(format!(
+            "item {item} has semi-axes {found:?} in the packing, {expected:?} in the scene"
+        )),
+        E::ResumeFixedSize { found, expected } => PackError::FixedSizeMismatch { found, expected },
+        E::Model(e) => named(e),
+        other => PackError::Packer(other),
+    }
 }
 
-/// A random packing of the scene's items ([`ellipsoid_packer::random`]): a random start, then
-/// compression to the scene's packing fraction or until jammed, within the time limit. A
-/// resumed jammed run compresses its packing further; a resumed run at a fraction is its
-/// packing, checked. The observer hears of every packing the compression kept (the history:
-/// one row per kept step, the written packing last), after the run.
-fn run_random<const N: usize>(
-    scene: &Scene,
-    axes: &[[f64; N]],
-    goal: RandomGoal,
+/// The run's outcome as the files hold it.
+fn packed_outcome<const N: usize>(
+    packed: Packed<N>,
+    kind: ContainerKind,
     options: &RunOptions,
-    observer: &mut dyn Observer,
+    seed: u64,
 ) -> Result<RunOutcome, PackError> {
-    let began = Instant::now();
-    let kind = model_container(scene.container);
-    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
-    let (target, container) = match &goal {
-        RandomGoal::Fraction(c) => (Target::Fraction, c),
-        RandomGoal::Jammed(c) => (Target::Jammed, c),
-    };
-    let dims = model_dimensions(container, kind);
-    let mut local = local_settings(scene);
-    local.method = LocalMethod::Compression;
-    local.fixed_orientations = scene.item_fixed_orientations();
-    let seed = options.seed.unwrap_or(scene.seed);
-    // One compression: the threads share its evaluations (0: every core).
-    let threads = options.threads.unwrap_or(scene.solver.threads);
-    let settings = RandomSettings::new(target, seed)
-        .with_local(local.clone())
-        .with_orientations(scene.item_orientations())
-        .with_threads(threads);
-    let time_limit = options.time_limit.unwrap_or(scene.solver.time_limit);
-    let shared: &dyn Observer = &*observer;
-    let mut observe = |p: &ellipsoid_packer::multistart::SolverProgress<'_>| {
-        shared.iteration(p);
-        shared.should_stop() || began.elapsed() >= time_limit
-    };
-    // The density of every packing the compression keeps, with its time: the run's history.
-    let mut steps: Vec<(Duration, f64)> = Vec::new();
-    let mut kept = |density: f64| steps.push((began.elapsed(), density));
-    let made = match &options.resume_from {
-        None => random_packing_seen(&mut problem, &dims, &settings, &mut observe, &mut kept),
-        Some(packing) => {
-            let fixed = (target == Target::Fraction).then_some(dims.as_slice());
-            problem.set_threads(threads)?;
-            let x0 = resumed_start(&mut problem, packing, scene, fixed, axes)?;
-            let aim = (target == Target::Fraction)
-                .then(|| problem.evaluate(&x0, None))
-                .transpose()?;
-            compression_seen(
-                &mut problem,
-                &x0,
-                &local,
-                aim.map(|e| e.objective),
-                &mut observe,
-                &mut |p| kept(p.density),
-            )
-            .map(|packing| RandomPacking {
-                start_density: packing.density,
-                packing,
-            })
-        }
-    };
-    let made = match made {
-        Ok(made) => made,
-        Err(ellipsoid_packer::Error::NotReached(u)) => {
-            return Err(not_reached(&mut problem, &u, scene.container));
-        }
-        Err(e) => return Err(e.into()),
-    };
-    let interrupted = observer.should_stop();
-    let elapsed = began.elapsed();
-    steps.push((elapsed, made.packing.density));
-    let mut best = 0.0_f64;
-    for (k, &(at, density)) in steps.iter().enumerate() {
-        best = best.max(density);
-        observer.finished(&MultiStartProgress {
-            local_minimisations: k + 1,
-            best_density: best,
-            last_density: density,
-            elapsed: at,
-        });
-    }
-    let jammed = target == Target::Jammed;
-    let written = written_packing::<N>(&mut problem, &made.packing.x, scene.container, jammed)?;
-    let packing = written.packing;
+    let packing = packing_of(&packed.configuration, kind)?;
     let mut summary = Summary::new(
         &packing,
-        written.objective,
-        elapsed.as_secs_f64(),
-        1,
-        written.certificate,
+        packed.configuration.container.measure().0,
+        packed.wall_time.as_secs_f64(),
+        packed.local_minimisations as u64,
+        certificate_of(&packed.certificate),
     );
-    let repair_factor = made.packing.repair_factor * written.dilation;
-    summary.repair = jammed.then_some(crate::packing::Repair {
-        dilation: repair_factor,
-        density_before: made.packing.density_before_repair,
+    summary.repair = packed.repair.map(|r| crate::packing::Repair {
+        dilation: r.dilation,
+        density_before: r.density_before,
     });
-    summary.start_kept = false;
-    summary.fixed_container = !jammed;
+    // Only a container of given size is never repaired.
+    summary.fixed_container = packed.repair.is_none();
+    summary.start_kept = packed.start_kept;
+    summary.shard = options.shard.map(|shard| crate::packing::ShardOrigin {
+        index: shard.index(),
+        count: shard.count(),
+        seed,
+    });
     Ok(RunOutcome {
+        density_before_repair: packed.repair.map_or(summary.density, |r| r.density_before),
+        repair_factor: packed.repair.map_or(1.0, |r| r.dilation),
         packing,
         summary,
-        density_before_repair: made.packing.density_before_repair,
-        repair_factor,
-        seconds_to_best: elapsed.as_secs_f64(),
-        interrupted,
-        failed_starts: 0,
-        restarts: 0,
-        start_density: Some(made.start_density),
-        start_kept: false,
+        seconds_to_best: packed.time_to_best.as_secs_f64(),
+        interrupted: packed.interrupted,
+        failed_starts: packed.failed_starts,
+        restarts: packed.restarts,
+        start_density: packed.start_density,
+        start_kept: packed.start_kept,
+        history: History::of(&packed.history),
     })
 }
 
-/// An observer whose progress times start earlier, at the run's start, by `by` (the time
-/// spent before the multi-start: the small cells of a periodic run).
-struct Shifted<'a> {
-    inner: &'a mut dyn Observer,
-    by: Duration,
-}
-
-impl Observer for Shifted<'_> {
-    fn finished(&mut self, progress: &MultiStartProgress) {
-        let mut progress = *progress;
-        progress.elapsed += self.by;
-        self.inner.finished(&progress);
-    }
-    fn iteration(&self, progress: &ellipsoid_packer::multistart::SolverProgress<'_>) {
-        self.inner.iteration(progress);
-    }
-    fn should_stop(&self) -> bool {
-        self.inner.should_stop()
-    }
-}
-
-/// A packing as the files hold it, with its own certificate.
-struct Written {
-    packing: Packing,
-    objective: f64,
-    certificate: CertificateCounts,
-    /// The dilation applied to make the written form certified (1: none).
-    dilation: f64,
-}
-
-/// The packing of the certified variables `x` as the files hold it (quaternions, a reduced
-/// periodic cell, items wrapped into it, 17 significant digits), certified again in that form:
-/// the conversion moves values by a few ulps, which can put a pair at exact tangency (an item
-/// touching its own image in a periodic cell, say) an ulp inside. When `may_dilate`, such a
-/// packing is dilated by the least of 1 + 1e-12, 1e-11, … that certifies its written form.
-fn written_packing<const N: usize>(
-    problem: &mut Model<N>,
-    x: &[f64],
+/// The error of a fixed-container run that found no packing, with its least overlapping
+/// configuration as the files hold it.
+fn not_reached<const N: usize>(
+    u: Unfilled<N>,
     kind: ContainerKind,
-    may_dilate: bool,
-) -> Result<Written, PackError> {
-    let mut dilation = 1.0;
-    let mut step = 0;
-    loop {
-        let y = problem.dilated(x, dilation);
-        let packing = packing_of::<N>(problem, &y, kind)?;
-        let certificate = verify(&packing)?;
-        if certificate.is_certified() || !may_dilate || step == 6 {
-            return Ok(Written {
-                objective: problem.evaluate(&y, None)?.objective,
-                packing,
-                certificate,
-                dilation,
-            });
-        }
-        dilation = 1.0 + 1e-12 * 10f64.powi(step);
-        step += 1;
-    }
-}
-
-/// The overlapping pairs (with μ²) and the items outside (with the container growth that
-/// would hold each) of an uncertified point, from its certificate.
-fn start_defects(certificate: &implicit_packing::model::Certificate) -> StartDefects {
-    StartDefects {
-        overlapping: certificate
-            .overlapping
-            .iter()
-            .map(|o| (o.items.0, o.items.1, o.mu2))
-            .collect(),
-        outside: certificate
-            .outside
-            .iter()
-            .map(|o| (o.item, o.scale))
-            .collect(),
-    }
+) -> Result<PackError, PackError> {
+    let packing = packing_of(&u.configuration, kind)?;
+    let mut summary = Summary::new(
+        &packing,
+        u.configuration.container.measure().0,
+        u.wall_time.as_secs_f64(),
+        u.local_minimisations as u64,
+        certificate_of(&u.certificate),
+    );
+    summary.not_reached = true;
+    summary.fixed_container = true;
+    Ok(PackError::NotReached(Box::new(Unfinished {
+        packing,
+        summary,
+        infeasibility: u.infeasibility,
+        interrupted: u.interrupted,
+        history: History::of(&u.history),
+    })))
 }
 
 /// Re-checks a packing from its files, independently of how it was made: PW85 verdicts on every
-/// pair whose enclosing balls meet and exact containment (the model's certificate), and the
+/// pair whose enclosing balls meet and exact containment (the one certificate), and the
 /// smallest μ² over those pairs.
 ///
 /// # Errors
-/// [`PackError`] when the items do not form a valid model (a zero semi-axis, NaN).
+/// [`PackError`] when the items do not form valid bodies (a zero semi-axis, NaN).
 pub fn verify(packing: &Packing) -> Result<CertificateCounts, PackError> {
     verify_detailed(packing).map(|v| v.certificate)
 }
@@ -808,28 +512,10 @@ pub struct Verification {
 /// # Errors
 /// As [`verify`].
 pub fn verify_detailed(packing: &Packing) -> Result<Verification, PackError> {
-    match &packing.items() {
-        Items::Ellipses(v) => {
-            let axes: Vec<[f64; 2]> = v.iter().map(|e| e.semi_axes).collect();
-            verify_n::<2>(packing, &axes)
-        }
-        Items::Ellipsoids(v) => {
-            let axes: Vec<[f64; 3]> = v.iter().map(|e| e.semi_axes).collect();
-            verify_n::<3>(packing, &axes)
-        }
-    }
-}
-
-fn verify_n<const N: usize>(
-    packing: &Packing,
-    axes: &[[f64; N]],
-) -> Result<Verification, PackError> {
-    let kind = model_container(packing.container().kind());
-    let mut problem = Model::<N>::new(axes.to_vec(), kind)?;
-    let x = variables_of::<N>(packing, axes, kind)?;
-    let model = problem
-        .certify(&x)
-        .map_err(|e| named::<N>(e, axes.len(), kind))?;
+    let model = match packing.items() {
+        Items::Ellipses(_) => certified::<2>(packing)?,
+        Items::Ellipsoids(_) => certified::<3>(packing)?,
+    };
     let certificate = certificate_of(&model);
     let mut overlapping_pairs = model.overlapping;
     // Deepest first; the stable sort keeps the certificate's (i, j) order among equals.
@@ -843,45 +529,40 @@ fn verify_n<const N: usize>(
     })
 }
 
-/// A model error about "variable k" named as the packing states it: item i's centre
-/// coordinate (or, in a periodic cell, its fractional coordinate along a cell edge), or its
-/// orientation, or the container's value. Other errors pass unchanged.
-fn named<const N: usize>(
-    e: implicit_packing::Error,
-    items: usize,
-    kind: ModelContainer,
-) -> PackError {
+/// The certificate of a packing's items as stated.
+fn certified<const N: usize>(
+    packing: &Packing,
+) -> Result<implicit_packing::Certificate, PackError> {
+    let c = configuration_of::<N>(packing)?;
+    certify_items(&c.items, &c.container).map_err(named)
+}
+
+/// A model error about an item's values named as the packing states them: item i's centre
+/// coordinate, or its fractional coordinate along a cell edge. Other errors pass unchanged.
+fn named(e: implicit_packing::Error) -> PackError {
     use implicit_packing::Error as E;
-    let stride = Model::<N>::vars_per_body();
-    let periodic = kind == ModelContainer::Periodic;
-    let what = |index: usize| {
-        let axis = ["x", "y", "z"];
-        let edge = ["a", "b", "c"];
-        if index >= items * stride {
-            format!("the container's value {}", index - items * stride + 1)
-        } else {
-            let (item, k) = (index / stride, index % stride);
-            match k {
-                k if k < N && periodic => {
-                    format!(
-                        "item {item}'s fractional coordinate along the cell edge {}",
-                        edge[k]
-                    )
-                }
-                k if k < N => format!("item {item}'s centre coordinate {}", axis[k]),
-                _ => format!("item {item}'s orientation"),
-            }
-        }
-    };
+    let axis = ["x", "y", "z"];
+    let edge = ["a", "b", "c"];
     match e {
-        E::NonFiniteVariable { index, value } => PackError::OutOfRange {
-            what: what(index),
+        E::NonFiniteCentre {
+            item: Some(item),
+            axis: k,
+            value,
+        } => PackError::OutOfRange {
+            what: format!("item {item}'s centre coordinate {}", axis[k.min(2)]),
             value: format!("{value:e}"),
             rule: "coordinates must be finite and within ±1e30 (rescale the packing, or check \
                    the container's size and tilts)",
         },
-        E::FractionalOutOfRange { index, value } => PackError::OutOfRange {
-            what: what(index),
+        E::ItemFarFromCell {
+            item,
+            edge: k,
+            value,
+        } => PackError::OutOfRange {
+            what: format!(
+                "item {item}'s fractional coordinate along the cell edge {}",
+                edge[k.min(2)]
+            ),
             value: format!("{value:e}"),
             rule: "items of a periodic cell must lie within 2^30 cells of it (wrap them into \
                    the cell)",
@@ -890,32 +571,19 @@ fn named<const N: usize>(
     }
 }
 
-/// The bodies and the container of a packing, as the model and the certificate see them.
+/// The bodies and the container of a packing, as the certificate sees them.
 ///
 /// # Errors
 /// [`PackError`] when the items do not form valid bodies (a zero semi-axis, NaN).
 pub fn bodies_of<const N: usize>(
     packing: &Packing,
 ) -> Result<(Vec<Body<N>>, SizedContainer<N>), PackError> {
-    let axes: Vec<[f64; N]> = match packing.items() {
-        Items::Ellipses(v) => v
-            .iter()
-            .map(|e| std::array::from_fn(|k| e.semi_axes.get(k).copied().unwrap_or(f64::NAN)))
-            .collect(),
-        Items::Ellipsoids(v) => v
-            .iter()
-            .map(|e| std::array::from_fn(|k| e.semi_axes.get(k).copied().unwrap_or(f64::NAN)))
-            .collect(),
-    };
-    let kind = model_container(packing.container().kind());
-    let mut problem = Model::<N>::new(axes.clone(), kind)?;
-    let x = variables_of::<N>(packing, &axes, kind)?;
-    let container = problem.container_at(&x)?;
-    Ok((problem.bodies_at(&x)?.to_vec(), container))
+    let c = configuration_of::<N>(packing)?;
+    Ok((stated_bodies(&c.items).map_err(named)?, c.container))
 }
 
 /// The summary's certificate: the counts and the smallest μ² of the one certificate.
-fn certificate_of(model: &implicit_packing::model::Certificate) -> CertificateCounts {
+fn certificate_of(model: &implicit_packing::Certificate) -> CertificateCounts {
     CertificateCounts {
         overlapping_pairs: model.overlapping.len() as u64,
         containment_violations: model.outside.len() as u64,
@@ -923,163 +591,109 @@ fn certificate_of(model: &implicit_packing::model::Certificate) -> CertificateCo
     }
 }
 
-/// The model's container for a container kind of the files.
-pub fn model_container(kind: ContainerKind) -> ModelContainer {
+/// The model's container shape for a container kind of the files.
+pub fn model_container(kind: ContainerKind) -> ContainerShape {
     match kind {
-        ContainerKind::Circle | ContainerKind::Ball => ModelContainer::Ball,
-        ContainerKind::Ellipse | ContainerKind::Ellipsoid => ModelContainer::Ellipsoid,
-        ContainerKind::Rectangle | ContainerKind::Cuboid => ModelContainer::Box,
-        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => ModelContainer::Periodic,
+        ContainerKind::Circle | ContainerKind::Ball => ContainerShape::Ball,
+        ContainerKind::Ellipse | ContainerKind::Ellipsoid => ContainerShape::Ellipsoid,
+        ContainerKind::Rectangle | ContainerKind::Cuboid => ContainerShape::Box,
+        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => ContainerShape::Periodic,
     }
 }
 
-/// A periodic cell's item centre `c` moved by a lattice translation into the cell (fractional
-/// coordinates in `[0, 1)`), where the files show it.
-fn wrapped<const N: usize>(cell: &[[f64; N]; N], c: [f64; N]) -> [f64; N] {
-    use implicit_packing::periodic::{to_cartesian, to_fractional};
-    let s = to_fractional(cell, &c);
-    to_cartesian(cell, &s.map(|v| v - v.floor()))
+/// The container of the files as the packer's, centred at the origin: a ball's radius, else
+/// its semi-axes, half sides or cell entries.
+fn sized<const N: usize>(
+    container: &Container,
+    shape: ContainerShape,
+) -> Result<SizedContainer<N>, PackError> {
+    let size = container.size();
+    let dims = match shape {
+        ContainerShape::Ball => vec![size.first().copied().unwrap_or(0.0)],
+        _ => size,
+    };
+    Ok(SizedContainer::from_dimensions(shape, &dims)?)
 }
 
-/// The packing of the model's variables `x`.
+/// The items of a packing relative to its container's centre, and its container, as the packer
+/// and the certificate take them.
+fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N>, PackError> {
+    let container = packing.container();
+    let centre = container.center();
+    let at = |v: &[f64], k: usize| v.get(k).copied().unwrap_or(f64::NAN);
+    let item = |c: &[f64], l: &[f64], orientation| Item {
+        centre: std::array::from_fn(|k| at(c, k) - at(centre, k)),
+        semi_axes: std::array::from_fn(|k| at(l, k)),
+        orientation,
+    };
+    let items: Vec<Item<N>> = match packing.items() {
+        Items::Ellipses(v) if N == 2 => v
+            .iter()
+            .map(|e| item(&e.center, &e.semi_axes, Orientation::Angle(e.theta)))
+            .collect(),
+        Items::Ellipsoids(v) if N == 3 => v
+            .iter()
+            .map(|e| {
+                item(
+                    &e.center,
+                    &e.semi_axes,
+                    Orientation::Quaternion(e.quaternion),
+                )
+            })
+            .collect(),
+        _ => {
+            return Err(PackError::Mismatch(
+                "the packing has the other dimension".into(),
+            ));
+        }
+    };
+    let container = sized::<N>(container, model_container(container.kind()))?;
+    Ok(Configuration { items, container })
+}
+
+/// The packing the files hold of a configuration of the packer.
 fn packing_of<const N: usize>(
-    problem: &mut Model<N>,
-    x: &[f64],
+    configuration: &Configuration<N>,
     kind: ContainerKind,
 ) -> Result<Packing, PackError> {
-    // A periodic cell is written with its tilts reduced: the same lattice in the cell LAMMPS
-    // accepts.
-    let shape = match problem.container_at(x)? {
-        SizedContainer::Periodic { cell } => SizedContainer::Periodic {
-            cell: implicit_packing::periodic::reduced(&cell),
-        },
-        other => other,
+    let items = &configuration.items;
+    let angle = |o: &Orientation| match *o {
+        Orientation::Angle(theta) => theta,
+        Orientation::Quaternion(_) => f64::NAN,
     };
-    let bodies = problem.bodies_at(x)?;
-    let centre = |b: &implicit_packing::Body<N>| match shape {
-        SizedContainer::Periodic { cell } => wrapped(&cell, b.centre()),
-        _ => b.centre(),
+    let quaternion = |o: &Orientation| match *o {
+        Orientation::Quaternion(q) => q,
+        Orientation::Angle(_) => [f64::NAN; 4],
     };
     let items = if N == 2 {
         Items::Ellipses(
-            bodies
+            items
                 .iter()
-                .map(|b| {
-                    let (c, l, r) = (centre(b), b.semi_axes(), b.rotation());
-                    EllipseItem {
-                        center: [c[0], c[1]],
-                        semi_axes: [l[0], l[1]],
-                        theta: r[1][0].atan2(r[0][0]),
-                    }
+                .map(|i| EllipseItem {
+                    center: [i.centre[0], i.centre[1]],
+                    semi_axes: [i.semi_axes[0], i.semi_axes[1]],
+                    theta: angle(&i.orientation),
                 })
                 .collect(),
         )
     } else {
         Items::Ellipsoids(
-            bodies
+            items
                 .iter()
-                .map(|b| {
-                    let (c, l) = (centre(b), b.semi_axes());
-                    let r = b.rotation();
-                    let rot3 = [
-                        [r[0][0], r[0][1], r[0][2]],
-                        [r[1][0], r[1][1], r[1][2]],
-                        [r[2][0], r[2][1], r[2][2]],
-                    ];
-                    EllipsoidItem {
-                        center: [c[0], c[1], c[2]],
-                        semi_axes: [l[0], l[1], l[2]],
-                        quaternion: implicit_packing::shape::quaternion_from_rotation(&rot3),
-                    }
+                .map(|i| EllipsoidItem {
+                    center: std::array::from_fn(|k| i.centre[k]),
+                    semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
+                    quaternion: quaternion(&i.orientation),
                 })
                 .collect(),
         )
     };
-    let dims: Vec<f64> = match shape {
+    let dims: Vec<f64> = match configuration.container {
         SizedContainer::Ball { radius } => vec![radius; N],
-        SizedContainer::Ellipsoid { semi_axes } => semi_axes.to_vec(),
-        SizedContainer::Box { half_sides } => half_sides.to_vec(),
-        SizedContainer::Periodic { .. } => shape.dimensions(),
+        other => other.dimensions(),
     };
     let container = Container::unchecked(kind, &[0.0; N], &dims);
     Ok(Packing::new(container, items)?)
-}
-
-/// The model's container variables of a container: the radius of a ball, else its semi-axes
-/// or half sides.
-fn model_dimensions(container: &Container, kind: ModelContainer) -> Vec<f64> {
-    let size = container.size();
-    match kind {
-        ModelContainer::Ball => vec![size.first().copied().unwrap_or(0.0)],
-        _ => size,
-    }
-}
-
-/// The model's variables of a packing (centres relative to the container's centre), checking
-/// that its items have the semi-axes `axes`, in order.
-fn variables_of<const N: usize>(
-    packing: &Packing,
-    axes: &[[f64; N]],
-    kind: ModelContainer,
-) -> Result<Vec<f64>, PackError> {
-    if packing.items().len() != axes.len() {
-        return Err(PackError::Mismatch(format!(
-            "the packing has {} items, the scene {}",
-            packing.items().len(),
-            axes.len()
-        )));
-    }
-    let centre = packing.container().center().to_vec();
-    let same = |a: &[f64], b: &[f64]| {
-        a.iter()
-            .zip(b)
-            .all(|(p, q)| (p - q).abs() <= 1e-12 * q.abs())
-    };
-    let mismatch = |i: usize, found: &[f64]| {
-        PackError::Mismatch(format!(
-            "item {i} has semi-axes {found:?} in the packing, {:?} in the scene",
-            axes[i]
-        ))
-    };
-    let dims = model_dimensions(packing.container(), kind);
-    // The bodies relative to the container's centre, with the scene's semi-axes (equal to the
-    // packing's within 1e-12, checked here), so that the model takes them as its own.
-    let axis = |i: usize, k: usize| axes[i].get(k).copied().unwrap_or(f64::NAN);
-    match &packing.items() {
-        Items::Ellipses(v) if N == 2 => {
-            let mut bodies = Vec::with_capacity(v.len());
-            for (i, e) in v.iter().enumerate() {
-                if !same(&e.semi_axes, &axes[i]) {
-                    return Err(mismatch(i, &e.semi_axes));
-                }
-                let l = [axis(i, 0), axis(i, 1)];
-                let c = [e.center[0] - centre[0], e.center[1] - centre[1]];
-                bodies.push(Body::ellipse(c, l, e.theta)?);
-            }
-            let axes: Vec<[f64; 2]> = bodies.iter().map(Body::semi_axes).collect();
-            Ok(Model::<2>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
-        }
-        Items::Ellipsoids(v) if N == 3 => {
-            let mut bodies = Vec::with_capacity(v.len());
-            for (i, e) in v.iter().enumerate() {
-                if !same(&e.semi_axes, &axes[i]) {
-                    return Err(mismatch(i, &e.semi_axes));
-                }
-                let l = [axis(i, 0), axis(i, 1), axis(i, 2)];
-                let c = [
-                    e.center[0] - centre[0],
-                    e.center[1] - centre[1],
-                    e.center[2] - centre[2],
-                ];
-                bodies.push(Body::from_quaternion(c, l, e.quaternion)?);
-            }
-            let axes: Vec<[f64; 3]> = bodies.iter().map(Body::semi_axes).collect();
-            Ok(Model::<3>::new(axes, kind)?.pack_variables(&bodies, &dims)?)
-        }
-        _ => Err(PackError::Mismatch(
-            "the packing has the other dimension".into(),
-        )),
-    }
 }
 
 #[cfg(test)]
@@ -1088,19 +702,20 @@ mod tests {
 
     #[test]
     fn the_history_has_its_header_and_a_row_per_local_minimisation() {
-        let mut history = History::new();
-        history.record(&MultiStartProgress {
-            local_minimisations: 1,
-            best_density: 0.5,
-            last_density: 0.25,
-            elapsed: Duration::from_millis(1500),
-        });
-        history.record(&MultiStartProgress {
-            local_minimisations: 2,
-            best_density: 0.625,
-            last_density: 0.625,
-            elapsed: Duration::from_secs(3),
-        });
+        let history = History::of(&[
+            MultiStartProgress {
+                local_minimisations: 1,
+                best_density: 0.5,
+                last_density: 0.25,
+                elapsed: Duration::from_millis(1500),
+            },
+            MultiStartProgress {
+                local_minimisations: 2,
+                best_density: 0.625,
+                last_density: 0.625,
+                elapsed: Duration::from_secs(3),
+            },
+        ]);
         assert_eq!(
             history.into_text(),
             "local_minimisation,seconds,density,best_density\n\

@@ -7,6 +7,8 @@
 //! it by the least enlargement of the container ([`local::repair`]), and repeats from many
 //! starts.
 //!
+//! - [`run`] — one whole run, owned here: [`Packer::new`] and [`Packer::run`] from the problem
+//!   and its settings to a certified [`Configuration`] of items and container.
 //! - [`starts`] — the paper's first initial solution, dense lattice starts, perturbations.
 //! - [`local`] — one local minimisation with its polish, certificate and repair.
 //! - [`compression`] — the container made small by placements in shrinking fixed containers,
@@ -44,11 +46,13 @@ pub mod local;
 mod merged;
 pub mod multistart;
 pub mod random;
+pub mod run;
 pub mod starts;
 pub mod tiling;
 
-pub use error::Error;
+pub use error::{Error, StartDefects};
 pub use fixed::fill;
 pub use local::{LocalResult, LocalSettings, local_minimisation};
 pub use multistart::{MultiStartResult, MultiStartSettings, multistart};
 pub use random::{RandomPacking, RandomSettings, Target, random_packing};
+pub use run::{Configuration, Goal, Outcome, Packed, Packer, Problem, Repair, Settings, Unfilled};

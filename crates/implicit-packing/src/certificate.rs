@@ -17,7 +17,7 @@
 
 use crate::containment::{Container, containment_residual, farthest_point};
 use crate::error::Error;
-use crate::shape::Body;
+use crate::shape::{Body, Item};
 
 /// Two items that overlap: their indices and μ² < 1.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -107,6 +107,46 @@ pub fn contact<const N: usize>(i: &Body<N>, j: &Body<N>) -> Result<pw85::Contact
         let sym = |m: &[[f64; N]; N]| [at(m, 0, 0), at(m, 0, 1), at(m, 1, 1)];
         pw85::contact_function(&[d(0), d(1)], &sym(&mi), &sym(&mj))
     }
+}
+
+/// The certificate of `items` as they are stated (centres relative to the container's centre):
+/// [`certify`] on their bodies, so that a packing written with round-trip precision and read
+/// back is certified exactly as it was made.
+///
+/// # Errors
+/// An item that is not a body ([`Item::body`]'s errors, naming the item), an item of a periodic
+/// cell beyond 2³⁰ cells of it ([`Error::ItemFarFromCell`]), and those of [`certify`].
+pub fn certify_items<const N: usize>(
+    items: &[Item<N>],
+    container: &Container<N>,
+) -> Result<Certificate, Error> {
+    let bodies = bodies_of(items)?;
+    if let Container::Periodic { cell } = container {
+        for (item, body) in bodies.iter().enumerate() {
+            let s = crate::periodic::to_fractional(cell, &body.centre());
+            if let Some(edge) = (0..N).find(|&k| !s[k].is_finite() || s[k].abs() > MAX_CELLS) {
+                let value = s[edge];
+                return Err(Error::ItemFarFromCell { item, edge, value });
+            }
+        }
+    }
+    certify(&bodies, container)
+}
+
+/// Fractional coordinates beyond this many cells are refused: their lattice translations
+/// must be `i32`.
+pub(crate) const MAX_CELLS: f64 = (1u32 << 30) as f64;
+
+/// The bodies `items` state, an error naming the first that is not one.
+///
+/// # Errors
+/// [`Item::body`]'s, naming the item.
+pub fn bodies_of<const N: usize>(items: &[Item<N>]) -> Result<Vec<Body<N>>, Error> {
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| item.body().map_err(|e| e.for_item(i)))
+        .collect()
 }
 
 /// The certificate of `bodies` in `container` (centred at the origin).

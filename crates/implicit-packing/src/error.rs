@@ -107,6 +107,16 @@ pub enum Error {
         /// The offending value.
         value: f64,
     },
+    /// An item of a periodic cell so far from it that its lattice translation is not an `i32`
+    /// (beyond ±2³⁰ cells), named by the item and the cell edge.
+    ItemFarFromCell {
+        /// The item.
+        item: usize,
+        /// The cell edge (0 = a, 1 = b, 2 = c) along which it is far.
+        edge: usize,
+        /// Its fractional coordinate along that edge.
+        value: f64,
+    },
     /// The neighbour grid rejected the input.
     Grid(cell_grid::Error),
     /// The threads asked for the model's evaluations could not be started (the error is
@@ -127,6 +137,35 @@ pub enum Error {
 }
 
 impl Error {
+    /// The same error naming `item` where it names an item and did not know which.
+    pub fn for_item(self, item: usize) -> Self {
+        match self {
+            Error::NonFiniteCentre { axis, value, .. } => Error::NonFiniteCentre {
+                item: Some(item),
+                axis,
+                value,
+            },
+            Error::InvalidSemiAxis { axis, value, .. } => Error::InvalidSemiAxis {
+                item: Some(item),
+                axis,
+                value,
+            },
+            Error::NonFiniteAngle { angle, value, .. } => Error::NonFiniteAngle {
+                item: Some(item),
+                angle,
+                value,
+            },
+            Error::InvalidQuaternion {
+                quaternion, norm2, ..
+            } => Error::InvalidQuaternion {
+                item: Some(item),
+                quaternion,
+                norm2,
+            },
+            other => other,
+        }
+    }
+
     /// `Ok` when a slice of `what` has the `expected` length, the `LengthMismatch` otherwise.
     pub(crate) fn check_length(
         what: &'static str,
@@ -269,6 +308,13 @@ impl fmt::Display for Error {
                 f,
                 "variable {index} is the fractional coordinate {}; items of a periodic cell \
                  must lie within 2^30 cells of it",
+                short(value)
+            ),
+            Error::ItemFarFromCell { item, edge, value } => write!(
+                f,
+                "item {item}'s fractional coordinate along the cell edge {} is {}; items of a \
+                 periodic cell must lie within 2^30 cells of it",
+                ["a", "b", "c"][edge.min(2)],
                 short(value)
             ),
             Error::Grid(ref e) => write!(f, "neighbour grid: {e}"),

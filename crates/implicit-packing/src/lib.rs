@@ -59,4 +59,4 @@ pub use containment::{Container, ContainerShape};
 pub use error::Error;
 pub use model::Model;
 pub use pair::{PairTerm, Route, epsilon, overlap_measure, pair_term, pair_term_by};
-pub use shape::{Body, Ellipse, Ellipsoid};
+pub use shape::{Body, Ellipse, Ellipsoid, Item, Orientation};

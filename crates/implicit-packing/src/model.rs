@@ -688,9 +688,7 @@ impl<const N: usize> PeriodicSums<'_, N> {
     }
 }
 
-/// Fractional coordinates beyond this many cells are refused: their lattice translations
-/// must be `i32`.
-const MAX_CELLS: f64 = (1u32 << 30) as f64;
+use crate::certificate::MAX_CELLS;
 
 /// The periodic cell ([`crate::periodic`]): pair terms over the lattice images, no containment,
 /// the objective `det H`.

@@ -410,6 +410,67 @@ pub fn angles_from_rotation(m: &[[f64; 3]; 3]) -> [f64; 3] {
     }
 }
 
+/// How an item's rotation is stated outside the model: the angle θ of eq. 1 in 2D, a unit
+/// quaternion `(w, x, y, z)` in 3D (the forms of packing files).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Orientation {
+    /// The angle θ of eq. 1 (2D).
+    Angle(f64),
+    /// A unit quaternion `(w, x, y, z)`, Hamilton, active (3D).
+    Quaternion([f64; 4]),
+}
+
+impl Orientation {
+    /// The values, as [`Body::oriented`] takes them.
+    pub fn values(&self) -> &[f64] {
+        match self {
+            Orientation::Angle(theta) => std::slice::from_ref(theta),
+            Orientation::Quaternion(q) => q,
+        }
+    }
+}
+
+/// An item as it is stated outside the model: centre, semi-axes and the orientation its
+/// rotation is built from. A packing stated by items and written with round-trip precision
+/// reads back as the same bodies, bit for bit, so a certificate of [`Item::body`]s holds for the
+/// files.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Item<const N: usize> {
+    /// The centre.
+    pub centre: [f64; N],
+    /// The semi-axes, along the columns of the rotation.
+    pub semi_axes: [f64; N],
+    /// The orientation.
+    pub orientation: Orientation,
+}
+
+impl<const N: usize> Item<N> {
+    /// The item stating `body`: θ = atan2(Q₂₁, Q₁₁) in 2D, the quaternion of `Q` with `w ≥ 0` in
+    /// 3D. Its [`Item::body`] is `body` up to the rounding of that conversion.
+    pub fn stating(body: &Body<N>) -> Self {
+        let r = body.rotation();
+        let orientation = if N == 2 {
+            Orientation::Angle(r[1][0].atan2(r[0][0]))
+        } else {
+            let m: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| r[i][k]));
+            Orientation::Quaternion(quaternion_from_rotation(&m))
+        };
+        Item {
+            centre: body.centre(),
+            semi_axes: body.semi_axes(),
+            orientation,
+        }
+    }
+
+    /// The body this item states ([`Body::oriented`]).
+    ///
+    /// # Errors
+    /// Those of [`Body::oriented`], naming no item: callers name it.
+    pub fn body(&self) -> Result<Body<N>, Error> {
+        Body::oriented(self.centre, self.semi_axes, self.orientation.values())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
