@@ -229,7 +229,7 @@ impl PyPacking {
             ellipack::pack::probe_output_folder(&folder).map_err(|e| e.to_string())?;
             let staging = Staging::begin(&folder).map_err(|e| e.to_string())?;
             let staged = staging.path();
-            ellipack::packing::write_files(staged, &self.packing, &self.summary, xyz)
+            ellipack::folder::write_files(staged, &self.packing, &self.summary, xyz)
                 .map_err(|e| e.to_string())?;
             if let Some(history) = &self.history {
                 ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())

@@ -12,10 +12,10 @@
 
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
+use ellipack::folder::write_files;
 use ellipack::instances::{INSTANCES, Instance, by_name, names};
 use ellipack::output::write_atomically;
 use ellipack::pack::{RunOptions, run};
-use ellipack::packing::write_files;
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
 use ellipack::scene::MethodName;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};

@@ -59,6 +59,7 @@ mod inner;
 mod lagrangian;
 mod options;
 mod outer;
+mod phr;
 mod problem;
 mod projected_qn;
 mod projection;
@@ -67,9 +68,9 @@ mod spg;
 mod truncated_newton;
 
 pub use error::{Error, Evaluation};
-pub use lagrangian::Phr;
 pub use options::{InnerSolver, Options};
 pub use outer::{minimize, minimize_with_callback};
+pub use phr::Phr;
 pub use problem::Problem;
 pub use report::{Control, Event, Progress, Report, Solution, StopReason};
 

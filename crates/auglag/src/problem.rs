@@ -10,7 +10,7 @@
 //!
 //! Constraints are passed as one vector `c = [h; g]`, equalities first.
 
-use crate::lagrangian::Phr;
+use crate::phr::Phr;
 
 /// A smooth nonlinear program with bounds.
 ///

@@ -1,8 +1,5 @@
 //! Configuration of a grid: cutoff or radii, domain, periodic axes, cap on cells.
 
-use crate::error::Error;
-use crate::grid::Grid;
-
 /// How far apart two items may be and still form a pair.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Reach {
@@ -12,7 +9,7 @@ pub(crate) enum Reach {
     Radii(Vec<f64>),
 }
 
-/// Options for a [`Grid`] beyond the plain [`Grid::build`].
+/// Options for a [`Grid`](crate::Grid) beyond the plain [`Grid::build`](crate::Grid::build).
 ///
 /// ```
 /// use cell_grid::GridBuilder;
@@ -105,13 +102,5 @@ impl<const D: usize> GridBuilder<D> {
     pub fn split_large_items(mut self, split: bool) -> Self {
         self.split = split;
         self
-    }
-
-    /// Validates the configuration and builds the grid over `points`.
-    ///
-    /// # Errors
-    /// Any [`Error`] about the configuration, and those of [`Grid::rebuild`].
-    pub fn build(self, points: &[[f64; D]]) -> Result<Grid<D>, Error> {
-        Grid::from_builder(self, points)
     }
 }

@@ -199,6 +199,16 @@ pub struct Grid<const D: usize> {
     pub(crate) slot_coords: Vec<[i64; D]>,
 }
 
+impl<const D: usize> GridBuilder<D> {
+    /// Validates the configuration and builds the grid over `points`.
+    ///
+    /// # Errors
+    /// Any [`Error`] about the configuration, and those of [`Grid::rebuild`].
+    pub fn build(self, points: &[[f64; D]]) -> Result<Grid<D>, Error> {
+        Grid::from_builder(self, points)
+    }
+}
+
 impl<const D: usize> Grid<D> {
     /// Builds a grid over `points` where pairs are the points closer than `cutoff`.
     ///
@@ -224,7 +234,7 @@ impl<const D: usize> Grid<D> {
         GridBuilder::with_radii(radii)
     }
 
-    pub(crate) fn from_builder(b: GridBuilder<D>, points: &[[f64; D]]) -> Result<Self, Error> {
+    fn from_builder(b: GridBuilder<D>, points: &[[f64; D]]) -> Result<Self, Error> {
         if D == 0 || D > 3 {
             return Err(Error::UnsupportedDimension { dim: D });
         }

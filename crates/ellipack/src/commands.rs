@@ -1,14 +1,14 @@
 //! `ellipack pack` and `ellipack verify`: the terminal side (progress, Ctrl-C, files).
 
 use ellipack::export::{Cell, Format, write_formats};
-use ellipack::folder::{HISTORY_FILE, Published, Staging};
+use ellipack::folder::{HISTORY_FILE, Published, Staging, write_files};
 use ellipack::pack::{
     MultiStartProgress, Observer, PackError, RunOptions, UNFINISHED_DIR, Unfinished,
     probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
     CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
-    read_table_into, write_files,
+    read_table_into,
 };
 use ellipack::render::{RenderError, RenderOptions, write_pictures_until};
 use ellipack::scene::Scene;

@@ -24,7 +24,10 @@
 //! output folder still sees the old, removed folder until it changes into it again.
 
 use crate::export::{GSD_FILE, LAMMPS_FILE, MESH_FILE};
-use crate::packing::{CSV_FILE, SUMMARY_FILE, XYZ_FILE};
+use crate::packing::{
+    CSV_FILE, Packing, PackingError, SUMMARY_FILE, Summary, write_csv, write_summary,
+};
+use crate::xyz::{XYZ_FILE, write_xyz};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
@@ -479,6 +482,25 @@ fn exchange_unsupported(e: &std::io::Error) -> bool {
         return [libc::EINVAL, libc::ENOSYS, libc::ENOTSUP, libc::EOPNOTSUPP].contains(&code);
     }
     e.kind() == std::io::ErrorKind::Unsupported
+}
+
+/// Writes `packing.csv`, `summary.json` and (when `xyz`) `packing.xyz` into `dir`, each
+/// atomically. The directory must exist.
+///
+/// # Errors
+/// The first error of [`write_csv`], [`write_summary`], [`write_xyz`].
+pub fn write_files(
+    dir: &Path,
+    packing: &Packing,
+    summary: &Summary,
+    xyz: bool,
+) -> Result<(), PackingError> {
+    write_csv(&dir.join(CSV_FILE), &packing.items)?;
+    write_summary(&dir.join(SUMMARY_FILE), summary)?;
+    if xyz {
+        write_xyz(&dir.join(XYZ_FILE), packing)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

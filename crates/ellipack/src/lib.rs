@@ -11,6 +11,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used))]
 
 pub mod analysis;
+pub mod atoms;
 pub mod error;
 pub mod export;
 pub mod folder;
@@ -28,6 +29,7 @@ pub mod scene;
 pub mod structure_plots;
 pub mod table;
 pub mod terminal;
+pub mod xyz;
 
 pub use error::Error;
 

@@ -14,7 +14,7 @@
 //! * [`CSV_FILE`]: one row per item, `id,x,y,a,b,theta` (2D) or `id,x,y,z,a,b,c,qw,qx,qy,qz`
 //!   (3D); `id` counts from 0;
 //! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
-//! * [`XYZ_FILE`]: extended XYZ for ASE and OVITO, see [`xyz_string`].
+//! * `packing.xyz`: extended XYZ for ASE and OVITO ([`crate::xyz`]).
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -25,19 +25,11 @@ use std::path::{Path, PathBuf};
 pub const CSV_FILE: &str = "packing.csv";
 /// The file name of the summary.
 pub const SUMMARY_FILE: &str = "summary.json";
-/// The file name of the extended XYZ file.
-pub const XYZ_FILE: &str = "packing.xyz";
 
 /// The columns of [`CSV_FILE`] for ellipses.
 pub const CSV_COLUMNS_2D: [&str; 6] = ["id", "x", "y", "a", "b", "theta"];
 /// The columns of [`CSV_FILE`] for ellipsoids.
 pub const CSV_COLUMNS_3D: [&str; 11] = ["id", "x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"];
-
-/// The `Properties` of [`XYZ_FILE`]: OVITO maps `aspherical_shape` to *Aspherical Shape* and
-/// `orientation` to *Orientation*, a quaternion in OVITO's order (x, y, z, w); `group` is the
-/// item's shape group (from 1).
-pub const XYZ_PROPERTIES: &str =
-    "species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4";
 
 /// Why a packing file could not be read or written. Messages name the file and, for what is
 /// wrong inside it, the line and column (both 1-based).
@@ -991,7 +983,7 @@ fn periodic_container<const N: usize>(origin: &[f64], h: &[[f64; N]; N]) -> Cont
 }
 
 /// 17 significant digits: enough for every double to read back to itself.
-fn num(x: f64) -> String {
+pub(crate) fn num(x: f64) -> String {
     format!("{x:.16e}")
 }
 
@@ -1040,7 +1032,7 @@ pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
 }
 
 /// Writes `text` to `path` atomically.
-fn write_text(path: &Path, text: &str) -> Result<(), PackingError> {
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), PackingError> {
     Ok(crate::output::write_atomically(path, text.as_bytes())?)
 }
 
@@ -1409,287 +1401,4 @@ pub fn read_table_into(
         other => other,
     })?;
     Ok((packing, table))
-}
-
-/// Writes `packing.csv`, `summary.json` and (when `xyz`) `packing.xyz` into `dir`, each
-/// atomically. The directory must exist.
-///
-/// # Errors
-/// The first error of [`write_csv`], [`write_summary`], [`write_xyz`].
-pub fn write_files(
-    dir: &Path,
-    packing: &Packing,
-    summary: &Summary,
-    xyz: bool,
-) -> Result<(), PackingError> {
-    write_csv(&dir.join(CSV_FILE), &packing.items)?;
-    write_summary(&dir.join(SUMMARY_FILE), summary)?;
-    if xyz {
-        write_xyz(&dir.join(XYZ_FILE), packing)?;
-    }
-    Ok(())
-}
-
-/// The text of [`XYZ_FILE`], extended XYZ as ASE and OVITO read it.
-///
-/// ```text
-/// 2
-/// Lattice="8 0 0 0 8 0 0 0 8" Origin="-4 -4 -4" pbc="F F F" Properties=species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4 dimension=3 container=ball container_center="0 0 0" container_radius=4
-/// C x y z 1 a b c qx qy qz qw
-/// ```
-///
-/// `species` is a chemical symbol standing for the item's shape group
-/// ([`crate::export::GROUP_ELEMENTS`]: ASE needs an element), `group` the group's number from 1
-/// (the LAMMPS atom type), `aspherical_shape` the semi-axes, `orientation` the unit quaternion
-/// in OVITO's order (x, y, z, w) — OVITO's *Orientation* property is (X, Y, Z, W) with W the
-/// scalar part. The cell (`Lattice`, `Origin`) is [`crate::export::Cell::enclosing`], not
-/// periodic. Ellipses are written at z = 0 as ellipsoids (a, b, min(a, b)) rotated by θ about
-/// z, with `dimension=2`; the container is in the `container*` keys, which OVITO keeps as
-/// global attributes and ASE in `Atoms.info`.
-pub fn xyz_string(packing: &Packing) -> String {
-    xyz_string_in(packing, &crate::export::Cell::enclosing(packing))
-}
-
-/// [`xyz_string`] with the cell given: `Lattice` holds its edge vectors, `Origin` its lower
-/// corner and `pbc` its periodicity.
-pub fn xyz_string_in(packing: &Packing, cell: &crate::export::Cell) -> String {
-    let items = &packing.items;
-    let container = &packing.container;
-    let bodies = crate::export::bodies(items);
-    let groups = crate::export::shape_groups(&bodies);
-    let join = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");
-    let lattice = join(cell.vectors().as_flattened());
-    let size = container.size();
-    let size_value = if size.len() == 1 {
-        num(size[0])
-    } else {
-        format!("\"{}\"", join(&size))
-    };
-    let pbc: Vec<&str> = cell
-        .periodic
-        .iter()
-        .map(|p| if *p { "T" } else { "F" })
-        .collect();
-    let mut out = format!(
-        "{}\nLattice=\"{lattice}\" Origin=\"{}\" pbc=\"{}\" Properties={XYZ_PROPERTIES} \
-         dimension={} container={} container_center=\"{}\" container_{}={size_value}\n",
-        items.len(),
-        join(&cell.lo),
-        pbc.join(" "),
-        items.dimension(),
-        container.kind().name(),
-        join(container.center()),
-        container.size_name(),
-    );
-    let elements = crate::export::GROUP_ELEMENTS;
-    for (b, g) in bodies.iter().zip(&groups.of_item) {
-        let [w, x, y, z] = b.quaternion;
-        let [cx, cy, cz] = b.center;
-        let [a, bb, c] = b.semi_axes;
-        out.push_str(&format!(
-            "{} {} {} {}\n",
-            elements[g % elements.len()],
-            join(&[cx, cy, cz]),
-            g + 1,
-            join(&[a, bb, c, x, y, z, w])
-        ));
-    }
-    out
-}
-
-/// Writes [`xyz_string`] to `path` atomically.
-///
-/// # Errors
-/// [`PackingError::Write`] naming the file.
-pub fn write_xyz(path: &Path, packing: &Packing) -> Result<(), PackingError> {
-    write_text(path, &xyz_string(packing))
-}
-
-/// Splits an extended XYZ comment line into `key=value` pairs (values may be double-quoted).
-fn xyz_pairs(line: &str) -> Result<Vec<(String, String)>, String> {
-    let mut pairs = Vec::new();
-    let mut chars = line.chars().peekable();
-    loop {
-        while chars.next_if(|c| c.is_whitespace()).is_some() {}
-        if chars.peek().is_none() {
-            return Ok(pairs);
-        }
-        let key: String =
-            std::iter::from_fn(|| chars.next_if(|c| *c != '=' && !c.is_whitespace())).collect();
-        if chars.next_if_eq(&'=').is_none() {
-            return Err(format!("`{key}` has no `=value`"));
-        }
-        let value: String = if chars.next_if_eq(&'"').is_some() {
-            let v: String = std::iter::from_fn(|| chars.next_if(|c| *c != '"')).collect();
-            if chars.next_if_eq(&'"').is_none() {
-                return Err(format!("the value of `{key}` has no closing quote"));
-            }
-            v
-        } else {
-            std::iter::from_fn(|| chars.next_if(|c| !c.is_whitespace())).collect()
-        };
-        pairs.push((key, value));
-    }
-}
-
-/// Reads the [`XYZ_FILE`] that [`xyz_string`] writes (not arbitrary extended XYZ: the
-/// `Properties` must be [`XYZ_PROPERTIES`] and the `dimension` and `container*` keys present).
-/// Ellipses get θ = 2 atan2(q_z, q_w), the same orientation as written, within (−2π, 2π].
-///
-/// # Errors
-/// [`PackingError::Malformed`] for a header that is not ours or a wrong number of rows,
-/// [`PackingError::BadValue`] (line, column) for a field that is not a number or impossible.
-pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> {
-    let malformed = |line: u64, message: String| PackingError::Malformed {
-        source_name: source_name.to_string(),
-        line,
-        message,
-    };
-    let mut lines = text.lines();
-    let count_text = lines.next().unwrap_or("").trim();
-    let count: usize = count_text
-        .parse()
-        .map_err(|_| malformed(1, format!("`{count_text}` is not a number of items")))?;
-    let comment = lines
-        .next()
-        .ok_or_else(|| malformed(2, "the comment line is missing".to_string()))?;
-    let pairs = xyz_pairs(comment).map_err(|m| malformed(2, m))?;
-    let get = |key: &str| {
-        pairs
-            .iter()
-            .find(|(k, _)| k.eq_ignore_ascii_case(key))
-            .map(|(_, v)| v.as_str())
-            .ok_or_else(|| malformed(2, format!("the comment line has no `{key}=`")))
-    };
-    let properties = get("Properties")?;
-    if properties != XYZ_PROPERTIES {
-        return Err(malformed(
-            2,
-            format!("Properties={properties}: expected {XYZ_PROPERTIES}"),
-        ));
-    }
-    let numbers = |key: &str| -> Result<Vec<f64>, PackingError> {
-        get(key)?
-            .split_whitespace()
-            .map(|t| {
-                t.parse::<f64>()
-                    .map_err(|_| malformed(2, format!("{key}: `{t}` is not a number")))
-            })
-            .collect()
-    };
-    let dimension = get("dimension")?;
-    let kind_name = get("container")?;
-    let kind = ["2", "3"]
-        .iter()
-        .position(|d| *d == dimension)
-        .and_then(|d| ContainerKind::named(kind_name, d + 2))
-        .or_else(|| ContainerKind::from_name(kind_name))
-        .ok_or_else(|| malformed(2, format!("container={kind_name}: unknown kind")))?;
-    if dimension != kind.dimension().to_string() {
-        return Err(malformed(
-            2,
-            format!("dimension={dimension} but container={kind_name}"),
-        ));
-    }
-    let center = numbers("container_center")?;
-    let size_key = match kind {
-        ContainerKind::Circle | ContainerKind::Ball => "container_radius",
-        ContainerKind::Ellipse | ContainerKind::Ellipsoid => "container_semi_axes",
-        ContainerKind::Rectangle | ContainerKind::Cuboid => "container_half_sides",
-        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => "container_lengths",
-    };
-    let size = numbers(size_key)?;
-    let container = Container::from_parts(kind, &center, &size).map_err(|e| {
-        let message = match e {
-            PackingError::Inconsistent { message, .. } => message,
-            other => other.to_string(),
-        };
-        malformed(2, format!("container_center, {size_key}: {message}"))
-    })?;
-    const NAMES: [&str; 12] = [
-        "species", "x", "y", "z", "group", "a", "b", "c", "qx", "qy", "qz", "qw",
-    ];
-    // The error of a bad value in field `k` (0-based, as in NAMES) of `line`.
-    let bad_value = |line, k: usize, message| PackingError::BadValue {
-        source_name: source_name.to_string(),
-        line,
-        column: k as u64 + 1,
-        name: NAMES[k].to_string(),
-        message,
-    };
-    let mut ellipses = Vec::new();
-    let mut ellipsoids = Vec::new();
-    let mut rows = 0;
-    for (index, row) in lines.enumerate() {
-        let line = index as u64 + 3;
-        if row.trim().is_empty() {
-            continue;
-        }
-        rows += 1;
-        if rows > count {
-            return Err(malformed(
-                line,
-                format!("more rows than the {count} announced"),
-            ));
-        }
-        let fields: Vec<&str> = row.split_whitespace().collect();
-        if fields.len() != NAMES.len() {
-            return Err(malformed(
-                line,
-                format!("{} fields, expected {}", fields.len(), NAMES.len()),
-            ));
-        }
-        if fields[4].parse::<u64>().map_or(true, |g| g == 0) {
-            let message = format!("`{}` is not a group number (1, 2, …)", fields[4]);
-            return Err(bad_value(line, 4, message));
-        }
-        let mut v = [0.0; 10];
-        for (k, slot) in v.iter_mut().enumerate() {
-            // Past the group column, value k is field k + 2.
-            let f = if k < 3 { k + 1 } else { k + 2 };
-            *slot = match fields[f].parse::<f64>() {
-                Ok(x) if x.is_finite() => x,
-                _ => {
-                    let message = format!("`{}` is not a finite number", fields[f]);
-                    return Err(bad_value(line, f, message));
-                }
-            };
-        }
-        let [x, y, z, a, b, c, qx, qy, qz, qw] = v;
-        if let Some(k) = [a, b, c].iter().position(|l| *l <= 0.0) {
-            let message = format!("semi-axis {} is not positive", v[k + 3]);
-            return Err(bad_value(line, k + 5, message));
-        }
-        if kind.dimension() == 2 {
-            ellipses.push(EllipseItem {
-                center: [x, y],
-                semi_axes: [a, b],
-                theta: 2.0 * qz.atan2(qw),
-            });
-        } else {
-            ellipsoids.push(EllipsoidItem {
-                center: [x, y, z],
-                semi_axes: [a, b, c],
-                quaternion: [qw, qx, qy, qz],
-            });
-        }
-    }
-    if rows != count {
-        return Err(malformed(
-            1,
-            format!("{count} items announced, {rows} rows found"),
-        ));
-    }
-    let items = if kind.dimension() == 2 {
-        Items::Ellipses(ellipses)
-    } else {
-        Items::Ellipsoids(ellipsoids)
-    };
-    Packing::new(container, items).map_err(|e| match e {
-        PackingError::Inconsistent { message, .. } => PackingError::Inconsistent {
-            source_name: source_name.to_string(),
-            message,
-        },
-        other => other,
-    })
 }

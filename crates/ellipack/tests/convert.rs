@@ -3,14 +3,13 @@
 
 mod common;
 use common::{assert_success, ellipack, names, temp_dir};
-use ellipack::packing;
 use std::path::Path;
 use std::process::Output;
 
 fn folder(name: &str) -> common::TempDir {
     let dir = temp_dir(name);
     let p = common::ellipsoids(2, false, 5);
-    packing::write_files(&dir, &p, &common::certified_summary(&p), false).unwrap();
+    ellipack::folder::write_files(&dir, &p, &common::certified_summary(&p), false).unwrap();
     dir
 }
 

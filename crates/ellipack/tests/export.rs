@@ -238,7 +238,7 @@ fn a_sheared_cell_writes_its_tilt_factors() {
 
     // The same cell, periodic, in the XYZ and GSD files.
     cell.periodic = [true; 3];
-    let xyz = packing::xyz_string_in(p, &cell);
+    let xyz = ellipack::xyz::xyz_string_in(p, &cell);
     let comment = xyz.lines().nth(1).unwrap();
     assert!(comment.contains(r#"pbc="T T T""#), "{comment}");
     let lattice: Vec<f64> = comment
@@ -583,7 +583,7 @@ fn the_container_mesh_is_an_outward_surface_on_the_container() {
 fn convert_writes_the_chosen_files_of_a_packing_folder() {
     let p = &every_kind()[1];
     let dir = common::temp_dir("export-convert");
-    packing::write_files(&dir, p, &common::certified_summary(p), false).unwrap();
+    ellipack::folder::write_files(&dir, p, &common::certified_summary(p), false).unwrap();
     export::convert(&dir, &[Format::Gsd], false).unwrap();
     assert_eq!(
         common::names(&dir),
@@ -598,7 +598,7 @@ fn convert_writes_the_chosen_files_of_a_packing_folder() {
             packing::CSV_FILE,
             LAMMPS_FILE,
             GSD_FILE,
-            packing::XYZ_FILE,
+            ellipack::xyz::XYZ_FILE,
             packing::SUMMARY_FILE
         ]
     );
@@ -635,7 +635,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     assert!(e.to_string().contains("packing.csv"), "{e}");
     // A broken row is named by its line, and nothing is written.
     let p = &every_kind()[0];
-    packing::write_files(&empty, p, &common::certified_summary(p), false).unwrap();
+    ellipack::folder::write_files(&empty, p, &common::certified_summary(p), false).unwrap();
     let csv = std::fs::read_to_string(empty.join(packing::CSV_FILE)).unwrap();
     let broken = csv.replacen("\n0,", "\n0,nan-ish,", 1);
     std::fs::write(empty.join(packing::CSV_FILE), broken).unwrap();

@@ -3,7 +3,8 @@
 //! and the leftovers of killed runs are cleaned up.
 
 use ellipack::folder::Staging;
-use ellipack::packing::{CertificateCounts, Summary, read_packing_dir, write_files};
+use ellipack::folder::write_files;
+use ellipack::packing::{CertificateCounts, Summary, read_packing_dir};
 use std::path::{Path, PathBuf};
 
 mod common;

@@ -272,7 +272,7 @@ fn check_summary(bytes: &[u8]) {
 }
 
 fn check_xyz(bytes: &[u8]) {
-    read_says_something(bytes, "packing.xyz", packing::read_xyz);
+    read_says_something(bytes, "packing.xyz", ellipack::xyz::read_xyz);
 }
 
 fn check_lammps(bytes: &[u8]) {
@@ -417,12 +417,12 @@ proptest! {
     }
 
     #[test]
-    fn packing_xyz_2d(bytes in input(leak(packing::xyz_string(&common::ellipses(2, true, 3))))) {
+    fn packing_xyz_2d(bytes in input(leak(ellipack::xyz::xyz_string(&common::ellipses(2, true, 3))))) {
         check_xyz(&bytes);
     }
 
     #[test]
-    fn packing_xyz_3d(bytes in input(leak(packing::xyz_string(&common::ellipsoids(2, false, 4))))) {
+    fn packing_xyz_3d(bytes in input(leak(ellipack::xyz::xyz_string(&common::ellipsoids(2, false, 4))))) {
         check_xyz(&bytes);
     }
 

@@ -61,7 +61,7 @@ fn csv_and_json_round_trips_are_exact() {
     for p in every_kind() {
         let dir = common::temp_dir(&format!("roundtrip-{}", p.container().kind()));
         let summary = summary_of(&p);
-        packing::write_files(&dir, &p, &summary, true).unwrap();
+        ellipack::folder::write_files(&dir, &p, &summary, true).unwrap();
         let (p2, s2) = packing::read_packing_dir(&dir).unwrap();
         assert_eq!(p2, p, "{}", p.container().kind());
         assert_eq!(s2, summary);
@@ -166,7 +166,7 @@ fn density_is_item_measure_over_container_measure() {
 #[test]
 fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
     for p in every_kind() {
-        let text = packing::xyz_string(&p);
+        let text = ellipack::xyz::xyz_string(&p);
         let mut lines = text.lines();
         assert_eq!(lines.next().unwrap(), p.items().len().to_string());
         let comment = lines.next().unwrap();
@@ -174,7 +174,7 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
             "Properties=species:S:1:pos:R:3:group:I:1:aspherical_shape:R:3:orientation:R:4"
         ));
         assert!(comment.contains("Lattice=\""), "{comment}");
-        let back = packing::read_xyz(&text, "packing.xyz").unwrap();
+        let back = ellipack::xyz::read_xyz(&text, "packing.xyz").unwrap();
         assert_eq!(back.container(), p.container());
         match (&back.items(), &p.items()) {
             (Items::Ellipsoids(a), Items::Ellipsoids(b)) => {
@@ -212,7 +212,7 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
 /// The numbers of the first item's line of the XYZ file, after its species: x, y, z, group,
 /// the semi-axes and the quaternion (x, y, z, w).
 fn first_xyz_row(p: &Packing) -> Vec<f64> {
-    packing::xyz_string(p)
+    ellipack::xyz::xyz_string(p)
         .lines()
         .nth(2)
         .unwrap()
@@ -397,19 +397,19 @@ fn files_that_disagree_are_an_error() {
 #[test]
 fn malformed_xyz_is_an_error_with_the_line() {
     let p = &every_kind()[3];
-    let good = packing::xyz_string(p);
+    let good = ellipack::xyz::xyz_string(p);
     let bad = good.replacen("27\n", "28\n", 1);
-    let e = packing::read_xyz(&bad, "packing.xyz")
+    let e = ellipack::xyz::read_xyz(&bad, "packing.xyz")
         .unwrap_err()
         .to_string();
     assert!(e.contains("28 items announced, 27 rows"), "{e}");
     let mut lines: Vec<String> = good.lines().map(String::from).collect();
     lines[4] = lines[4].replacen(" 1.0000000000000000e0", " x", 1);
-    let e = packing::read_xyz(&lines.join("\n"), "packing.xyz")
+    let e = ellipack::xyz::read_xyz(&lines.join("\n"), "packing.xyz")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("packing.xyz: line 5, column "), "{e}");
-    let e = packing::read_xyz(&good.replace("orientation:R:4", "orientation:R:3"), "p.xyz")
+    let e = ellipack::xyz::read_xyz(&good.replace("orientation:R:4", "orientation:R:3"), "p.xyz")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("p.xyz: line 2: Properties="), "{e}");
@@ -441,8 +441,8 @@ fn mangled_files_never_panic() {
     let texts = [
         packing::csv_string(p2.items()),
         packing::csv_string(p3.items()),
-        packing::xyz_string(p2),
-        packing::xyz_string(p3),
+        ellipack::xyz::xyz_string(p2),
+        ellipack::xyz::xyz_string(p3),
         packing::summary_json(&summary_of(p3)).unwrap(),
     ];
     for _ in 0..400 {
@@ -460,7 +460,7 @@ fn mangled_files_never_panic() {
             let text: String = text.into_iter().collect();
             let _ = match which {
                 0 | 1 => packing::read_csv(&text, "p.csv").map(|_| ()),
-                2 | 3 => packing::read_xyz(&text, "p.xyz").map(|_| ()),
+                2 | 3 => ellipack::xyz::read_xyz(&text, "p.xyz").map(|_| ()),
                 _ => packing::read_summary(&text, "s.json").map(|_| ()),
             };
         }
@@ -483,9 +483,11 @@ fn containers_from_solver_variables() {
     assert!(e.to_string().contains("2 size values"), "{e}");
     let e = Container::from_parts(ContainerKind::Cuboid, &[0.0; 3], &[1.0, 0.0, 1.0]).unwrap_err();
     assert!(e.to_string().contains("half_sides"), "{e}");
-    let text =
-        packing::xyz_string(&every_kind()[3]).replace("container_radius=", "container_radius=-");
-    let e = packing::read_xyz(&text, "p.xyz").unwrap_err().to_string();
+    let text = ellipack::xyz::xyz_string(&every_kind()[3])
+        .replace("container_radius=", "container_radius=-");
+    let e = ellipack::xyz::read_xyz(&text, "p.xyz")
+        .unwrap_err()
+        .to_string();
     assert!(
         e.starts_with("p.xyz: line 2: container_center, container_radius: radius"),
         "{e}"

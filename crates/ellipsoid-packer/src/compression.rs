@@ -43,15 +43,16 @@
 //!   J. Stat. Phys. 60 (1990): dense packings by compression.
 
 use crate::Error;
-use crate::local::{
-    Adapter, LocalResult, LocalSettings, centre_bound, certified, certified_as, certified_start,
-    check_start, repair, separated_then_held, solver_options,
+use crate::problem::Adapter;
+use crate::repair::{certified, certified_as, certified_start, repair, separated_then_held};
+use crate::settings::{
+    LocalResult, LocalSettings, add_counts, centre_bound, check_start, solver_options,
 };
 use auglag::{Control, Event, Progress, Report, StopReason};
 use implicit_packing::model::{Certificate, Model};
 
 /// The first relative shrink δ of the container's linear size, and the largest.
-pub const FIRST_STEP: f64 = 0.02;
+pub use crate::settings::FIRST_STEP;
 /// The compression ends when δ falls below this.
 pub const LAST_STEP: f64 = 1e-4;
 /// The compression also ends when this many steps in a row were given up: the packing is
@@ -303,7 +304,7 @@ impl<'a> Placer<'a> {
             fixed_orientations: settings.fixed_orientations.clone(),
             observe,
             interrupted: false,
-            total: crate::local::empty_report(),
+            total: crate::settings::empty_report(),
         }
     }
 
@@ -325,7 +326,7 @@ impl<'a> Placer<'a> {
         enough: Option<f64>,
     ) -> Option<Placed> {
         let mut x = x.to_vec();
-        let mut total = crate::local::empty_report();
+        let mut total = crate::settings::empty_report();
         let mut pulls = 0;
         loop {
             let inner = self.options.max_inner_iterations - total.inner_iterations;
@@ -592,17 +593,6 @@ fn first_packing<const N: usize>(
         overlapping: c.overlapping.len(),
         outside: c.outside.len(),
     })
-}
-
-/// Adds the iteration and evaluation counts and the wall time of `more` to `total`.
-pub(crate) fn add_counts(total: &mut Report, more: &Report) {
-    total.outer_iterations += more.outer_iterations;
-    total.inner_iterations += more.inner_iterations;
-    total.function_evaluations += more.function_evaluations;
-    total.gradient_evaluations += more.gradient_evaluations;
-    total.constraint_evaluations += more.constraint_evaluations;
-    total.hessian_products += more.hessian_products;
-    total.wall_time += more.wall_time;
 }
 
 #[cfg(test)]

@@ -49,8 +49,9 @@ pub struct Unfinished {
 }
 
 /// The multi-start in feasibility mode (see the module documentation) of the items of
-/// `problem`; `x0` fixes the container. Called by [`multistart`](crate::multistart::multistart) when
-/// `settings.local.fixed_container` is set.
+/// `problem`; `x0` fixes the container. Its local minimisations keep the container
+/// ([`LocalSettings::fixed_container`](crate::local::LocalSettings::fixed_container) is set for
+/// them).
 ///
 /// # Errors
 /// [`Error::NotReached`] when no certified packing was found; errors of the model (a start of
@@ -62,6 +63,10 @@ pub fn fill<const N: usize>(
     observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
     let start = Instant::now();
+    let settings = &MultiStartSettings {
+        local: settings.local.clone().with_fixed_container(true),
+        ..settings.clone()
+    };
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     // The round's threads minimise on models of their own.
     let (semi_axes, kind) = (problem.semi_axes().to_vec(), problem.container_kind());
@@ -236,11 +241,10 @@ mod tests {
         let x0 = fill_start(&mut p, &LatticeStart::centred(), &[radius]).unwrap();
         let local = settings.local.clone().with_fixed_container(true);
         let settings = settings.with_local(local);
-        let r = multistart(&axes, ContainerShape::Ball, &x0, &settings, &mut ());
+        let p = Model::<3>::new(axes, ContainerShape::Ball).unwrap();
+        let r = fill(p, &x0, &settings, &mut ());
         (radius, x0, r)
     }
-
-    use crate::multistart::multistart;
 
     #[test]
     fn a_ball_at_fraction_045_is_filled_and_keeps_its_radius() {
@@ -335,7 +339,8 @@ mod tests {
             .with_lattice_starts(4)
             .with_max_local_minimisations(20)
             .with_local(LocalSettings::default().with_fixed_container(true));
-        let r = multistart(&axes, ContainerShape::Periodic, &x0, &settings, &mut ()).unwrap();
+        let p = Model::<2>::new(axes, ContainerShape::Periodic).unwrap();
+        let r = fill(p, &x0, &settings, &mut ()).unwrap();
         assert!(r.best.certificate.is_feasible());
         assert_eq!(&r.best.x[30..], &cell[..]);
         assert!((r.best.density - 0.7).abs() < 1e-12, "{}", r.best.density);

@@ -45,8 +45,11 @@ pub mod fixed;
 pub mod local;
 mod merged;
 pub mod multistart;
+mod problem;
 pub mod random;
+mod repair;
 pub mod run;
+mod settings;
 pub mod starts;
 pub mod tiling;
 

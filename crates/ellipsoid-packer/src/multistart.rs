@@ -288,12 +288,11 @@ where
 /// `observe` sees the solver's progress inside every local minimisation, from whichever thread
 /// runs it; `interrupt` is polled often and stops the run, keeping the best packing found.
 ///
-/// With `settings.local.fixed_container` the run fills the container of `x0` instead
-/// ([`crate::fixed::fill`]): it ends at the first certified packing.
+/// A container of given size is filled by [`crate::fixed::fill`] instead.
 ///
 /// # Errors
 /// Errors of the model or of the first local minimisation (a wrong-length `x0`, non-finite
-/// values); [`Error::NotReached`] for a fixed container without a certified packing.
+/// values).
 pub fn multistart<const N: usize>(
     semi_axes: &[[f64; N]],
     kind: ContainerShape,
@@ -301,10 +300,6 @@ pub fn multistart<const N: usize>(
     settings: &MultiStartSettings,
     observer: &mut dyn Observer,
 ) -> Result<MultiStartResult, Error> {
-    if settings.local.fixed_container {
-        let problem = Model::<N>::new(semi_axes.to_vec(), kind)?;
-        return crate::fixed::fill(problem, x0, settings, observer);
-    }
     let start = Instant::now();
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     let mut problem = Model::<N>::new(semi_axes.to_vec(), kind)?;

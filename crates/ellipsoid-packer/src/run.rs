@@ -3,7 +3,7 @@
 //! [`Packer::run`] owns the whole run: it chooses and certifies the start (the paper's lattice
 //! start, the densest small periodic cell tiled, a lattice start dilated into a fixed container,
 //! a random sequential addition, or a packing to resume from), splits the time budget between
-//! the start and the search, runs the multi-start of Section 6 ([`crate::multistart`]) or the
+//! the start and the search, runs the multi-start of Section 6 ([`multistart`](mod@crate::multistart)) or the
 //! random compression ([`crate::random`]), and certifies the result in the form it is handed
 //! out: [`Item`]s (centre, semi-axes, θ or a quaternion) in a [`Container`] centred at the
 //! origin, a periodic cell reduced and its items wrapped into it. A caller that writes those
@@ -237,7 +237,6 @@ impl<const N: usize> Packer<N> {
             (None, None) => lattice_start(&self.model),
         };
         let mut settings = self.settings.multistart.clone();
-        settings.local.fixed_container = fixed.is_some();
         settings.threads = match settings.threads {
             0 => std::thread::available_parallelism().map_or(1, usize::from),
             n => n,
@@ -255,9 +254,14 @@ impl<const N: usize> Packer<N> {
         let prelude = prelude.elapsed();
         settings.time_limit = settings.time_limit.map(|t| t.saturating_sub(prelude));
         let mut recorder = Recorder::new(observer, prelude);
-        let kind = self.model.container_kind();
-        let semi_axes = self.problem.semi_axes.clone();
-        let result = match crate::multistart(&semi_axes, kind, &x0, &settings, &mut recorder) {
+        let (semi_axes, kind) = (&self.problem.semi_axes, self.problem.shape);
+        let result = if fixed.is_some() {
+            let model = Model::<N>::new(semi_axes.clone(), kind)?;
+            crate::fill(model, &x0, &settings, &mut recorder)
+        } else {
+            crate::multistart(semi_axes, kind, &x0, &settings, &mut recorder)
+        };
+        let result = match result {
             Ok(result) => result,
             Err(Error::NotReached(u)) => {
                 let configuration = self.configuration_at(&u.x)?;

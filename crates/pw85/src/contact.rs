@@ -32,7 +32,6 @@
 use crate::arith::{Arith, Dd, DdT, Mag};
 use crate::arith::{is_positive, select_gt, select_sign};
 use crate::error::{Argument, Error};
-use crate::form::QuadraticForm;
 use crate::poly::{Coefficients, OddsForm, OddsSearch, RationalForm, Search, coefficients_2d};
 use crate::sym::{Sym2, Sym3};
 use simd::multiversion;
@@ -111,45 +110,14 @@ pub struct ContactDetails {
     pub grad_q2: [f64; 6],
 }
 
-/// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
-///
-/// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
-/// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
-/// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
-///
-/// # Errors
-/// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
-/// Q2 is not positive definite.
-///
-/// # Example
-/// ```
-/// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
-/// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
-/// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
-/// assert!((c.mu2 - 2.25).abs() < 1e-15);
-/// assert!((c.lambda - 0.5).abs() < 1e-15);
-/// # Ok::<(), pw85::Error>(())
-/// ```
-///
-/// The same call on ellipses (`r12: [f64; 2]`, forms `[f64; 3]`) is the contact function
-/// of two ellipses: the form's type ([`QuadraticForm`]) chooses the dimension.
-#[inline]
-pub fn contact_function<Q: QuadraticForm>(
-    r12: &Q::Vector,
-    q1: &Q,
-    q2: &Q,
-) -> Result<Contact, Error> {
-    Q::contact(r12, q1, q2)
-}
-
-/// [`contact_function`] on two ellipsoids.
+/// [`contact_function`](crate::contact_function) on two ellipsoids.
 #[inline]
 pub(crate) fn contact_function_3d(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
     contact_function_dispatched(r12, q1, q2, true)
 }
 
 multiversion! {
-    /// [`contact_function`], with (`rescue`) or without the rescue of pairs outside the fast
+    /// [`contact_function`](crate::contact_function), with (`rescue`) or without the rescue of pairs outside the fast
     /// path's window: [`crate::extreme`] runs the kernel without it on the rescaled pair. One
     /// dispatched function for both, so that a rescaled pair gives the same bits, and so that
     /// the kernel is compiled once (a second copy changed the optimiser's inlining decisions
@@ -184,7 +152,7 @@ pub(crate) fn contact_function_portable<const FMA: bool>(
     }
 }
 
-/// [`contact_function`] without the rescue of pairs outside the window.
+/// [`contact_function`](crate::contact_function) without the rescue of pairs outside the window.
 #[inline]
 pub(crate) fn contact_function_unrescued(
     r12: &[f64; 3],
@@ -217,13 +185,13 @@ pub(crate) fn exact_coefficients_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Rat
     coefficients_2d::<Dd>(r12, q1, q2).to_f64()
 }
 
-/// [`contact_function`] with the coefficients always recomputed in double-double arithmetic
+/// [`contact_function`](crate::contact_function) with the coefficients always recomputed in double-double arithmetic
 /// (about 32 significant digits), whatever the error bound says: a reference for checking the
 /// fast path on random input, at about twice its cost. Its `error_estimate` bounds the
 /// remaining error (below 1e-15 unless the pencil is singular to about 1e-16).
 ///
 /// # Errors
-/// As [`contact_function`].
+/// As [`contact_function`](crate::contact_function).
 pub fn contact_function_refined(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<Contact, Error> {
     check_inputs_finite::<false>(r12, q1, q2)?;
     if crate::extreme::within_window(r12, q1, q2) {
@@ -290,13 +258,13 @@ impl Prepared {
         // The coefficients and their error bound in one pass (four SIMD lanes).
         #[cfg(target_arch = "x86_64")]
         let (rational, bound) = if FMA {
-            crate::poly::coefficients_with_bound::<crate::lanes::Ends4Avx>(r12, q1, q2)
+            crate::lanes::coefficients_with_bound::<crate::lanes::Ends4Avx>(r12, q1, q2)
         } else {
-            crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2)
+            crate::lanes::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2)
         };
         #[cfg(not(target_arch = "x86_64"))]
         let (rational, bound) =
-            crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2);
+            crate::lanes::coefficients_with_bound::<crate::lanes::Ends4>(r12, q1, q2);
         let (beta, beta_bound) = (rational.beta, bound.beta);
         check_positive_definite(Argument::Q1, q1, beta[0], beta_bound[0])?;
         check_positive_definite(Argument::Q2, q2, beta[3], beta_bound[3])?;
@@ -454,7 +422,7 @@ impl Contact {
 
 multiversion! {
     /// The contact function of two ellipses: `r12` ∈ ℝ², `q1`, `q2` stored as Q11, Q12, Q22.
-    /// Same definition, conventions and errors as [`contact_function`] (the PW85 library has no 2D
+    /// Same definition, conventions and errors as [`contact_function`](crate::contact_function) (the PW85 library has no 2D
     /// version).
     pub(crate) fn contact_function_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<Contact, Error>
         => fused contact_function_2d_portable;
@@ -527,12 +495,12 @@ pub(crate) fn inputs_finite_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<b
 /// non-negative terms. The cancellation sits in the seven coefficients (needles, pancakes,
 /// very different sizes): their running error bound, carried to a(λ) and b(λ), decides
 /// whether the `f64` coefficients are good to 1e-14 relative in f; otherwise they are
-/// recomputed in double-double arithmetic, as [`contact_function`] does. The relative error
+/// recomputed in double-double arithmetic, as [`contact_function`](crate::contact_function) does. The relative error
 /// is then a few units in the last place (the reference file `pw85_objective.csv`: below
 /// 1e-15 on needles, pancakes and size ratios up to 1e8). The PW85 library's `f_neg` is −f.
 ///
 /// # Errors
-/// As [`contact_function`], and [`Error::LambdaOutOfRange`] unless 0 ≤ λ ≤ 1.
+/// As [`contact_function`](crate::contact_function), and [`Error::LambdaOutOfRange`] unless 0 ≤ λ ≤ 1.
 ///
 /// # Example
 /// ```
@@ -557,7 +525,7 @@ pub fn objective(lambda: f64, r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<f6
     // of non-negative Bernstein terms, the bound gives at most u times `amplified` in f.
     // NaN (a = 0 from r12 = 0, or a coefficient rounded below zero) fails the test and
     // refines.
-    let (fast, bound) = crate::poly::coefficients_with_bound::<crate::lanes::Ends4>(&r, &a, &b);
+    let (fast, bound) = crate::lanes::coefficients_with_bound::<crate::lanes::Ends4>(&r, &a, &b);
     let (alpha_bound, beta_bound) = depth_weighted(&bound.alpha, &bound.beta);
     let [value_a, _, _, value_b, _, _] =
         crate::poly::pencil_values(&fast.alpha, &fast.beta, lambda);
@@ -583,10 +551,10 @@ const OBJECTIVE_REFINE_ABOVE: f64 = 1e-14;
 /// μ², λ₀, the contact point, the common normal and the gradients of μ² (see
 /// [`ContactDetails`]).
 ///
-/// μ² and λ₀ are [`contact_function`]'s, bit for bit. The rest is computed in double-double
+/// μ² and λ₀ are [`contact_function`](crate::contact_function)'s, bit for bit. The rest is computed in double-double
 /// arithmetic (about 32 digits), because two steps lose digits on stiff pairs:
 ///
-/// 1. λ₀ itself: [`contact_function`] returns it to a few 1e-13 absolute on stiff pairs (μ² is
+/// 1. λ₀ itself: [`contact_function`](crate::contact_function) returns it to a few 1e-13 absolute on stiff pairs (μ² is
 ///    stationary there, eq. 12, so it does not need more), but x₀(λ) of eq. 9 moves with λ.
 ///    One to three Newton steps on the numerator p(u) of f′ (eqs. 18–20 in the odds
 ///    u = λ / (1 − λ), or in 1/u when λ₀ > ½ so that 1 − λ₀ keeps its relative precision),
@@ -602,7 +570,7 @@ const OBJECTIVE_REFINE_ABOVE: f64 = 1e-14;
 /// near 1. Costs a contact function and about 0.5 µs more.
 ///
 /// # Errors
-/// As [`contact_function`].
+/// As [`contact_function`](crate::contact_function).
 pub fn contact_details(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<ContactDetails, Error> {
     // The dispatched entry point, so that the details agree with `contact_function` bit for bit.
     let contact = crate::contact_function(r12, q1, q2)?;

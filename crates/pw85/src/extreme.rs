@@ -370,7 +370,7 @@ pub(crate) fn rescue_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Option<Result<C
 /// After the fast path refused a pair as not positive definite: the balanced test decides
 /// (the refusal may come from an overflow or underflow of the fast path's determinants, for
 /// very large, very small or very elongated ellipsoids), and a pair that passes it is answered
-/// on the balanced pair: `balanced` is [`contact_function`] or [`contact_function_2d`] of the
+/// on the balanced pair: `balanced` is [`contact_function`](crate::contact_function) or [`contact_function_2d`] of the
 /// pair.
 #[cold]
 #[inline(never)]

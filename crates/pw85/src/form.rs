@@ -207,6 +207,64 @@ macro_rules! checked_form {
 checked_form!(Form3, Sym3, "Q11, Q12, Q13, Q22, Q23, Q33");
 checked_form!(Form2, Sym2, "Q11, Q12, Q22");
 
+/// The contact function μ² of two ellipsoids and its maximiser λ₀ (theory eqs. 6, 13).
+///
+/// `r12 = c2 − c1`; `q1`, `q2` are the quadratic forms of the ellipsoids
+/// {m : (m − cᵢ)ᵀ Qᵢ⁻¹ (m − cᵢ) ≤ 1}, stored as Q11, Q12, Q13, Q22, Q23, Q33. The ellipsoids
+/// overlap iff μ² < 1. Centres that coincide give μ² = 0 (not an error).
+///
+/// # Errors
+/// [`Error::NonFinite`] for a NaN or infinite entry, [`Error::NotPositiveDefinite`] when Q1 or
+/// Q2 is not positive definite.
+///
+/// # Example
+/// ```
+/// // Two unit spheres whose centres are 3 apart: μ = 3 / (1 + 1).
+/// let q = pw85::spheroid(1.0, 1.0, &[0.0, 0.0, 1.0])?;
+/// let c = pw85::contact_function(&[3.0, 0.0, 0.0], &q, &q)?;
+/// assert!((c.mu2 - 2.25).abs() < 1e-15);
+/// assert!((c.lambda - 0.5).abs() < 1e-15);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+///
+/// The same call on ellipses (`r12: [f64; 2]`, forms `[f64; 3]`) is the contact function
+/// of two ellipses: the form's type ([`QuadraticForm`]) chooses the dimension.
+#[inline]
+pub fn contact_function<Q: QuadraticForm>(
+    r12: &Q::Vector,
+    q1: &Q,
+    q2: &Q,
+) -> Result<Contact, Error> {
+    Q::contact(r12, q1, q2)
+}
+
+/// Whether two ellipsoids (or ellipses) overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
+/// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
+///
+/// Stops as soon as the answer is certain: the projections on the centre line disjoint (no
+/// overlap), the segment between the centres covered by the two ellipsoids' radial extents
+/// (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
+/// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
+/// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
+/// pencil, pay for the full [`crate::contact_function`].
+///
+/// # Errors
+/// As [`crate::contact_function`].
+///
+/// # Example
+/// ```
+/// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
+/// // Side by side, 0.15 apart across their thin direction: they overlap...
+/// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
+/// // ...and 0.25 apart they do not.
+/// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
+/// # Ok::<(), pw85::Error>(())
+/// ```
+#[inline]
+pub fn overlap<Q: QuadraticForm>(r12: &Q::Vector, q1: &Q, q2: &Q) -> Result<bool, Error> {
+    Q::overlap(r12, q1, q2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,11 @@
 //! when they stop, and a lane that has stopped keeps its state (selects, not branches).
 
 use crate::arith::{Arith, Fused, newtype_arith};
-use crate::poly::OddsForm;
+use crate::poly::{OddsForm, RationalForm};
+use crate::sym::{
+    Sym3, adjugate_generic, det_generic, frobenius_generic, mixed_adjugate_generic, outer_generic,
+    quadratic_form_generic,
+};
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Number of lanes.
@@ -129,7 +133,7 @@ impl Arith for Ends4 {
     }
 }
 
-/// The arithmetic of [`crate::poly::coefficients_with_bound`]'s four-lane pass: [`Ends4`] in
+/// The arithmetic of [`coefficients_with_bound`]'s four-lane pass: [`Ends4`] in
 /// the portable build, [`Ends4Avx`] in the AVX2 build.
 pub(crate) trait EndsLanes: Arith {
     /// [a, b, |a|, |b|] in this type's layout.
@@ -614,6 +618,32 @@ pub(crate) fn maximise4<const FMA: bool>(
     maximise4_in::<FMA, V4>(alpha, beta, u0)
 }
 
+/// The `f64` Bernstein coefficients and their Σ|terms| (the running error bound) in one pass:
+/// the same expression trees as [`pencil3`](crate::poly::pencil3) in `f64` and in `Mag`, bit for bit, evaluated for
+/// both ends of the pencil at once ([`Ends4`]). Returns (values, bounds).
+#[inline(always)]
+pub(crate) fn coefficients_with_bound<E: EndsLanes>(
+    r12: &[f64; 3],
+    q1: &Sym3,
+    q2: &Sym3,
+) -> (RationalForm, RationalForm) {
+    let ends: [E; 6] = core::array::from_fn(|i| E::of(q1[i], q2[i]));
+    let swapped: [E; 6] = ends.map(E::swapped);
+    let rr = outer_generic::<E>(r12);
+    let adj = adjugate_generic(&ends);
+    // Lanes: (β₀, β₃), (α₀, α₂), (β₁, β₂) and α₁ (first lane; the second is M(Q2, Q1)).
+    let det = det_generic(&ends, &adj);
+    let outer = quadratic_form_generic(&rr, &adj);
+    let cross = frobenius_generic(&adj, &swapped);
+    let mixed = quadratic_form_generic(&rr, &mixed_adjugate_generic(&ends, &swapped));
+    let [det, outer, cross, mixed] = [det, outer, cross, mixed].map(E::lanes);
+    let pick = |k: usize| RationalForm {
+        alpha: [outer[k], mixed[k], outer[k + 1]],
+        beta: [det[k], cross[k], cross[k + 1], det[k + 1]],
+    };
+    (pick(0), pick(2))
+}
+
 #[cfg(test)]
 mod tests {
     /// The vector-register form of the four-lane pass gives the same bits as the array form
@@ -621,7 +651,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_ends_equal_portable_ends_bit_for_bit() {
-        use crate::poly::coefficients_with_bound;
+        use super::coefficients_with_bound;
         if !simd::has_avx2_fma() {
             return;
         }

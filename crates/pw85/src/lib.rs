@@ -80,12 +80,10 @@ pub mod sym;
 mod sym;
 
 pub use contact::{
-    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function,
-    contact_function_refined, objective,
+    Contact, ContactDetails, REFINE_ABOVE, contact_details, contact_function_refined, objective,
 };
 pub use error::{Argument, Error};
-pub use form::{Form2, Form3, QuadraticForm};
-pub use overlap::overlap;
+pub use form::{Form2, Form3, QuadraticForm, contact_function, overlap};
 pub use shape::spheroid;
 pub use sym::{Sym2, Sym3};
 

@@ -25,7 +25,6 @@ use crate::contact::{
     clearly_positive_definite, orient,
 };
 use crate::error::{Argument, Error};
-use crate::form::QuadraticForm;
 use crate::poly::{
     OddsForm, OddsSearch, RationalForm, coefficients_2d, odds_numerator, odds_numerator_at, pencil3,
 };
@@ -43,35 +42,8 @@ const SPHERE_MARGIN: f64 = 1e-12;
 /// Iterations of the bounded search before handing over to the full contact function.
 const MAX_ITERATIONS: u32 = 12;
 
-/// Whether two ellipsoids (or ellipses) overlap: μ²(r12, Q1, Q2) < 1 (theory eq. 6), with the arguments and
-/// storage of [`crate::contact_function`]. Tangent ellipsoids (μ² = 1) do not overlap.
-///
-/// Stops as soon as the answer is certain: the projections on the centre line disjoint (no
-/// overlap), the segment between the centres covered by the two ellipsoids' radial extents
-/// (overlap), an iterate λ with f(λ) > 1 (no overlap, since f(λ) ≤ μ²), or
-/// tangent lines of the concave f bounding max f below 1 (overlap), each with a margin for the
-/// rounding error of f. Only pairs within that margin of tangency, or with a badly conditioned
-/// pencil, pay for the full [`crate::contact_function`].
-///
-/// # Errors
-/// As [`crate::contact_function`].
-///
-/// # Example
-/// ```
-/// let needle = pw85::spheroid(0.1, 1.0, &[1.0, 0.0, 0.0])?;
-/// // Side by side, 0.15 apart across their thin direction: they overlap...
-/// assert!(pw85::overlap(&[0.0, 0.15, 0.0], &needle, &needle)?);
-/// // ...and 0.25 apart they do not.
-/// assert!(!pw85::overlap(&[0.0, 0.25, 0.0], &needle, &needle)?);
-/// # Ok::<(), pw85::Error>(())
-/// ```
-#[inline]
-pub fn overlap<Q: QuadraticForm>(r12: &Q::Vector, q1: &Q, q2: &Q) -> Result<bool, Error> {
-    Q::overlap(r12, q1, q2)
-}
-
 multiversion! {
-    /// [`overlap`] on two ellipsoids.
+    /// [`overlap`](crate::overlap) on two ellipsoids.
     pub(crate) fn overlap_3d(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Result<bool, Error>
         => fused overlap_portable;
 }
@@ -179,7 +151,7 @@ fn largest_diagonal(q: &Sym3) -> f64 {
 }
 
 multiversion! {
-    /// [`overlap`] on two ellipses.
+    /// [`overlap`](crate::overlap) on two ellipses.
     pub(crate) fn overlap_2d(r12: &[f64; 2], q1: &Sym2, q2: &Sym2) -> Result<bool, Error>
         => fused overlap_2d_portable;
 }
@@ -697,7 +669,7 @@ fn bounded_search<const FMA: bool>(rational: &RationalForm, bound: &CrudeBound) 
 mod tests {
     use super::*;
 
-    /// The axis test on one pair, built exactly as [`overlap`] builds it, and the
+    /// The axis test on one pair, built exactly as [`overlap`](crate::overlap) builds it, and the
     /// contact-point test where the axis test leaves the pair open.
     fn stage_verdicts<const FMA: bool>(
         r12: &[f64; 3],

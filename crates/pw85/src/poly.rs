@@ -715,32 +715,6 @@ pub(crate) fn pencil3_lifted<T: Arith>(r12: [T; 3], a: [T; 6], b: [T; 6]) -> Pen
     Pencil3 { coefficients }
 }
 
-/// The `f64` Bernstein coefficients and their Σ|terms| (the running error bound) in one pass:
-/// the same expression trees as [`pencil3`] in `f64` and in `Mag`, bit for bit, evaluated for
-/// both ends of the pencil at once ([`crate::lanes::Ends4`]). Returns (values, bounds).
-#[inline(always)]
-pub(crate) fn coefficients_with_bound<E: crate::lanes::EndsLanes>(
-    r12: &[f64; 3],
-    q1: &Sym3,
-    q2: &Sym3,
-) -> (RationalForm, RationalForm) {
-    let ends: [E; 6] = core::array::from_fn(|i| E::of(q1[i], q2[i]));
-    let swapped: [E; 6] = ends.map(E::swapped);
-    let rr = crate::sym::outer_generic::<E>(r12);
-    let adj = adjugate_generic(&ends);
-    // Lanes: (β₀, β₃), (α₀, α₂), (β₁, β₂) and α₁ (first lane; the second is M(Q2, Q1)).
-    let det = det_generic(&ends, &adj);
-    let outer = quadratic_form_generic(&rr, &adj);
-    let cross = frobenius_generic(&adj, &swapped);
-    let mixed = quadratic_form_generic(&rr, &mixed_adjugate_generic(&ends, &swapped));
-    let [det, outer, cross, mixed] = [det, outer, cross, mixed].map(E::lanes);
-    let pick = |k: usize| RationalForm {
-        alpha: [outer[k], mixed[k], outer[k + 1]],
-        beta: [det[k], cross[k], cross[k + 1], det[k + 1]],
-    };
-    (pick(0), pick(2))
-}
-
 #[inline(always)]
 pub(crate) fn coefficients<T: Arith>(r12: &[f64; 3], q1: &Sym3, q2: &Sym3) -> Coefficients<T> {
     pencil3::<T>(r12, q1, q2).coefficients
