@@ -5,7 +5,7 @@
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of};
 use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
-use ellipack::scene::Scene;
+use ellipack::scene::{Overrides, Scene};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{
     PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
@@ -232,7 +232,7 @@ impl PyPacking {
             ellipack::folder::write_files(staged, &self.packing, &self.summary, xyz)
                 .map_err(|e| e.to_string())?;
             if let Some(history) = &self.history {
-                ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())
+                ellipack::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())
                     .map_err(|e| e.to_string())?;
             }
             match staging.commit().map_err(|e| e.to_string())? {
@@ -304,16 +304,15 @@ pub fn _pack(
         (None, Some(path)) => Scene::from_file(&path).map_err(value_error)?,
         (None, None) => Scene::default_scene(),
     };
-    let options = RunOptions {
+    let scene = scene.overridden(&Overrides {
         time_limit: time_limit
             .map(time_limit_of)
             .transpose()
             .map_err(value_error)?,
         seed,
         threads,
-        resume_from: None,
-        shard: None,
-    };
+    });
+    let options = RunOptions::default();
     let stop = AtomicBool::new(false);
     let (sender, receiver) = mpsc::channel();
     let relay = Relay {

@@ -32,27 +32,8 @@ enum Command {
     /// wall-clock budget each; write validation/paper_tables.csv, docs/paper-tables.md, the
     /// pictures and the packings.
     PaperTables {
-        /// Minutes of wall time per instance.
-        #[arg(long, default_value_t = 60.0)]
-        minutes: f64,
-        /// Instances (see `ellipack instances`). Default: the four of the multi-start targets.
-        #[arg(long, num_args = 1..)]
-        instances: Vec<String>,
-        /// Parallel starts (0: every core).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
-        /// Continue from the committed packings: each instance starts from its packing in
-        /// validation/paper-packings/, and its row adds this budget to the earlier one.
-        #[arg(long)]
-        resume: bool,
-        /// How each local minimisation makes the container small: lagrangian (the paper's),
-        /// compression or compression-lagrangian. Default: the scene's (lagrangian).
-        #[arg(long, value_parser = xtask::paper_tables::method_named)]
-        method: Option<ellipack::scene::MethodName>,
-        /// The multi-start's random seed (default: the instance's, 0); it is written in each
-        /// packing's summary.json.
-        #[arg(long)]
-        seed: Option<u64>,
+        #[command(flatten)]
+        options: xtask::paper_tables::Options,
         /// Run nothing: write the table, docs/paper-tables.md and the density-against-time
         /// figure again from the committed rows and histories.
         #[arg(long, conflicts_with_all = ["instances", "resume"])]
@@ -171,32 +152,17 @@ fn main() -> ExitCode {
             Err(e) => failed(e),
         },
         Command::PaperTables {
-            minutes,
-            instances,
-            threads,
-            resume,
-            method,
-            seed,
+            mut options,
             report_only,
         } => {
-            let instances = if report_only {
-                Vec::new()
-            } else if instances.is_empty() {
-                xtask::paper_tables::TARGETS
+            if report_only {
+                options.instances.clear();
+            } else if options.instances.is_empty() {
+                options.instances = xtask::paper_tables::TARGETS
                     .iter()
                     .map(|s| s.to_string())
-                    .collect()
-            } else {
-                instances
-            };
-            let options = xtask::paper_tables::Options {
-                minutes,
-                instances,
-                threads,
-                resume,
-                method,
-                seed,
-            };
+                    .collect();
+            }
             with_problems(
                 xtask::paper_tables::run_all(&workspace_root(), &options),
                 "NOT CERTIFIED",

@@ -97,6 +97,21 @@ pub fn csv_text(header: &[&str], rows: &[Vec<String>]) -> String {
     s
 }
 
+/// `head`, then every row as `line` writes it: the text of a CSV file or Markdown table whose
+/// rows each format their own fields, so that the studies share the loop around them.
+pub fn table_text<R>(
+    head: &str,
+    rows: &[R],
+    line: impl Fn(&mut String, &R) -> std::fmt::Result,
+) -> String {
+    let mut out = head.to_string();
+    for r in rows {
+        // Writing into a String cannot fail.
+        let _ = line(&mut out, r);
+    }
+    out
+}
+
 /// A float for a CSV file: 17 significant digits (round-trips).
 pub fn full(x: f64) -> String {
     format!("{x:.16e}")

@@ -245,13 +245,14 @@ fn solved_scenes(
             context: file.clone(),
             message,
         };
-        let scene =
-            ellipack::scene::Scene::from_file(&path).map_err(|e| pack_error(e.to_string()))?;
-        let options = ellipack::pack::RunOptions {
-            time_limit: Some(Duration::from_secs_f64(seconds)),
-            threads: Some(1),
-            ..Default::default()
-        };
+        let scene = ellipack::scene::Scene::from_file(&path)
+            .map_err(|e| pack_error(e.to_string()))?
+            .overridden(&ellipack::scene::Overrides {
+                time_limit: Some(Duration::from_secs_f64(seconds)),
+                threads: Some(1),
+                ..Default::default()
+            });
+        let options = ellipack::pack::RunOptions::default();
         crate::progress(run.start)(&format!("  {} ({seconds} s)", scene.title()));
         let outcome = ellipack::pack::run(&scene, &options, &mut ())
             .map_err(|e| pack_error(e.to_string()))?;

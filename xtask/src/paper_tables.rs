@@ -14,10 +14,10 @@ use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
 use ellipack::folder::write_files;
 use ellipack::instances::{INSTANCES, Instance, by_name, names};
-use ellipack::output::write_atomically;
-use ellipack::pack::{RunOptions, run};
+use ellipack::pack::{PackError, RunOptions, RunOutcome, run};
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
-use ellipack::scene::MethodName;
+use ellipack::scene::{Dimension, MethodName, Scene, SolverSettings};
+use ellipack::write_atomically;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -26,23 +26,30 @@ use std::time::Duration;
 /// The four instances the multi-start issue sets targets for.
 pub const TARGETS: [&str; 4] = ["ellipse-100", "rectangle-100", "ball-100", "cuboid-100"];
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run; also the options of `cargo xtask paper-tables`, whose help the field comments
+/// are.
+#[derive(Clone, Debug, clap::Args)]
 pub struct Options {
-    /// Wall-clock minutes per instance.
+    /// Minutes of wall time per instance.
+    #[arg(long, default_value_t = 60.0)]
     pub minutes: f64,
-    /// Instance names (see `ellipack instances`).
+    /// Instances (see `ellipack instances`). Default: the four of the multi-start targets.
+    #[arg(long, num_args = 1..)]
     pub instances: Vec<String>,
     /// Parallel starts (0: every core).
+    #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Continue from the committed packings (`validation/paper-packings/<instance>/`): the
-    /// run starts from them, never writes a worse packing, and its row adds this budget to
-    /// the earlier one.
+    /// Continue from the committed packings: each instance starts from its packing in
+    /// validation/paper-packings/, and its row adds this budget to the earlier one.
+    #[arg(long)]
     pub resume: bool,
-    /// How each local minimisation makes the container small (default: the scene's, the
-    /// paper's augmented Lagrangian).
+    /// How each local minimisation makes the container small: lagrangian (the paper's),
+    /// compression or compression-lagrangian. Default: the scene's (lagrangian).
+    #[arg(long, value_parser = method_named)]
     pub method: Option<MethodName>,
-    /// The multi-start's random seed (default: the instance's).
+    /// The multi-start's random seed (default: the instance's, 0); it is written in each
+    /// packing's summary.json.
+    #[arg(long)]
     pub seed: Option<u64>,
 }
 
@@ -128,28 +135,20 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         if let Some(method) = options.method.or(earlier_method) {
             scene.solver.method = method;
         }
+        scene.solver.time_limit = Duration::from_secs_f64(options.minutes * 60.0);
+        scene.solver.threads = threads;
         let run_options = RunOptions {
-            time_limit: Some(Duration::from_secs_f64(options.minutes * 60.0)),
-            threads: Some(threads),
             resume_from: earlier.as_ref().map(|(_, p)| p.clone()),
             ..RunOptions::default()
         };
-        let mut best = 0.0;
-        let outcome = run(
-            &scene,
-            &run_options,
-            &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-                if p.best_density > best {
-                    best = p.best_density;
-                    eprintln!(
-                        "  {:8.1} s: best certified density {:.5} ({} local minimisations)",
-                        p.elapsed.as_secs_f64(),
-                        p.best_density,
-                        p.local_minimisations
-                    );
-                }
-            }),
-        )
+        let outcome = run_noting_gains(&scene, &run_options, |p| {
+            eprintln!(
+                "  {:8.1} s: best certified density {:.5} ({} local minimisations)",
+                p.elapsed.as_secs_f64(),
+                p.best_density,
+                p.local_minimisations
+            );
+        })
         .map_err(|e| format!("{}: {e}", instance.name))?;
         // Every run's history is kept, also of a run whose packing is not kept: the figure
         // shows how the code of the latest run gets to its density.
@@ -269,6 +268,30 @@ const DENSITY_TIME_FIGURE: &str = "paper_density_time";
 
 /// The folder of each instance's latest run history, `<instance>.csv`.
 const RUNS_DIR: &str = "validation/paper-runs";
+
+/// Runs `scene` through the `ellipack pack` pipeline, calling `gained` with the report of each
+/// local minimisation that raised the best certified density: the studies follow a long run by
+/// its gains only, not by every start.
+///
+/// # Errors
+/// What [`run`] refuses.
+pub(crate) fn run_noting_gains(
+    scene: &Scene,
+    options: &RunOptions,
+    mut gained: impl FnMut(&MultiStartProgress) + Sync,
+) -> Result<RunOutcome, PackError> {
+    let mut best = 0.0;
+    run(
+        scene,
+        options,
+        &mut Callbacks::on_finished(|p: &MultiStartProgress| {
+            if p.best_density > best {
+                best = p.best_density;
+                gained(p);
+            }
+        }),
+    )
+}
 
 /// One instance's best certified density against wall time, relative to the paper's.
 struct Curve {
@@ -509,7 +532,10 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
             machine: field("machine").to_string(),
             // Rows written before the column existed were all run with the default method.
             method: match field("method") {
-                "" => MethodName::default().name().to_string(),
+                "" => SolverSettings::defaults(Dimension::Two)
+                    .method
+                    .name()
+                    .to_string(),
                 m => m.to_string(),
             },
             commit: field("commit").to_string(),

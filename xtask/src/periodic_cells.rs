@@ -11,9 +11,9 @@
 //! Writes `validation/periodic_cells.csv` and the table between the markers of
 //! `docs/periodic.md`.
 
-use ellipack::output::write_atomically;
 use ellipack::pack::{PackError, RunOptions, run};
 use ellipack::scene::Scene;
+use ellipack::write_atomically;
 use ellipsoid_packer::multistart::Callbacks;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -54,12 +54,11 @@ struct Row {
 /// solves and certificates, for a fixed one, which ends at its first packing), and its local
 /// minimisations.
 fn pack(scene_text: &str, seconds: f64, threads: usize) -> Result<(Option<f64>, f64, u64), String> {
-    let scene = Scene::from_toml_str(scene_text, "periodic-cells").map_err(|e| e.to_string())?;
-    let options = RunOptions {
-        time_limit: Some(Duration::from_secs_f64(seconds)),
-        threads: Some(threads),
-        ..RunOptions::default()
-    };
+    let mut scene =
+        Scene::from_toml_str(scene_text, "periodic-cells").map_err(|e| e.to_string())?;
+    scene.solver.time_limit = Duration::from_secs_f64(seconds);
+    scene.solver.threads = threads;
+    let options = RunOptions::default();
     let start = Instant::now();
     match run(&scene, &options, &mut Callbacks::on_finished(|_| {})) {
         Ok(outcome) => Ok((

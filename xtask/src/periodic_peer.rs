@@ -18,11 +18,11 @@
 
 use crate::error::{self, Error};
 use crate::output::{Outputs, Stability};
+use crate::paper_tables::run_noting_gains;
 use crate::plot::{Figure, Kind, Series, render};
 use crate::provenance::{commit, machine};
-use ellipack::pack::{RunOptions, run as pack_run};
+use ellipack::pack::RunOptions;
 use ellipack::scene::Scene;
-use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
 use implicit_packing::certificate;
 use implicit_packing::containment::Container;
 use implicit_packing::shape::Body;
@@ -438,39 +438,29 @@ pub fn run_ours_as(
     scene_text: &str,
     seconds: f64,
 ) -> Result<(Vec<Point>, RunRow), Error> {
-    let scene =
+    let mut scene =
         Scene::from_toml_str(scene_text, "periodic-peer scene").map_err(|e| Error::Pack {
             context: "our scene".into(),
             message: e.to_string(),
         })?;
+    scene.solver.time_limit = Duration::from_secs_f64(seconds);
+    scene.solver.threads = 1;
     let n = scene.item_count();
-    let options = RunOptions {
-        time_limit: Some(Duration::from_secs_f64(seconds)),
-        threads: Some(1),
-        ..RunOptions::default()
-    };
+    let options = RunOptions::default();
     let mut points = Vec::new();
-    let mut best = 0.0;
-    let outcome = pack_run(
-        &scene,
-        &options,
-        &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-            if p.best_density > best {
-                best = p.best_density;
-                eprintln!(
-                    "  ours N = {n}: {:8.1} s: {:.5}",
-                    p.elapsed.as_secs_f64(),
-                    p.best_density
-                );
-                points.push(Point {
-                    who: who.into(),
-                    n,
-                    seconds: p.elapsed.as_secs_f64(),
-                    packing_fraction: p.best_density,
-                });
-            }
-        }),
-    )
+    let outcome = run_noting_gains(&scene, &options, |p| {
+        eprintln!(
+            "  ours N = {n}: {:8.1} s: {:.5}",
+            p.elapsed.as_secs_f64(),
+            p.best_density
+        );
+        points.push(Point {
+            who: who.into(),
+            n,
+            seconds: p.elapsed.as_secs_f64(),
+            packing_fraction: p.best_density,
+        });
+    })
     .map_err(|e| Error::Pack {
         context: format!("ellipack on {n} items"),
         message: e.to_string(),
@@ -878,6 +868,16 @@ impl Fields<'_> {
     pub(crate) fn get<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
         field(self.path, self.line, self.row, name)
     }
+
+    /// The column `name` parsed, or `None` where it is blank: a value the run did not measure.
+    pub(crate) fn optional<T: std::str::FromStr>(&self, name: &str) -> Result<Option<T>, Error> {
+        let text: String = self.get(name)?;
+        if text.is_empty() {
+            Ok(None)
+        } else {
+            self.get(name).map(Some)
+        }
+    }
 }
 
 /// Every row of the table at `path`, made by `make`.
@@ -898,56 +898,59 @@ pub(crate) fn read_rows<T>(
         .collect()
 }
 
+/// The struct `$row` from one row of a table read by [`read_rows`] (`$fields`, a [`Fields`]),
+/// its fields in the order listed: each parsed from the column of its own name, or of the name
+/// given after `:`, by [`Fields::get`], or by the method of [`Fields`] given after `as`. A
+/// reader so names each column once, not once for the field and again for the column.
+macro_rules! from_columns {
+    (@column $field:ident) => {
+        stringify!($field)
+    };
+    (@column $field:ident $column:literal) => {
+        $column
+    };
+    (@get $fields:ident, $column:expr) => {
+        $fields.get($column)
+    };
+    (@get $fields:ident, $column:expr, $method:ident) => {
+        $fields.$method($column)
+    };
+    ($fields:ident => $row:ident {
+        $($field:ident $(: $column:literal)? $(as $method:ident)?),* $(,)?
+    }) => {
+        $row {
+            $($field: $crate::periodic_peer::from_columns!(
+                @get $fields,
+                $crate::periodic_peer::from_columns!(@column $field $($column)?)
+                $(, $method)?
+            )?,)*
+        }
+    };
+}
+pub(crate) use from_columns;
+
 fn read_points(path: &Path) -> Result<Vec<Point>, Error> {
     read_rows(path, |f| {
-        Ok(Point {
-            who: f.get("who")?,
-            n: f.get("n")?,
-            seconds: f.get("seconds")?,
-            packing_fraction: f.get("packing_fraction")?,
-        })
+        Ok(from_columns!(f => Point { who, n, seconds, packing_fraction }))
     })
 }
 
 fn read_runs(path: &Path) -> Result<Vec<RunRow>, Error> {
     read_rows(path, |f| {
-        let min_mu2: String = f.get("min_mu2")?;
-        Ok(RunRow {
-            who: f.get("who")?,
-            n: f.get("n")?,
-            budget_seconds: f.get("budget_seconds")?,
-            final_fraction: f.get("final_fraction")?,
-            final_seconds: f.get("final_seconds")?,
-            checks: f.get("checks")?,
-            rejected: f.get("rejected")?,
-            min_mu2: if min_mu2.is_empty() {
-                None
-            } else {
-                Some(f.get("min_mu2")?)
-            },
-            machine: f.get("machine")?,
-            commit: f.get("commit")?,
-            protocol: f.get("protocol")?,
-        })
+        Ok(from_columns!(f => RunRow {
+            who, n, budget_seconds, final_fraction, final_seconds, checks, rejected,
+            min_mu2 as optional, machine, commit, protocol,
+        }))
     })
 }
 
 fn read_overlap(path: &Path) -> Result<Option<OverlapRow>, Error> {
     let rows = read_rows(path, |f| {
-        Ok(OverlapRow {
-            pairs: f.get("pairs")?,
-            peer_ns: f.get("peer_ns_per_pair")?,
-            pw85_ns: f.get("pw85_ns_per_pair")?,
-            peer_ns_spread: f.get("peer_ns_spread")?,
-            pw85_ns_spread: f.get("pw85_ns_spread")?,
-            peer_ns_near: f.get("peer_ns_near")?,
-            pw85_ns_near: f.get("pw85_ns_near")?,
-            disagreements: f.get("disagreements")?,
-            max_disagreement_mu2_minus_one: f.get("max_disagreement_mu2_minus_one")?,
-            overlapping: f.get("overlapping")?,
-            machine: f.get("machine")?,
-            commit: f.get("commit")?,
-        })
+        Ok(from_columns!(f => OverlapRow {
+            pairs, peer_ns: "peer_ns_per_pair", pw85_ns: "pw85_ns_per_pair", peer_ns_spread,
+            pw85_ns_spread, peer_ns_near, pw85_ns_near, disagreements,
+            max_disagreement_mu2_minus_one, overlapping, machine, commit,
+        }))
     })?;
     Ok(rows.into_iter().next())
 }

@@ -247,14 +247,12 @@ fn read_history(path: &Path) -> Result<Vec<(String, f64, f64)>, Error> {
 
 /// One run: its row, and the (seconds, density) of every kept compression step.
 fn measure(name: &str, scene: &Scene, threads: usize) -> Result<(Row, Vec<(f64, f64)>), Error> {
-    let options = RunOptions {
-        threads: Some(threads),
-        ..RunOptions::default()
-    };
+    let mut scene = scene.clone();
+    scene.solver.threads = threads;
     let mut seen = Vec::new();
     let outcome = pack_run(
-        scene,
-        &options,
+        &scene,
+        &RunOptions::default(),
         &mut Callbacks::on_finished(|p: &MultiStartProgress| {
             seen.push((p.elapsed.as_secs_f64(), p.last_density));
         }),
@@ -292,28 +290,39 @@ fn measure(name: &str, scene: &Scene, threads: usize) -> Result<(Row, Vec<(f64, 
     Ok((row, seen))
 }
 
+/// Writes one line of `$row`'s fields, in the table's column order, through `$format`: the CSV
+/// file and the Markdown table differ only in their format and in how they spell `certified`.
+macro_rules! write_row {
+    ($out:expr, $format:literal, $row:expr, $certified:expr) => {
+        writeln!(
+            $out,
+            $format,
+            $row.scene,
+            $row.items,
+            $row.target,
+            $row.density,
+            $row.seconds,
+            $row.peak_mib,
+            $row.bond_order,
+            $row.largest_nematic,
+            $row.contacts,
+            $row.rattlers,
+            $certified,
+            $row.machine,
+            $row.commit
+        )
+    };
+}
+
 fn csv(rows: &[Row]) -> String {
-    let mut out = format!("{HEADER}\n");
-    for r in rows {
-        let _ = writeln!(
+    crate::output::table_text(&format!("{HEADER}\n"), rows, |out, r| {
+        write_row!(
             out,
             "{},{},{},{:.6},{:.2},{:.0},{:.4},{:.4},{:.3},{},{},\"{}\",{}",
-            r.scene,
-            r.items,
-            r.target,
-            r.density,
-            r.seconds,
-            r.peak_mib,
-            r.bond_order,
-            r.largest_nematic,
-            r.contacts,
-            r.rattlers,
-            r.certified,
-            r.machine,
-            r.commit
-        );
-    }
-    out
+            r,
+            r.certified
+        )
+    })
 }
 
 fn read_rows(path: &Path) -> Result<Vec<Row>, Error> {
@@ -355,31 +364,20 @@ fn read_rows(path: &Path) -> Result<Vec<Row>, Error> {
 }
 
 fn markdown(rows: &[Row]) -> String {
-    let mut out = String::from(
+    crate::output::table_text(
         "| scene (`validation/random/`) | items | target | φ | wall time | peak memory | Q₆ (2D: ψ₆) \
          | largest S | Z | rattlers | certified | machine, commit |\n\
          |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---|\n",
-    );
-    for r in rows {
-        let _ = writeln!(
-            out,
-            "| `{}` | {} | {} | {:.5} | {:.1} s | {:.0} MiB | {:.4} | {:.3} | {:.2} | {} | {} | {}, {} |",
-            r.scene,
-            r.items,
-            r.target,
-            r.density,
-            r.seconds,
-            r.peak_mib,
-            r.bond_order,
-            r.largest_nematic,
-            r.contacts,
-            r.rattlers,
-            if r.certified { "yes" } else { "**no**" },
-            r.machine,
-            r.commit
-        );
-    }
-    out
+        rows,
+        |out, r| {
+            write_row!(
+                out,
+                "| `{}` | {} | {} | {:.5} | {:.1} s | {:.0} MiB | {:.4} | {:.3} | {:.2} | {} | {} | {}, {} |",
+                r,
+                if r.certified { "yes" } else { "**no**" }
+            )
+        },
+    )
 }
 
 #[cfg(test)]

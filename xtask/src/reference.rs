@@ -36,53 +36,46 @@ pub type BlmCase3 = Case<reference::Blm3Case, Pair3>;
 /// One row of `blm_2d.csv`.
 pub type BlmCase2 = Case<reference::Blm2Case, Pair2>;
 
-/// `pw85_contact.csv`.
-pub fn contact_cases() -> Result<Vec<ContactCase>, Error> {
-    Ok(reference::contact_cases()?
-        .into_iter()
+/// Each of the kit's `rows` with its inputs as the harness's pair, made by `pair`: the
+/// reference files differ only in their row and pair types.
+fn cases<R, P>(rows: Vec<R>, pair: impl Fn(&R) -> P) -> Vec<Case<R, P>> {
+    rows.into_iter()
         .map(|row| Case {
-            pair: Pw85Pair {
-                r12: row.r12,
-                q1: row.q1,
-                q2: row.q2,
-            },
+            pair: pair(&row),
             row,
         })
-        .collect())
+        .collect()
+}
+
+/// `pw85_contact.csv`.
+pub fn contact_cases() -> Result<Vec<ContactCase>, Error> {
+    Ok(cases(reference::contact_cases()?, |row| Pw85Pair {
+        r12: row.r12,
+        q1: row.q1,
+        q2: row.q2,
+    }))
 }
 
 /// `blm_3d.csv`.
 pub fn blm_3d() -> Result<Vec<BlmCase3>, Error> {
-    Ok(reference::blm_3d()?
-        .into_iter()
-        .map(|row| Case {
-            pair: Pair3 {
-                ci: row.ci,
-                li: row.li,
-                qi: row.qi,
-                cj: row.cj,
-                lj: row.lj,
-                qj: row.qj,
-            },
-            row,
-        })
-        .collect())
+    Ok(cases(reference::blm_3d()?, |row| Pair3 {
+        ci: row.ci,
+        li: row.li,
+        qi: row.qi,
+        cj: row.cj,
+        lj: row.lj,
+        qj: row.qj,
+    }))
 }
 
 /// `blm_2d.csv`.
 pub fn blm_2d() -> Result<Vec<BlmCase2>, Error> {
-    Ok(reference::blm_2d()?
-        .into_iter()
-        .map(|row| Case {
-            pair: Pair2 {
-                ci: row.ci,
-                li: row.li,
-                ti: row.theta_i,
-                cj: row.cj,
-                lj: row.lj,
-                tj: row.theta_j,
-            },
-            row,
-        })
-        .collect())
+    Ok(cases(reference::blm_2d()?, |row| Pair2 {
+        ci: row.ci,
+        li: row.li,
+        ti: row.theta_i,
+        cj: row.cj,
+        lj: row.lj,
+        tj: row.theta_j,
+    }))
 }

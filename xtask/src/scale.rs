@@ -21,7 +21,7 @@
 
 use crate::error::Error;
 use crate::output::{Outputs, Stability};
-use crate::periodic_peer::read_rows;
+use crate::periodic_peer::{from_columns, read_rows};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use auglag::{InnerSolver, Progress};
 use ellipsoid_packer::local::{LocalMethod, LocalSettings, local_minimisation};
@@ -327,22 +327,25 @@ const HEADER: &str = "m,solver,threads,stop,outer_iterations,inner_iterations,ev
                       hessian_products,first_solve_seconds,seconds,budget_minutes,density,\
                       density_before_repair,certified,peak_rss_mib,machine,commit";
 
+/// Writes one line through `$format`: `$row`'s counts and times (`m` to `seconds`, the columns
+/// the CSV file and the Markdown table share, in this order), then `$rest`, where the two
+/// differ.
+macro_rules! write_row {
+    ($out:expr, $format:literal, $row:expr, $($rest:expr),+ $(,)?) => {
+        writeln!(
+            $out, $format, $row.m, $row.solver, $row.threads, $row.stop, $row.outer, $row.inner,
+            $row.evaluations, $row.hessian_products, $row.first_solve_seconds, $row.seconds,
+            $($rest),+
+        )
+    };
+}
+
 fn csv(rows: &[Row]) -> String {
-    let mut out = format!("{HEADER}\n");
-    for r in rows {
-        let _ = writeln!(
+    crate::output::table_text(&format!("{HEADER}\n"), rows, |out, r| {
+        write_row!(
             out,
             "{},{},{},{},{},{},{},{},{:.2},{:.2},{},{:.6},{:.6},{},{:.1},\"{}\",{}",
-            r.m,
-            r.solver,
-            r.threads,
-            r.stop,
-            r.outer,
-            r.inner,
-            r.evaluations,
-            r.hessian_products,
-            r.first_solve_seconds,
-            r.seconds,
+            r,
             r.budget_minutes,
             r.density,
             r.density_before_repair,
@@ -350,32 +353,17 @@ fn csv(rows: &[Row]) -> String {
             r.peak_rss_mib,
             r.machine.replace('"', "'"),
             r.commit
-        );
-    }
-    out
+        )
+    })
 }
 
 fn read_table(path: &Path) -> Result<Vec<Row>, Error> {
     read_rows(path, |f| {
-        Ok(Row {
-            m: f.get("m")?,
-            solver: f.get("solver")?,
-            threads: f.get("threads")?,
-            stop: f.get("stop")?,
-            outer: f.get("outer_iterations")?,
-            inner: f.get("inner_iterations")?,
-            evaluations: f.get("evaluations")?,
-            hessian_products: f.get("hessian_products")?,
-            first_solve_seconds: f.get("first_solve_seconds")?,
-            seconds: f.get("seconds")?,
-            budget_minutes: f.get("budget_minutes")?,
-            density: f.get("density")?,
-            density_before_repair: f.get("density_before_repair")?,
-            certified: f.get("certified")?,
-            peak_rss_mib: f.get("peak_rss_mib")?,
-            machine: f.get("machine")?,
-            commit: f.get("commit")?,
-        })
+        Ok(from_columns!(f => Row {
+            m, solver, threads, stop, outer: "outer_iterations", inner: "inner_iterations",
+            evaluations, hessian_products, first_solve_seconds, seconds, budget_minutes, density,
+            density_before_repair, certified, peak_rss_mib, machine, commit,
+        }))
     })
 }
 
@@ -437,36 +425,27 @@ fn figure(rows: &[Row]) -> Figure {
 }
 
 fn markdown(rows: &[Row]) -> String {
-    let mut out = String::from(
+    crate::output::table_text(
         "| m | method | threads | stop | outer / inner iterations | evaluations | Hessian \
          products | first solve (s) | wall time (s) | ms per inner iteration | budget (min) | density | certified | peak memory (MiB) \
          | machine | commit |\n\
          |---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---|\n",
-    );
-    for r in rows {
-        let _ = writeln!(
-            out,
-            "| {} | {} | {} | {} | {} / {} | {} | {} | {:.1} | {:.1} | {:.2} | {} | {:.5} | {} | {:.0} | {} | {} |",
-            r.m,
-            r.solver,
-            r.threads,
-            r.stop,
-            r.outer,
-            r.inner,
-            r.evaluations,
-            r.hessian_products,
-            r.first_solve_seconds,
-            r.seconds,
-            1e3 * r.seconds / r.inner.max(1) as f64,
-            r.budget_minutes,
-            r.density,
-            if r.certified { "yes" } else { "no" },
-            r.peak_rss_mib,
-            r.machine,
-            r.commit
-        );
-    }
-    out
+        rows,
+        |out, r| {
+            write_row!(
+                out,
+                "| {} | {} | {} | {} | {} / {} | {} | {} | {:.1} | {:.1} | {:.2} | {} | {:.5} | {} | {:.0} | {} | {} |",
+                r,
+                1e3 * r.seconds / r.inner.max(1) as f64,
+                r.budget_minutes,
+                r.density,
+                if r.certified { "yes" } else { "no" },
+                r.peak_rss_mib,
+                r.machine,
+                r.commit
+            )
+        },
+    )
 }
 
 const BEGIN: &str = "<!-- scale: generated by `cargo xtask scale`; do not edit -->";

@@ -1,6 +1,8 @@
 //! Behaviour of the outer loop and of the interface: safeguarded multipliers, best feasible
 //! point, non-finite values, interrupts, determinism, input errors, the fused hook.
 
+mod common;
+
 use std::cell::Cell;
 
 use auglag::{
@@ -375,8 +377,7 @@ impl Problem for Boxed {
         self.lower.len()
     }
     fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        lower.copy_from_slice(&self.lower);
-        upper.copy_from_slice(&self.upper);
+        common::write_box(&self.lower, &self.upper, lower, upper);
     }
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         if let Some(g) = grad {

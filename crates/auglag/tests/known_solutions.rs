@@ -1,6 +1,8 @@
 //! Problems with known solutions: bound-constrained Rosenbrock, Hock–Schittkowski problems and
 //! circle packings, each solved with both inner solvers.
 
+mod common;
+
 use auglag::{InnerSolver, Options, Problem, Solution, StopReason, minimize};
 
 const SOLVERS: [InnerSolver; 3] = [
@@ -79,8 +81,7 @@ impl Problem for Rosenbrock {
         self.lower.len()
     }
     fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        lower.copy_from_slice(&self.lower);
-        upper.copy_from_slice(&self.upper);
+        common::write_box(&self.lower, &self.upper, lower, upper);
     }
     fn objective(&self, x: &[f64], mut grad: Option<&mut [f64]>) -> f64 {
         if let Some(g) = grad.as_deref_mut() {

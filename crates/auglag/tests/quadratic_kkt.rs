@@ -2,6 +2,8 @@
 //! point must satisfy the projected-gradient KKT condition, recomputed here independently, and
 //! — the problem being convex — be no worse than random feasible points.
 
+mod common;
+
 use auglag::{InnerSolver, Options, Problem, StopReason, minimize};
 use proptest::prelude::*;
 
@@ -31,8 +33,7 @@ impl Problem for Qp {
         self.n
     }
     fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        lower.copy_from_slice(&self.lower);
-        upper.copy_from_slice(&self.upper);
+        common::write_box(&self.lower, &self.upper, lower, upper);
     }
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         let g = self.gradient(x);

@@ -132,7 +132,8 @@ fn exact_and_quotient_hessians_agree_on_a_constrained_problem() {
 }
 
 /// f(x) = Σ dᵢ φ(xᵢ − 1), φ(t) = t²/2 + t⁴/4, dᵢ from 1 to 1e4: ill-conditioned, and its
-/// Hessian changes from one Newton step to the next.
+/// Hessian changes from one Newton step to the next. Unconstrained and unbounded: the trait's
+/// defaults for `bounds`, `n_eq` and the constraints.
 struct Quartic {
     d: Vec<f64>,
 }
@@ -140,13 +141,6 @@ struct Quartic {
 impl Problem for Quartic {
     fn dim(&self) -> usize {
         self.d.len()
-    }
-    fn bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-        lower.fill(f64::NEG_INFINITY);
-        upper.fill(f64::INFINITY);
-    }
-    fn n_eq(&self) -> usize {
-        0
     }
     fn objective(&self, x: &[f64], grad: Option<&mut [f64]>) -> f64 {
         if let Some(g) = grad {
@@ -164,8 +158,6 @@ impl Problem for Quartic {
             })
             .sum()
     }
-    fn constraints(&self, _x: &[f64], _c: &mut [f64]) {}
-    fn constraints_jt_times(&self, _x: &[f64], _w: &[f64], _out: &mut [f64]) {}
     fn hessian_times(&self, x: &[f64], phr: &Phr<'_>, v: &[f64], out: &mut [f64]) -> bool {
         let sf = phr.objective_scale();
         for (((o, &d), &x), &vi) in out.iter_mut().zip(&self.d).zip(x).zip(v) {

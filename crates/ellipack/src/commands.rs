@@ -11,7 +11,7 @@ use ellipack::packing::{
     read_table_into,
 };
 use ellipack::render::{RenderError, RenderOptions, write_pictures_until};
-use ellipack::scene::Scene;
+use ellipack::scene::{Overrides, Scene};
 use implicit_packing::certificate::shown_mu2;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::error::Error;
@@ -65,7 +65,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             })?
             .scene(),
         (None, None) => {
-            ellipack::note!(
+            crate::note!(
                 "no scene given: packing the built-in scene ({})",
                 Scene::default_scene().title()
             );
@@ -77,7 +77,11 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         .clone()
         .or_else(|| scene.output.directory.clone())
         .unwrap_or_else(|| PathBuf::from("out"));
-    let time_limit = args.time_limit.map(time_limit_of).transpose()?;
+    let scene = scene.overridden(&Overrides {
+        time_limit: args.time_limit.map(time_limit_of).transpose()?,
+        seed: args.seed,
+        threads: args.threads,
+    });
     let resume_from = if args.resume {
         Some(resume_start(&scene, &out)?)
     } else {
@@ -86,9 +90,6 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     // Before the run: a folder found unwritable afterwards would lose the packing.
     probe_output_folder(&out)?;
     let options = RunOptions {
-        time_limit,
-        seed: args.seed,
-        threads: args.threads,
         resume_from,
         shard: args.shard,
     };
@@ -135,7 +136,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     write_files(staged, &outcome.packing, &outcome.summary, scene.output.xyz)?;
     let cell = Cell::enclosing(&outcome.packing);
     write_formats(staged, &outcome.packing, &cell, &PACK_FORMATS)?;
-    ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
+    ellipack::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     let structure = ellipack::analysis::analyse(
         &outcome.packing,
         &ellipack::analysis::settings(
@@ -145,7 +146,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     );
     match &structure {
         Ok(s) => ellipack::analysis::write_structure(staged, s)?,
-        Err(e) => ellipack::note!("note: the structure was not measured: {e}"),
+        Err(e) => crate::note!("note: the structure was not measured: {e}"),
     }
     if scene.output.pictures {
         let options = RenderOptions {
@@ -154,7 +155,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         };
         // Pictures are the one optional file: drawing them stops at a signal, or when it
         // would run past the time limit by more than PICTURE_GRACE (plus 5 % of the limit).
-        let limit = time_limit.unwrap_or(scene.solver.time_limit);
+        let limit = scene.solver.time_limit;
         let deadline = limit
             .checked_add(PICTURE_GRACE + limit / 20)
             .and_then(|d| started.checked_add(d));
@@ -172,7 +173,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
                     )?;
                 }
             }
-            Err(RenderError::Stopped) => ellipack::note!(
+            Err(RenderError::Stopped) => crate::note!(
                 "note: packing.svg and packing.png were not drawn: the run was stopped or \
                  drawing would have run past its time limit (`ellipack convert {} --pictures` \
                  draws them)",
@@ -182,7 +183,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
         }
     }
     if let Published::InPlace(why) = staging.commit()? {
-        ellipack::note!(
+        crate::note!(
             "note: the files in {} were replaced one by one, not swapped in as a set ({})",
             out.display(),
             why.map_or_else(
@@ -191,98 +192,9 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
             )
         );
     }
+    crate::report::pack(&scene, &outcome, args.resume);
     let s = &outcome.summary;
-    ellipack::say!("{}", scene.title());
-    ellipack::say!(
-        "density {:.5} ({} {}), found after {:.1} s of {:.1} s, {} local minimisations{}",
-        s.density,
-        s.container.size_name(),
-        {
-            let size = s.container.size();
-            let text = |v: &[f64]| {
-                v.iter()
-                    .map(|v| format!("{v:.6}"))
-                    .collect::<Vec<_>>()
-                    .join(" × ")
-            };
-            match s.container.cell_matrix() {
-                Some(h) => {
-                    let n = h.len();
-                    format!("{}, tilts {}", text(&size[..n]), text(&size[n..]))
-                }
-                None => text(&size),
-            }
-        },
-        outcome.seconds_to_best,
-        s.wall_seconds,
-        s.local_minimisations,
-        if outcome.interrupted {
-            " (interrupted)"
-        } else {
-            ""
-        }
-    );
-    let min_mu2 = s
-        .certificate
-        .min_mu2
-        .map_or("—".into(), |m| shown_mu2(m, 9));
-    if scene.fixed_container().is_some() {
-        // A fixed container is filled, never dilated: there is no repair to report.
-        ellipack::say!(
-            "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
-             the container is the scene's",
-            s.certificate.overlapping_pairs,
-            s.certificate.containment_violations,
-        );
-    } else {
-        ellipack::say!(
-            "certificate: {} overlapping pairs, {} containment violations, min μ² = {min_mu2}; \
-             repair dilation {:.2e} (density {:.5} before)",
-            s.certificate.overlapping_pairs,
-            s.certificate.containment_violations,
-            outcome.repair_factor - 1.0,
-            outcome.density_before_repair
-        );
-    }
-    if outcome.restarts > 0 {
-        ellipack::say!(
-            "{} new chains from fresh lattice starts (after {} starts without improvement)",
-            outcome.restarts,
-            scene.solver.restart_after
-        );
-    }
-    let limit = options
-        .time_limit
-        .unwrap_or(scene.solver.time_limit)
-        .as_secs_f64();
-    if outcome.start_kept && outcome.seconds_to_best >= limit {
-        ellipack::say!(
-            "the time limit ({limit:.3e} s) is shorter than building and certifying the start \
-             took ({:.3} s): give at least that for any local minimisation",
-            outcome.seconds_to_best
-        );
-    }
-    if outcome.start_kept && scene.fixed_container().is_some() {
-        ellipack::say!("the start is already a packing in the fixed container: wrote the start");
-    } else if outcome.start_kept {
-        ellipack::say!(
-            "no local minimisation found a denser certified packing than the start{}: wrote \
-             the start",
-            if args.resume {
-                " (the resumed packing)"
-            } else {
-                ""
-            }
-        );
-    }
-    if outcome.failed_starts > 0 {
-        ellipack::say!(
-            "{} starts were abandoned: their local minimisation ended at a point that could \
-             not be certified",
-            outcome.failed_starts
-        );
-    }
-    ellipack::say!("wrote {}", out.display());
+    crate::say!("wrote {}", out.display());
     Ok(if s.certificate.is_certified() {
         ExitCode::SUCCESS
     } else {
@@ -307,10 +219,10 @@ fn not_reached(
     let staging = Staging::begin(&dir)?;
     let staged = staging.path();
     write_files(staged, &unfinished.packing, &unfinished.summary, false)?;
-    ellipack::output::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
+    ellipack::write_atomically(&staged.join(HISTORY_FILE), history.as_bytes())?;
     staging.commit()?;
-    ellipack::say!("{}", scene.title());
-    ellipack::note!(
+    crate::say!("{}", scene.title());
+    crate::note!(
         "error: {}{}",
         PackError::NotReached(Box::new(unfinished.clone())),
         if unfinished.interrupted {
@@ -319,7 +231,7 @@ fn not_reached(
             ""
         }
     );
-    ellipack::note!(
+    crate::note!(
         "wrote the least overlapping configuration, which is not a packing, to {}; {} was not \
          written (a longer time limit or a lower packing fraction may reach one)",
         dir.display(),
@@ -332,14 +244,14 @@ fn not_reached(
 pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>> {
     let outcome = ellipack::merge::merge(folders, out)?;
     for folder in &outcome.skipped {
-        ellipack::say!(
+        crate::say!(
             "  {}: no packing.csv (a run stopped before writing, or an unfinished fixed \
              container): skipped",
             folder.display()
         );
     }
     for (k, c) in outcome.candidates.iter().enumerate() {
-        ellipack::say!(
+        crate::say!(
             "{} {}: density {:.6}{}",
             if k == outcome.best { "*" } else { " " },
             c.folder.display(),
@@ -353,15 +265,15 @@ pub fn merge(folders: &[PathBuf], out: &Path) -> Result<ExitCode, Box<dyn Error>
     }
     let best = &outcome.candidates[outcome.best];
     if outcome.written {
-        ellipack::say!("wrote {} (from {})", out.display(), best.folder.display());
+        crate::say!("wrote {} (from {})", out.display(), best.folder.display());
     } else {
-        ellipack::say!(
+        crate::say!(
             "{} already holds the best packing: left as it was",
             out.display()
         );
     }
     if let Some(Published::InPlace(_)) = outcome.published {
-        ellipack::note!(
+        crate::note!(
             "note: the files in {} were replaced one by one, not swapped in as a set",
             out.display()
         );
@@ -473,7 +385,7 @@ pub fn convert(
         write_pictures_until(folder, &packing, &RenderOptions::default(), &|| false)?;
         names.extend([ellipack::render::SVG_FILE, ellipack::render::PNG_FILE]);
     }
-    ellipack::say!(
+    crate::say!(
         "{} {} in a {} container: wrote {} in {}",
         packing.items().len(),
         packing.items().noun(),
@@ -570,14 +482,14 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     };
     let verification = check(&packing)?;
     let certificate = verification.certificate;
-    ellipack::say!(
+    crate::say!(
         "{} {}, container: {}, density {:.5}",
         packing.items().len(),
         packing.items().noun(),
         packing.container().kind().name(),
         packing.density()
     );
-    ellipack::say!(
+    crate::say!(
         "certificate: {} overlapping pairs, {} containment violations, min μ² = {}",
         certificate.overlapping_pairs,
         certificate.containment_violations,
@@ -587,9 +499,9 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
     let id = |row: usize| table.ids.get(row).copied().unwrap_or(row as u64);
     let pairs = &verification.overlapping_pairs;
     if !pairs.is_empty() {
-        ellipack::say!("overlapping pairs (ids, μ² < 1), deepest first:");
+        crate::say!("overlapping pairs (ids, μ² < 1), deepest first:");
         for p in pairs.iter().take(OFFENDERS_SHOWN) {
-            ellipack::say!(
+            crate::say!(
                 "  {} and {}: μ² = {}",
                 id(p.items.0),
                 id(p.items.1),
@@ -597,12 +509,12 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
             );
         }
         if pairs.len() > OFFENDERS_SHOWN {
-            ellipack::say!("  … and {} more", pairs.len() - OFFENDERS_SHOWN);
+            crate::say!("  … and {} more", pairs.len() - OFFENDERS_SHOWN);
         }
     }
     let outside = &verification.outside;
     if !outside.is_empty() {
-        ellipack::say!(
+        crate::say!(
             "outside the container (id, t: the item fits only in the container scaled by t \
              about its centre), worst first:"
         );
@@ -613,14 +525,14 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
             } else {
                 format!("{percent:.1e}")
             };
-            ellipack::say!(
+            crate::say!(
                 "  {}: t = {:.9} (the container would have to be {percent} % larger)",
                 id(o.item),
                 o.scale,
             );
         }
         if outside.len() > OFFENDERS_SHOWN {
-            ellipack::say!("  … and {} more", outside.len() - OFFENDERS_SHOWN);
+            crate::say!("  … and {} more", outside.len() - OFFENDERS_SHOWN);
         }
     }
     // The counts are the verdict; the smallest μ² may differ in its last digits between runs
@@ -632,17 +544,17 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
                 certificate.containment_violations,
             )
     }) {
-        ellipack::say!(
+        crate::say!(
             "note: summary.json states {} overlapping pairs, {} containment violations",
             stated.overlapping_pairs,
             stated.containment_violations
         );
     }
     Ok(if certificate.is_certified() {
-        ellipack::say!("certified");
+        crate::say!("certified");
         ExitCode::SUCCESS
     } else {
-        ellipack::say!("NOT certified");
+        crate::say!("NOT certified");
         ExitCode::FAILURE
     })
 }

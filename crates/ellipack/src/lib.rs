@@ -18,7 +18,7 @@ pub mod folder;
 pub mod instances;
 pub mod measure;
 pub mod merge;
-pub mod output;
+mod output;
 pub mod pack;
 pub mod packing;
 pub mod pairs;
@@ -28,10 +28,11 @@ pub mod scene;
 #[cfg(feature = "pictures")]
 pub mod structure_plots;
 pub mod table;
-pub mod terminal;
+mod toml_keys;
 pub mod xyz;
 
 pub use error::Error;
+pub use output::{OutputFile, refuse_overwriting_input, write_atomically};
 
 /// The example pairs bundled with the program (`crates/ellipack/data/pairs.csv`): what
 /// `ellipack contact` evaluates when no `--input` is given.

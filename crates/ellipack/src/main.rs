@@ -3,16 +3,18 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use ellipack::Error;
 use ellipack::export::Format;
-use ellipack::output::{OutputFile, refuse_overwriting_input};
 use ellipack::packing::ContainerKind;
 use ellipack::pairs::{Criterion, Summary, contact_stream};
-use ellipack::terminal::reader_gone;
+use ellipack::{OutputFile, refuse_overwriting_input};
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use terminal::reader_gone;
 
 mod commands;
+mod report;
+mod terminal;
 
 /// Decide whether ellipsoids overlap, and measure by how much.
 #[derive(Parser)]
@@ -248,7 +250,7 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {
-            ellipack::note!("error: {e}");
+            crate::note!("error: {e}");
             ExitCode::FAILURE
         }
     }
@@ -291,7 +293,7 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
             rdf_bins,
         })?,
         Command::Instances => {
-            ellipack::say!("{}", ellipack::instances::listing().trim_end());
+            crate::say!("{}", ellipack::instances::listing().trim_end());
             ExitCode::SUCCESS
         }
         Command::Contact {
@@ -341,14 +343,14 @@ fn deliver(
         Err(e) => return Err(e),
     };
     if summary.failed > 0 {
-        ellipack::note!(
+        crate::note!(
             "{} of {} rows failed: see their `error` column",
             summary.failed,
             summary.rows
         );
     }
     if let Some(path) = output {
-        ellipack::note!("wrote {} rows to {}", summary.rows, path.display());
+        crate::note!("wrote {} rows to {}", summary.rows, path.display());
     }
     Ok(if summary.failed > 0 {
         ExitCode::from(ROWS_FAILED)
@@ -389,7 +391,7 @@ fn contact(
             })
         }
         None => {
-            ellipack::note!("no --input given: evaluating the bundled example pairs");
+            crate::note!("no --input given: evaluating the bundled example pairs");
             deliver(output.as_deref(), |out, destination| {
                 contact_stream(
                     ellipack::EXAMPLE_PAIRS.as_bytes(),

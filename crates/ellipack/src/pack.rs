@@ -12,7 +12,7 @@ use crate::packing::{
 };
 use crate::scene::{RandomGoal, Scene};
 use ellipsoid_packer::Target;
-use ellipsoid_packer::local::{LocalMethod, LocalSettings};
+use ellipsoid_packer::local::LocalSettings;
 use ellipsoid_packer::multistart::MultiStartSettings;
 pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::run::{
@@ -134,20 +134,13 @@ pub struct Unfinished {
 /// The folder inside the output folder that holds [`Unfinished`] configurations.
 pub const UNFINISHED_DIR: &str = "unfinished";
 
-/// Converts a time limit in seconds, refusing what is not positive or beyond a [`Duration`]
-/// (which would otherwise panic).
+/// Converts a time limit in seconds ([`crate::scene::time_limit`]).
 ///
 /// # Errors
 /// [`PackError::TimeLimit`] for zero, negative, NaN, infinite, too large values, or values
 /// below a nanosecond.
 pub fn time_limit_of(seconds: f64) -> Result<Duration, PackError> {
-    if !(seconds.is_finite() && seconds > 0.0) {
-        return Err(PackError::TimeLimit { seconds });
-    }
-    Duration::try_from_secs_f64(seconds)
-        .ok()
-        .filter(|d| !d.is_zero())
-        .ok_or(PackError::TimeLimit { seconds })
+    crate::scene::time_limit(seconds).ok_or(PackError::TimeLimit { seconds })
 }
 
 /// Makes sure the output folder can be written before a run spends its time: creates it,
@@ -237,15 +230,10 @@ impl History {
     }
 }
 
-/// Command-line overrides of the scene's settings.
+/// What a run starts from besides its scene (whose settings the command line overrides
+/// through [`Scene::overridden`]).
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
-    /// Wall-clock limit (else the scene's).
-    pub time_limit: Option<Duration>,
-    /// Seed of the multi-start (else the scene's).
-    pub seed: Option<u64>,
-    /// Threads (else the scene's; 0 means every core).
-    pub threads: Option<usize>,
     /// A packing of the same items to start from (resuming a run).
     pub resume_from: Option<Packing>,
     /// This run's part of a multi-start spread over several runs (else the whole).
@@ -344,7 +332,7 @@ fn run_n<const N: usize>(
 /// The packer's settings of the scene, with the command line's overrides.
 fn settings_of(scene: &Scene, options: &RunOptions, n: usize) -> Settings {
     let count = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
-    let mut multistart = MultiStartSettings::paper(n, options.seed.unwrap_or(scene.seed));
+    let mut multistart = MultiStartSettings::paper(n, scene.seed);
     multistart.local = local_settings(scene);
     if scene.random_goal().is_some() {
         multistart.local.fixed_orientations = scene.item_fixed_orientations();
@@ -355,9 +343,9 @@ fn settings_of(scene: &Scene, options: &RunOptions, n: usize) -> Settings {
     multistart.perturbation_levels = scene.solver.perturbation_levels;
     multistart.fresh_lattice_every = count(scene.solver.fresh_lattice_every);
     multistart.restart_after = count(scene.solver.restart_after);
-    multistart.threads = options.threads.unwrap_or(scene.solver.threads);
+    multistart.threads = scene.solver.threads;
     multistart.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
-    multistart.time_limit = Some(options.time_limit.unwrap_or(scene.solver.time_limit));
+    multistart.time_limit = Some(scene.solver.time_limit);
     multistart.shard = options.shard.unwrap_or(Shard::WHOLE);
     Settings {
         multistart,
@@ -368,20 +356,11 @@ fn settings_of(scene: &Scene, options: &RunOptions, n: usize) -> Settings {
 /// The scene's solver settings, mapped once onto the packer's settings of one local
 /// minimisation.
 fn local_settings(scene: &Scene) -> LocalSettings {
-    use ellipsoid_packer::local::InnerSolver;
     let mut local = LocalSettings::default();
     local.feasibility_tolerance = scene.solver.feasibility_tolerance;
     local.optimality_tolerance = scene.solver.optimality_tolerance;
-    local.inner_solver = match scene.solver.inner_solver {
-        crate::scene::InnerSolverName::Spg => InnerSolver::Spg,
-        crate::scene::InnerSolverName::ProjectedLbfgs => InnerSolver::ProjectedLbfgs,
-        crate::scene::InnerSolverName::TruncatedNewton => InnerSolver::TruncatedNewton,
-    };
-    local.method = match scene.solver.method {
-        crate::scene::MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,
-        crate::scene::MethodName::Compression => LocalMethod::Compression,
-        crate::scene::MethodName::CompressionLagrangian => LocalMethod::CompressionThenLagrangian,
-    };
+    local.inner_solver = scene.solver.inner_solver.solver();
+    local.method = scene.solver.method.method();
     local
 }
 

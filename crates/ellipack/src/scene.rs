@@ -120,6 +120,10 @@
 
 use crate::packing::{Container, ContainerKind};
 use crate::table::short;
+pub use crate::toml_keys::SceneError;
+use crate::toml_keys::{line_column, toml_error};
+use ellipsoid_packer::local::{InnerSolver, LocalMethod};
+use ellipsoid_packer::multistart::{self, MultiStartSettings};
 pub use ellipsoid_packer::random::{Distribution, Orientation};
 use serde::Deserialize;
 use std::fmt;
@@ -157,23 +161,6 @@ pub const SEMI_AXIS_RANGE: (f64, f64) = (
     implicit_packing::shape::MAX_MAGNITUDE,
 );
 
-/// Why a scene could not be read: the file, the position and the key of the first problem.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{source_name}: line {line}, column {column}: `{key}`: {message}")]
-pub struct SceneError {
-    /// The file, or `<built-in scene>`.
-    pub source_name: String,
-    /// 1-based line of the offending value or key (of the enclosing table for a missing
-    /// key; line 1 when the key is missing at the top level).
-    pub line: usize,
-    /// 1-based column (in characters).
-    pub column: usize,
-    /// The dotted key, e.g. `solver.time_limit` or `shapes[0].semi_axes`.
-    pub key: String,
-    /// What is wrong.
-    pub message: String,
-}
-
 /// Ellipses or ellipsoids.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Dimension {
@@ -195,13 +182,12 @@ impl Dimension {
 
 /// The name, in a scene file, of the inner solver of the augmented Lagrangian's
 /// bound-constrained subproblems ([`ellipsoid_packer::local::InnerSolver`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum InnerSolverName {
     /// Nonmonotone spectral projected gradient (`"spg"`).
     Spg,
     /// Active-set projected L-BFGS (`"projected-lbfgs"`).
-    #[default]
     ProjectedLbfgs,
     /// Active-set truncated Newton with the model's exact Hessian–vector products
     /// (`"truncated-newton"`).
@@ -209,6 +195,25 @@ pub enum InnerSolverName {
 }
 
 impl InnerSolverName {
+    /// The name of the packer's solver (`None`: one that scenes cannot name).
+    pub fn of(solver: InnerSolver) -> Option<Self> {
+        match solver {
+            InnerSolver::Spg => Some(InnerSolverName::Spg),
+            InnerSolver::ProjectedLbfgs => Some(InnerSolverName::ProjectedLbfgs),
+            InnerSolver::TruncatedNewton => Some(InnerSolverName::TruncatedNewton),
+            _ => None,
+        }
+    }
+
+    /// The packer's solver of this name.
+    pub fn solver(self) -> InnerSolver {
+        match self {
+            InnerSolverName::Spg => InnerSolver::Spg,
+            InnerSolverName::ProjectedLbfgs => InnerSolver::ProjectedLbfgs,
+            InnerSolverName::TruncatedNewton => InnerSolver::TruncatedNewton,
+        }
+    }
+
     /// The name in scene files.
     pub fn name(self) -> &'static str {
         match self {
@@ -221,12 +226,11 @@ impl InnerSolverName {
 
 /// The name, in a scene file, of how one local minimisation makes the container small
 /// ([`ellipsoid_packer::local::LocalMethod`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MethodName {
     /// The paper's augmented Lagrangian with the container among the variables
     /// (`"lagrangian"`).
-    #[default]
     Lagrangian,
     /// Compression: placements in shrinking fixed containers (`"compression"`); much faster
     /// for thousands of items, somewhat less dense, the container's aspect kept.
@@ -237,6 +241,25 @@ pub enum MethodName {
 }
 
 impl MethodName {
+    /// The name of the packer's method (`None`: one that scenes cannot name).
+    pub fn of(method: LocalMethod) -> Option<Self> {
+        match method {
+            LocalMethod::AugmentedLagrangian => Some(MethodName::Lagrangian),
+            LocalMethod::Compression => Some(MethodName::Compression),
+            LocalMethod::CompressionThenLagrangian => Some(MethodName::CompressionLagrangian),
+            _ => None,
+        }
+    }
+
+    /// The packer's method of this name.
+    pub fn method(self) -> LocalMethod {
+        match self {
+            MethodName::Lagrangian => LocalMethod::AugmentedLagrangian,
+            MethodName::Compression => LocalMethod::Compression,
+            MethodName::CompressionLagrangian => LocalMethod::CompressionThenLagrangian,
+        }
+    }
+
     /// The name in scene files.
     pub fn name(self) -> &'static str {
         match self {
@@ -373,42 +396,78 @@ pub struct SolverSettings {
 }
 
 /// Starts without improvement after which a run begins a new chain, unless the scene says
-/// otherwise.
-pub const DEFAULT_RESTART_AFTER: u64 = 300;
+/// otherwise ([`ellipsoid_packer::multistart::RESTART_AFTER`]).
+pub const DEFAULT_RESTART_AFTER: u64 = multistart::RESTART_AFTER as u64;
 
-/// Dense lattice starts of a run unless the scene says otherwise: four rounds of every
-/// lattice orientation in 3D, eight in 2D.
-pub const DEFAULT_LATTICE_STARTS: u64 = 16;
-
-/// Default wall-clock limit of a run.
-pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(60);
+/// Default wall-clock limit of a run ([`ellipsoid_packer::multistart::TIME_LIMIT`]).
+pub const DEFAULT_TIME_LIMIT: Duration = multistart::TIME_LIMIT;
 
 impl SolverSettings {
-    /// The defaults for a dimension.
+    /// The defaults for a dimension: the packer's ([`MultiStartSettings::recommended`]).
     pub fn defaults(dimension: Dimension) -> Self {
+        let n = match dimension {
+            Dimension::Two => 2,
+            Dimension::Three => 3,
+        };
+        let run = MultiStartSettings::recommended(n, 0);
+        let wide = |v: usize| u64::try_from(v).unwrap_or(u64::MAX);
         SolverSettings {
-            feasibility_tolerance: 1e-4,
-            optimality_tolerance: 1e-4,
-            time_limit: DEFAULT_TIME_LIMIT,
-            threads: 0,
+            feasibility_tolerance: run.local.feasibility_tolerance,
+            optimality_tolerance: run.local.optimality_tolerance,
+            time_limit: run.time_limit.unwrap_or(DEFAULT_TIME_LIMIT),
+            threads: run.threads,
             local_minimisations: None,
-            inner_solver: InnerSolverName::default(),
-            method: MethodName::default(),
-            perturbation: default_perturbation(dimension),
-            lattice_starts: DEFAULT_LATTICE_STARTS,
-            from_best: true,
-            perturbation_levels: 3,
-            fresh_lattice_every: 8,
+            // The packer's defaults are among the names (a test checks it).
+            inner_solver: InnerSolverName::of(run.local.inner_solver)
+                .unwrap_or(InnerSolverName::ProjectedLbfgs),
+            method: MethodName::of(run.local.method).unwrap_or(MethodName::Lagrangian),
+            perturbation: run.perturbation,
+            lattice_starts: wide(run.lattice_starts),
+            from_best: run.from_best,
+            perturbation_levels: run.perturbation_levels,
+            fresh_lattice_every: wide(run.fresh_lattice_every),
             start: StartName::Lattice,
-            restart_after: DEFAULT_RESTART_AFTER,
+            restart_after: wide(run.restart_after),
         }
     }
 }
 
-fn default_perturbation(dimension: Dimension) -> f64 {
-    match dimension {
-        Dimension::Two => 0.025,
-        Dimension::Three => 0.10,
+/// A run's time limit of `seconds`: finite, positive, at least a nanosecond (a shorter limit
+/// is a zero duration, no limit a clock can tell) and within a [`Duration`] (which would
+/// otherwise panic). The one rule for the scene, the command line and Python.
+pub fn time_limit(seconds: f64) -> Option<Duration> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return None;
+    }
+    Duration::try_from_secs_f64(seconds)
+        .ok()
+        .filter(|d| !d.is_zero())
+}
+
+/// The run settings that the command line and Python may give instead of the scene's.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// Wall-clock limit.
+    pub time_limit: Option<Duration>,
+    /// Seed.
+    pub seed: Option<u64>,
+    /// Threads (0: every core).
+    pub threads: Option<usize>,
+}
+
+impl Scene {
+    /// The scene with `overrides` applied: where they enter a run, once.
+    pub fn overridden(mut self, overrides: &Overrides) -> Scene {
+        if let Some(t) = overrides.time_limit {
+            self.solver.time_limit = t;
+        }
+        if let Some(seed) = overrides.seed {
+            self.seed = seed;
+        }
+        if let Some(threads) = overrides.threads {
+            self.solver.threads = threads;
+        }
+        self
     }
 }
 
@@ -1793,21 +1852,19 @@ impl Validator<'_> {
         }
         if let Some(v) = self.positive(&raw.time_limit, "solver.time_limit")? {
             let span = raw.time_limit.as_ref().map_or(0..0, Spanned::span);
-            s.time_limit = Duration::try_from_secs_f64(v).map_err(|_| {
+            s.time_limit = time_limit(v).ok_or_else(|| {
+                // Positive and finite already: too long for a clock, or below a nanosecond.
+                let why = if v > 1.0 {
+                    "is too long"
+                } else {
+                    "is shorter than a nanosecond"
+                };
                 self.error(
-                    span.clone(),
-                    "solver.time_limit",
-                    format!("{} seconds is too long", short(v)),
-                )
-            })?;
-            // A limit below a nanosecond would be a zero duration: no limit a clock can tell.
-            if s.time_limit.is_zero() {
-                return Err(self.error(
                     span,
                     "solver.time_limit",
-                    format!("{} seconds is shorter than a nanosecond", short(v)),
-                ));
-            }
+                    format!("{} seconds {why}", short(v)),
+                )
+            })?;
         }
         if let Some(t) = &raw.threads {
             s.threads = usize::try_from(*t.get_ref()).map_err(|_| {
@@ -2079,251 +2136,6 @@ fn read_item_file(text: &str, name: &str, dimension: Dimension) -> Result<ItemFi
     })
 }
 
-/// 1-based line and column (in characters) of a byte offset.
-fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(text.len());
-    let before = text.get(..offset).unwrap_or(text);
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    (line, before[line_start..].chars().count() + 1)
-}
-
-/// Converts a TOML error into a [`SceneError`], finding the key from the text around the
-/// error's position (the toml crate keeps its key path private).
-fn toml_error(text: &str, source_name: &str, e: &toml::de::Error) -> SceneError {
-    let span = e.span().unwrap_or(0..0);
-    let mut offset = span.start.min(text.len());
-    // Byte offsets from the parser sit on character boundaries; make sure before slicing.
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
-    }
-    let (line, column) = line_column(text, offset);
-    let message = plain_types(e.message().trim());
-    let table = table_path(text, offset);
-    let key = if let Some(field) = missing_field(&message) {
-        // A key missing at the top level comes with an empty span, one missing in a table
-        // with the span of the table's header (or of its inline `{`).
-        if span.is_empty() {
-            field.to_string()
-        } else {
-            match inline_key(text, offset) {
-                Some(outer) => join_key(&join_key(&table, &outer), field),
-                None => join_key(&table, field),
-            }
-        }
-    } else {
-        match key_near(text, offset) {
-            KeyNear::Header(path) => path,
-            KeyNear::Key(k) => join_key(&table, &k),
-            KeyNear::Nothing => table.clone(),
-        }
-    };
-    // A mangled header (`[]`) or key can leave nothing to name: name the place instead.
-    let key = if !key.is_empty() {
-        key
-    } else if !table.is_empty() {
-        table
-    } else {
-        "<document>".to_string()
-    };
-    let message = table_not_string(&key, &message).unwrap_or(message);
-    SceneError {
-        source_name: source_name.to_string(),
-        line,
-        column,
-        key,
-        message,
-    }
-}
-
-/// Serde's type names are Rust's: say "an integer" and "a number" to a person.
-/// Our private `Raw…` structs are tables to a person, and an integer beyond 64 bits is out of
-/// range rather than of an "invalid type".
-fn plain_types(message: &str) -> String {
-    let mut message = message
-        .replace("expected i64", "expected an integer")
-        .replace("expected u64", "expected a non-negative integer")
-        .replace("expected f64", "expected a number")
-        .replace("expected a sequence", "expected an array");
-    while let Some(start) = message.find("expected struct Raw") {
-        let rest = &message[start + "expected struct ".len()..];
-        let end = rest
-            .find(|c: char| !c.is_alphanumeric())
-            .unwrap_or(rest.len());
-        message.replace_range(
-            start..start + "expected struct ".len() + end,
-            "expected a table",
-        );
-    }
-    // toml reports an integer beyond i64 in one of these two forms, depending on the path.
-    let out_of_range = [
-        ("invalid type: integer `", "` as i128, expected an integer"),
-        ("invalid value: integer `", "`, expected an integer"),
-    ];
-    for (prefix, suffix) in out_of_range {
-        if let Some(number) = message
-            .strip_prefix(prefix)
-            .and_then(|rest| rest.strip_suffix(suffix))
-        {
-            return format!(
-                "{} is out of range: a whole number here is at most 9223372036854775807",
-                crate::table::short_text(number)
-            );
-        }
-    }
-    message
-}
-
-/// A string where a table belongs (`container = "circle"`): show the two ways to write it.
-fn table_not_string(key: &str, message: &str) -> Option<String> {
-    let value = message
-        .strip_prefix("invalid type: string ")?
-        .strip_suffix(", expected a table")?;
-    let inner = crate::table::short_text(value.trim_matches('"'));
-    Some(if key == "container" {
-        format!(
-            "a container is a table, not the string {value}: write `container = {{ kind = \"{inner}\" }}`, or a [container] table with kind = \"{inner}\""
-        )
-    } else {
-        format!("`{key}` is a table, not the string {value}")
-    })
-}
-
-fn join_key(table: &str, key: &str) -> String {
-    if table.is_empty() {
-        key.to_string()
-    } else {
-        format!("{table}.{key}")
-    }
-}
-
-/// The field named in serde's "missing field `x`".
-fn missing_field(message: &str) -> Option<&str> {
-    message
-        .strip_prefix("missing field `")
-        .and_then(|rest| rest.split('`').next())
-}
-
-/// The header name of a `[table]` or `[[array]]` line.
-fn header_name(line: &str) -> Option<(&str, bool)> {
-    let t = line.trim();
-    if let Some(inner) = t.strip_prefix("[[") {
-        return inner.split("]]").next().map(|n| (n.trim(), true));
-    }
-    t.strip_prefix('[')
-        .and_then(|inner| inner.split(']').next())
-        .map(|n| (n.trim(), false))
-}
-
-/// The dotted path of the table that holds byte `offset`: "" at the top level, `solver`,
-/// `shapes[1]` (the second `[[shapes]]`, counted from 0).
-fn table_path(text: &str, offset: usize) -> String {
-    let mut path = String::new();
-    let mut counts: Vec<(String, usize)> = Vec::new();
-    let mut start = 0;
-    for line in text.split_inclusive('\n') {
-        if start > offset {
-            break;
-        }
-        start += line.len();
-        if let Some((name, array)) = header_name(line) {
-            path = if array {
-                let index = match counts.iter_mut().find(|(n, _)| n == name) {
-                    Some((_, c)) => {
-                        *c += 1;
-                        *c
-                    }
-                    None => {
-                        counts.push((name.to_string(), 0));
-                        0
-                    }
-                };
-                format!("{name}[{index}]")
-            } else {
-                name.to_string()
-            };
-        }
-    }
-    path
-}
-
-enum KeyNear {
-    Header(String),
-    Key(String),
-    Nothing,
-}
-
-/// The key whose value (or name) sits at byte `offset`: the key before the last `=` on that
-/// line before the offset, or the token at the offset (an unknown key), or for a value on a
-/// continuation line of a multi-line array the key of the line that opened it.
-fn key_near(text: &str, offset: usize) -> KeyNear {
-    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
-    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
-    let line = &text[line_start..line_end];
-    if header_name(line).is_some() {
-        return KeyNear::Header(table_path(text, offset));
-    }
-    let before = &text[line_start..offset];
-    if let Some(eq) = before.rfind('=') {
-        let inner = key_before(&before[..eq]);
-        return match (inline_key(text, offset), inner) {
-            (Some(outer), Some(inner)) if outer != inner => {
-                KeyNear::Key(format!("{outer}.{inner}"))
-            }
-            (_, Some(inner)) => KeyNear::Key(inner),
-            (Some(outer), None) => KeyNear::Key(outer),
-            (None, None) => KeyNear::Nothing,
-        };
-    }
-    let token: String = text[offset..line_end]
-        .chars()
-        .take_while(|c| *c != '=' && *c != '\n')
-        .collect();
-    let token = token.trim();
-    if !token.is_empty() && text[offset..line_end].contains('=') {
-        return KeyNear::Key(token.to_string());
-    }
-    // A continuation line: look upwards for the line with the key.
-    for previous in text[..line_start].lines().rev() {
-        if header_name(previous).is_some() {
-            break;
-        }
-        if let Some(eq) = previous.find('=') {
-            return key_before(&previous[..eq]).map_or(KeyNear::Nothing, KeyNear::Key);
-        }
-    }
-    KeyNear::Nothing
-}
-
-/// For an offset inside an inline table (`shapes = [{count = 1, …}]`), the key of the line
-/// that holds the inline table (`shapes`).
-fn inline_key(text: &str, offset: usize) -> Option<String> {
-    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
-    // The span of a table missing a key starts at its `{`.
-    let end = if text[offset..].starts_with('{') {
-        offset + 1
-    } else {
-        offset
-    };
-    let before = &text[line_start..end];
-    let eq = before.find('=')?;
-    before[eq..]
-        .contains('{')
-        .then(|| key_before(&before[..eq]))?
-}
-
-/// The bare (possibly dotted) key just before a `=`.
-fn key_before(s: &str) -> Option<String> {
-    let s = s.trim_end();
-    let start = s
-        .char_indices()
-        .rev()
-        .find(|(_, c)| !(c.is_ascii_alphanumeric() || *c == '_' || *c == '-' || *c == '.'))
-        .map_or(0, |(i, c)| i + c.len_utf8());
-    let key = s[start..].trim();
-    (!key.is_empty()).then(|| key.to_string())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -2339,25 +2151,17 @@ mod tests {
     }
 
     #[test]
-    fn line_and_column_count_characters() {
-        let text = "a = 1\nbé = 2\n";
-        assert_eq!(line_column(text, 0), (1, 1));
-        let offset = text.find('2').unwrap();
-        assert_eq!(line_column(text, offset), (2, 6));
-    }
-
-    #[test]
-    fn table_paths_count_arrays_from_zero() {
-        let text = "x = 1\n[[shapes]]\ncount = 1\n[[shapes]]\ncount = 2\n[solver]\nthreads = 1\n";
-        assert_eq!(table_path(text, 0), "");
+    fn the_default_solver_settings_are_the_packers() {
+        let run = MultiStartSettings::recommended(3, 0);
+        let s = SolverSettings::defaults(Dimension::Three);
         assert_eq!(
-            table_path(text, text.find("count = 1").unwrap()),
-            "shapes[0]"
+            InnerSolverName::of(run.local.inner_solver),
+            Some(s.inner_solver)
         );
-        assert_eq!(
-            table_path(text, text.find("count = 2").unwrap()),
-            "shapes[1]"
-        );
-        assert_eq!(table_path(text, text.find("threads").unwrap()), "solver");
+        assert_eq!(MethodName::of(run.local.method), Some(s.method));
+        assert_eq!(s.inner_solver.solver(), run.local.inner_solver);
+        assert_eq!(s.method.method(), run.local.method);
+        assert_eq!(s.feasibility_tolerance, run.local.feasibility_tolerance);
+        assert_eq!(SolverSettings::defaults(Dimension::Two).perturbation, 0.025);
     }
 }

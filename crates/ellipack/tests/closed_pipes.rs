@@ -3,7 +3,7 @@
 //! panics (exit status 101), and the files are written as without it.
 
 mod common;
-use common::{ellipack, temp_dir, text};
+use common::{ellipack, folder_with, text};
 use std::ffi::OsStr;
 use std::process::{Command, Stdio};
 
@@ -54,9 +54,7 @@ fn ellipack_with(args: &[&OsStr]) -> Command {
 
 #[test]
 fn no_command_panics_on_a_closed_stdout_or_stderr() {
-    let dir = temp_dir("closed-pipes");
-    let scene = dir.join("circles.toml");
-    std::fs::write(&scene, CIRCLES).unwrap();
+    let (dir, scene) = folder_with("closed-pipes", "circles.toml", CIRCLES);
     let unreachable = dir.join("unreachable.toml");
     std::fs::write(&unreachable, UNREACHABLE).unwrap();
     for closed in [Closed::Stdout, Closed::Stderr] {

@@ -2,7 +2,7 @@
 //! by name, and bad folders or names refused with a message.
 
 mod common;
-use common::{assert_success, ellipack, names, temp_dir};
+use common::{assert_success, ellipack, names, packing_folder, temp_dir};
 use std::path::Path;
 use std::process::Output;
 
@@ -82,20 +82,14 @@ fn convert_refuses_bad_names_and_folders() {
 /// outside it: the files state the reduced cell (|xy| ≤ l_x / 2) with every atom inside.
 #[test]
 fn convert_reduces_the_cell_and_wraps_the_items() {
-    let dir = temp_dir("convert-unreduced");
-    std::fs::write(
-        dir.join("packing.csv"),
+    let dir = packing_folder(
+        "convert-unreduced",
         "id,x,y,a,b,theta\n0,1,1,1,1,0\n1,38,4.5,1,1,0\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("summary.json"),
         r#"{"container": {"kind": "periodic", "origin": [0, 0], "lengths": [10, 8],
             "tilts": [25]}, "items": 2, "density": 0.07854, "objective": 80,
             "wall_seconds": 0, "local_minimisations": 0, "certificate": {"overlapping_pairs": 0,
             "containment_violations": 0, "min_mu2": null}}"#,
-    )
-    .unwrap();
+    );
     assert_success(&convert(&["--formats", "lammps"], &dir));
     let data = std::fs::read_to_string(dir.join("packing.data")).unwrap();
     let xy: f64 = data
@@ -130,20 +124,14 @@ fn convert_reduces_the_cell_and_wraps_the_items() {
 /// items) unless asked for with --unfinished.
 #[test]
 fn convert_refuses_an_unfinished_configuration_unless_asked() {
-    let dir = temp_dir("convert-unfinished");
-    std::fs::write(
-        dir.join("packing.csv"),
+    let dir = packing_folder(
+        "convert-unfinished",
         "id,x,y,a,b,theta\n0,0,0,1,1,0\n1,1,0,1,1,0\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("summary.json"),
         r#"{"container": {"kind": "circle", "center": [0, 0], "radius": 3}, "items": 2,
             "density": 0.2222, "objective": 28.27, "wall_seconds": 1, "local_minimisations": 1,
             "certificate": {"overlapping_pairs": 1, "containment_violations": 0,
             "min_mu2": 0.25}, "not_reached": true}"#,
-    )
-    .unwrap();
+    );
     let run = convert(&[], &dir);
     let said = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "{said}");

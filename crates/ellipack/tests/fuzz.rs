@@ -353,86 +353,40 @@ fn the_2d_base_file_is_a_2d_file() {
     assert!(packing::read_summary(SUMMARY, "b").is_ok());
 }
 
-proptest! {
-    #![proptest_config(config())]
+/// One proptest a line: `name(base) => check` runs `check` on inputs made from the valid text
+/// `base` by [`input`], with the cases and seed of [`config`].
+macro_rules! fuzz_tests {
+    ($($name:ident($base:expr) => $check:ident;)*) => {
+        proptest! {
+            #![proptest_config(config())]
+            $(
+                #[test]
+                fn $name(bytes in input($base)) {
+                    $check(&bytes);
+                }
+            )*
+        }
+    };
+}
 
-    #[test]
-    fn pairs_3d(bytes in input(ellipack::EXAMPLE_PAIRS)) {
-        check_pairs(&bytes);
-    }
-
-    #[test]
-    fn pairs_2d(bytes in input(PAIRS_2D)) {
-        check_pairs(&bytes);
-    }
-
-    #[test]
-    fn measure_2d(bytes in input(MEASURE_2D)) {
-        check_measure(&bytes);
-    }
-
-    #[test]
-    fn measure_3d(bytes in input(MEASURE_3D)) {
-        check_measure(&bytes);
-    }
-
-    #[test]
-    fn scene(bytes in input(ellipack::scene::DEFAULT_SCENE)) {
-        check_scene(&bytes);
-    }
-
-    #[test]
-    fn scene_periodic_fixed(bytes in input(PERIODIC_FIXED_SCENE)) {
-        check_scene(&bytes);
-    }
-
-    #[test]
-    fn scene_periodic_variable(bytes in input(PERIODIC_VARIABLE_SCENE)) {
-        check_scene(&bytes);
-    }
-
-    #[test]
-    fn scene_fixed_containers(bytes in input(FIXED_SCENE)) {
-        check_scene(&bytes);
-    }
-
-    #[test]
-    fn scene_random(bytes in input(RANDOM_SCENE)) {
-        check_scene(&bytes);
-    }
-
-    #[test]
-    fn packing_csv_2d(bytes in input(leak(packing::csv_string(common::ellipses(2, true, 1).items())))) {
-        check_packing_csv(&bytes);
-    }
-
-    #[test]
-    fn packing_csv_3d(bytes in input(leak(packing::csv_string(common::ellipsoids(2, true, 2).items())))) {
-        check_packing_csv(&bytes);
-    }
-
-    #[test]
-    fn summary_json(bytes in input(SUMMARY)) {
-        check_summary(&bytes);
-    }
-
-    #[test]
-    fn packing_xyz_2d(bytes in input(leak(ellipack::xyz::xyz_string(&common::ellipses(2, true, 3))))) {
-        check_xyz(&bytes);
-    }
-
-    #[test]
-    fn packing_xyz_3d(bytes in input(leak(ellipack::xyz::xyz_string(&common::ellipsoids(2, false, 4))))) {
-        check_xyz(&bytes);
-    }
-
-    #[test]
-    fn packing_data_2d(bytes in input(leak(lammps_text(&common::ellipses(2, true, 5))))) {
-        check_lammps(&bytes);
-    }
-
-    #[test]
-    fn packing_data_3d(bytes in input(leak(lammps_text(&common::ellipsoids(2, false, 6))))) {
-        check_lammps(&bytes);
-    }
+fuzz_tests! {
+    pairs_3d(ellipack::EXAMPLE_PAIRS) => check_pairs;
+    pairs_2d(PAIRS_2D) => check_pairs;
+    measure_2d(MEASURE_2D) => check_measure;
+    measure_3d(MEASURE_3D) => check_measure;
+    scene(ellipack::scene::DEFAULT_SCENE) => check_scene;
+    scene_periodic_fixed(PERIODIC_FIXED_SCENE) => check_scene;
+    scene_periodic_variable(PERIODIC_VARIABLE_SCENE) => check_scene;
+    scene_fixed_containers(FIXED_SCENE) => check_scene;
+    scene_random(RANDOM_SCENE) => check_scene;
+    packing_csv_2d(leak(packing::csv_string(common::ellipses(2, true, 1).items())))
+        => check_packing_csv;
+    packing_csv_3d(leak(packing::csv_string(common::ellipsoids(2, true, 2).items())))
+        => check_packing_csv;
+    summary_json(SUMMARY) => check_summary;
+    packing_xyz_2d(leak(ellipack::xyz::xyz_string(&common::ellipses(2, true, 3)))) => check_xyz;
+    packing_xyz_3d(leak(ellipack::xyz::xyz_string(&common::ellipsoids(2, false, 4))))
+        => check_xyz;
+    packing_data_2d(leak(lammps_text(&common::ellipses(2, true, 5)))) => check_lammps;
+    packing_data_3d(leak(lammps_text(&common::ellipsoids(2, false, 6)))) => check_lammps;
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{ellipack, pack_into, summary_json, temp_dir, text};
+use common::{ellipack, pack_into, summary_json, temp_dir, text, verify_periodic};
 
 /// A periodic scene of `count` items with the given semi-axes, one thread, its work bounded by
 /// local minimisations (the time limit is far beyond it, so a slow machine ends alike).
@@ -230,12 +230,7 @@ fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
             csv.push_str(&format!("{i},{},{},1,1,0\n", f64::from(i) * step, 0.03));
         }
         std::fs::write(&packing, csv).unwrap();
-        let v = ellipack()
-            .arg("verify")
-            .arg(&packing)
-            .args(["--container", "periodic", "--size", "0.07,0.07"])
-            .output()
-            .unwrap();
+        let v = verify_periodic(&packing, "0.07,0.07");
         let said = text(&v.stdout) + &text(&v.stderr);
         assert_eq!(v.status.code(), Some(1), "{rows} rows: {said}");
         assert!(said.contains("times over"), "{rows} rows: {said}");
@@ -262,12 +257,7 @@ fn verify_takes_a_periodic_cell_of_either_dimension() {
     for (csv, size) in cases {
         let packing = dir.join("packing.csv");
         std::fs::write(&packing, csv).unwrap();
-        let v = ellipack()
-            .arg("verify")
-            .arg(&packing)
-            .args(["--container", "periodic", "--size", size])
-            .output()
-            .unwrap();
+        let v = verify_periodic(&packing, size);
         let said = text(&v.stdout) + &text(&v.stderr);
         assert_eq!(v.status.code(), Some(0), "--size {size}: {said}");
         assert!(said.contains("certified"), "{said}");

@@ -2,7 +2,7 @@
 //! `ellipack merge`, run locally as a scheduler would run it.
 
 mod common;
-use common::{assert_success, ellipack, refused, temp_dir, text};
+use common::{assert_success, ellipack, folder_with, refused, temp_dir, text};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -45,9 +45,7 @@ fn csv(folder: &Path) -> String {
 
 #[test]
 fn three_shards_and_a_merge_keep_the_best_certified_packing() {
-    let dir = temp_dir("shards");
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    let (dir, scene) = folder_with("shards", "scene.toml", SCENE);
     let shards: Vec<PathBuf> = (0..3).map(|k| dir.join(format!("shard-{k}"))).collect();
     for (k, folder) in shards.iter().enumerate() {
         assert_success(&pack_shard(&scene, &format!("{k}/3"), folder));
@@ -92,9 +90,7 @@ fn three_shards_and_a_merge_keep_the_best_certified_packing() {
 
 #[test]
 fn merge_refuses_other_scenes_and_uncertified_sets() {
-    let dir = temp_dir("merge-refusals");
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    let (dir, scene) = folder_with("merge-refusals", "scene.toml", SCENE);
     let a = dir.join("a");
     assert_success(&pack_shard(&scene, "0/2", &a));
     let other_scene = dir.join("other.toml");

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 mod common;
-use common::{TempDir, ellipack, temp_dir, utf8};
+use common::{TempDir, ellipack, packing_folder, temp_dir, utf8};
 
 fn verify(args: &[&str], dir: &Path) -> (bool, String, String) {
     let out = ellipack()
@@ -262,12 +262,7 @@ fn values_beyond_the_models_range_are_named_as_the_packing_states_them() {
     ];
     for (rows, size, expected) in cases {
         std::fs::write(&packing, format!("id,x,y,a,b,theta\n{rows}")).unwrap();
-        let v = common::ellipack()
-            .arg("verify")
-            .arg(&packing)
-            .args(["--container", "periodic", "--size", size])
-            .output()
-            .unwrap();
+        let v = common::verify_periodic(&packing, size);
         let said = common::text(&v.stderr);
         assert_eq!(v.status.code(), Some(1), "{said}");
         assert!(said.contains(expected), "{said}");
@@ -280,20 +275,14 @@ fn values_beyond_the_models_range_are_named_as_the_packing_states_them() {
 /// scene names both dimensions.
 #[test]
 fn small_messages_say_what_is_meant() {
-    let dir = temp_dir("verify-small");
-    std::fs::write(
-        dir.join("packing.csv"),
+    let dir = packing_folder(
+        "verify-small",
         "id,x,y,a,b,theta\n0,0.5,0.5,0.2,0.2,0\n1,2,2,0.2,0.2,0\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("summary.json"),
         r#"{"container": {"kind": "periodic", "lengths": [4, 4], "tilts": [0]}, "items": 2,
             "density": 0.0157, "objective": 16, "wall_seconds": 0, "local_minimisations": 0,
             "certificate": {"overlapping_pairs": 0, "containment_violations": 0,
             "min_mu2": 12.5}}"#,
-    )
-    .unwrap();
+    );
     let out = ellipack().arg("verify").arg(&*dir).output().unwrap();
     let said = utf8(out.stdout);
     assert!(out.status.success(), "{said}{}", utf8(out.stderr));

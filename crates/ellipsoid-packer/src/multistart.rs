@@ -127,7 +127,33 @@ impl Default for Shard {
     }
 }
 
+/// Starts without improvement after which a run begins a new chain, by default.
+pub const RESTART_AFTER: usize = 300;
+/// Dense lattice starts of a run by default: four rounds of every lattice orientation in 3D,
+/// eight in 2D.
+pub const LATTICE_STARTS: usize = 16;
+/// The wall-clock limit of a run by default.
+pub const TIME_LIMIT: Duration = Duration::from_secs(60);
+
 impl MultiStartSettings {
+    /// A run's defaults for dimension `n`, the command's: the paper's perturbations of the best
+    /// packing so far at three amplitudes, after [`LATTICE_STARTS`] dense lattice starts and
+    /// with one every 8 starts, new chains after [`RESTART_AFTER`] starts without improvement,
+    /// every core, until [`TIME_LIMIT`].
+    pub fn recommended(n: usize, seed: u64) -> Self {
+        Self {
+            lattice_starts: LATTICE_STARTS,
+            from_best: true,
+            perturbation_levels: 3,
+            fresh_lattice_every: 8,
+            restart_after: RESTART_AFTER,
+            threads: 0,
+            max_local_minimisations: usize::MAX,
+            time_limit: Some(TIME_LIMIT),
+            ..Self::paper(n, seed)
+        }
+    }
+
     /// The paper's method for dimension `n`: its perturbation of the latest solution, no
     /// lattice starts, one thread, 100 local minimisations.
     pub fn paper(n: usize, seed: u64) -> Self {

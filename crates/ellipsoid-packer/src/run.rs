@@ -16,8 +16,11 @@
 
 use crate::compression::compression_seen;
 use crate::error::{Error, StartDefects};
+use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, item_measure};
-use crate::multistart::{MultiStartProgress, MultiStartSettings, Observer, SolverProgress};
+use crate::multistart::{
+    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, SolverProgress,
+};
 use crate::random::{Orientation, RandomPacking, RandomSettings, Target, random_packing_seen};
 use crate::starts::{LatticeStart, fill_start, lattice_start};
 use implicit_packing::certificate::{bodies_of, certify_items};
@@ -263,39 +266,10 @@ impl<const N: usize> Packer<N> {
         };
         let result = match result {
             Ok(result) => result,
-            Err(Error::NotReached(u)) => {
-                let configuration = self.configuration_at(&u.x)?;
-                return Ok(Outcome::Unfilled(Unfilled {
-                    configuration,
-                    certificate: u.certificate,
-                    infeasibility: u.infeasibility,
-                    local_minimisations: u.local_minimisations,
-                    wall_time: u.wall_time + prelude,
-                    interrupted: u.interrupted,
-                    history: recorder.history,
-                }));
-            }
+            Err(Error::NotReached(u)) => return self.unfilled(&u, prelude, recorder.history),
             Err(e) => return Err(e),
         };
-        let stated = self.stated(&result.best.x, fixed.is_none())?;
-        let repair = fixed.is_none().then_some(Repair {
-            dilation: result.best.repair_factor * stated.dilation,
-            density_before: result.best.density_before_repair,
-        });
-        Ok(Outcome::Packed(Packed {
-            configuration: stated.configuration,
-            certificate: stated.certificate,
-            repair,
-            local_minimisations: result.local_minimisations,
-            failed_starts: result.failed_starts,
-            restarts: result.restarts,
-            start_density: result.start_density,
-            start_kept: result.start_kept,
-            time_to_best: result.time_to_best + prelude,
-            wall_time: result.wall_time + prelude,
-            interrupted: result.interrupted,
-            history: recorder.history,
-        }))
+        self.packed(&result, fixed.is_none(), prelude, recorder.history)
     }
 
     /// The densest small periodic cell tiled ([`crate::tiling`]) when it is denser than the
@@ -363,17 +337,7 @@ impl<const N: usize> Packer<N> {
         };
         let made = match made {
             Ok(made) => made,
-            Err(Error::NotReached(u)) => {
-                return Ok(Outcome::Unfilled(Unfilled {
-                    configuration: self.configuration_at(&u.x)?,
-                    certificate: u.certificate,
-                    infeasibility: u.infeasibility,
-                    local_minimisations: u.local_minimisations,
-                    wall_time: u.wall_time,
-                    interrupted: u.interrupted,
-                    history: Vec::new(),
-                }));
-            }
+            Err(Error::NotReached(u)) => return self.unfilled(&u, Duration::ZERO, Vec::new()),
             Err(e) => return Err(e),
         };
         let interrupted = observer.should_stop();
@@ -383,24 +347,66 @@ impl<const N: usize> Packer<N> {
         for row in &history {
             observer.finished(row);
         }
-        let jammed = target == Target::Jammed;
-        let stated = self.stated(&made.packing.x, jammed)?;
-        let repair = jammed.then_some(Repair {
-            dilation: made.packing.repair_factor * stated.dilation,
-            density_before: made.packing.density_before_repair,
+        let result = MultiStartResult {
+            best: made.packing,
+            local_minimisations: 1,
+            failed_starts: 0,
+            restarts: 0,
+            time_to_best: wall_time,
+            wall_time,
+            interrupted,
+            start_density: Some(made.start_density),
+            start_kept: false,
+        };
+        self.packed(&result, target == Target::Jammed, Duration::ZERO, history)
+    }
+
+    /// The outcome of a run's certified `result` as stated; `repaired` when the run chose the
+    /// container (a fixed one is never changed), `before` the time spent before `result`'s run.
+    fn packed(
+        &mut self,
+        result: &MultiStartResult,
+        repaired: bool,
+        before: Duration,
+        history: Vec<MultiStartProgress>,
+    ) -> Result<Outcome<N>, Error> {
+        let best = &result.best;
+        let stated = self.stated(&best.x, repaired)?;
+        let repair = repaired.then_some(Repair {
+            dilation: best.repair_factor * stated.dilation,
+            density_before: best.density_before_repair,
         });
         Ok(Outcome::Packed(Packed {
             configuration: stated.configuration,
             certificate: stated.certificate,
             repair,
-            local_minimisations: 1,
-            failed_starts: 0,
-            restarts: 0,
-            start_density: Some(made.start_density),
-            start_kept: false,
-            time_to_best: wall_time,
-            wall_time,
-            interrupted,
+            local_minimisations: result.local_minimisations,
+            failed_starts: result.failed_starts,
+            restarts: result.restarts,
+            start_density: result.start_density,
+            start_kept: result.start_kept,
+            time_to_best: result.time_to_best + before,
+            wall_time: result.wall_time + before,
+            interrupted: result.interrupted,
+            history,
+        }))
+    }
+
+    /// The outcome of a container of given size not filled: its least overlapping point as
+    /// stated.
+    fn unfilled(
+        &mut self,
+        u: &Unfinished,
+        before: Duration,
+        history: Vec<MultiStartProgress>,
+    ) -> Result<Outcome<N>, Error> {
+        Ok(Outcome::Unfilled(Unfilled {
+            configuration: self.configuration_at(&u.x)?,
+            certificate: u.certificate.clone(),
+            infeasibility: u.infeasibility,
+            local_minimisations: u.local_minimisations,
+            wall_time: u.wall_time + before,
+            interrupted: u.interrupted,
             history,
         }))
     }

@@ -81,6 +81,22 @@ fn smooth_pair<const N: usize, const M: usize>(
     }
 }
 
+/// Runs `check` on the first 1000 pairs from `draw` (seeded with `seed`) at which f is
+/// positive and smooth, each with its number from 0; returns how many were checked.
+fn check_smooth_pairs<const N: usize, const M: usize>(
+    seed: u64,
+    draw: Draw<N, M>,
+    bodies: Bodies<N, M>,
+    mut check: impl FnMut(usize, Sample<N, M>),
+) -> usize {
+    let mut rng = Rng::new(seed);
+    let pairs = 1000;
+    for checked in 0..pairs {
+        check(checked, smooth_pair(&mut rng, draw, bodies));
+    }
+    pairs
+}
+
 fn rel_err(g: &[f64], fd: &[f64]) -> f64 {
     let scale = g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let worst = g
@@ -182,12 +198,10 @@ fn random_pair2(rng: &mut Rng) -> ([f64; 6], [f64; 2], [f64; 2]) {
 
 #[test]
 fn gradient_of_f_matches_finite_differences_3d() {
-    let mut rng = Rng::new(7);
-    let mut checked = 0;
     let mut worst = 0.0f64;
     let (mut worst_u, mut n_u) = (0.0f64, 0);
-    while checked < 1000 {
-        let Sample { v, li, lj, i, j, p } = smooth_pair(&mut rng, random_pair3, bodies3);
+    let checked = check_smooth_pairs(7, random_pair3, bodies3, |checked, sample| {
+        let Sample { v, li, lj, i, j, p } = sample;
         let d = pair_derivatives(&i, &j);
         let g = in_angles_3d(&v, &d.grad_f);
         let gu = in_angles_3d(&v, &d.grad_u);
@@ -208,8 +222,7 @@ fn gradient_of_f_matches_finite_differences_3d() {
             worst_u = worst_u.max(eu);
             n_u += 1;
         }
-        checked += 1;
-    }
+    });
     println!(
         "3D: {checked} pairs, worst relative error of ∇f {worst:.2e}; ∇U on {n_u} pairs: {worst_u:.2e}"
     );
@@ -217,13 +230,11 @@ fn gradient_of_f_matches_finite_differences_3d() {
 
 #[test]
 fn gradient_of_f_matches_finite_differences_2d() {
-    let mut rng = Rng::new(11);
-    let mut checked = 0;
     let mut worst = 0.0f64;
-    while checked < 1000 {
+    let checked = check_smooth_pairs(11, random_pair2, bodies2, |checked, sample| {
         let Sample {
             v, li, lj, i, j, ..
-        } = smooth_pair(&mut rng, random_pair2, bodies2);
+        } = sample;
         let d = pair_derivatives(&i, &j);
         let g = in_angles_2d(&d.grad_f);
         let [fd] = partials(&v, |x| {
@@ -231,8 +242,7 @@ fn gradient_of_f_matches_finite_differences_2d() {
             [pair_term(&i, &j).f]
         });
         worst = worst.max(assert_close(&g, &fd, || format!("pair {checked}")));
-        checked += 1;
-    }
+    });
     println!("2D: {checked} pairs, worst relative error of ∇f {worst:.2e}");
 }
 

@@ -13,7 +13,9 @@
 //! 100 000 pairs of ellipses (semi-axes s·(1, 10^−U), a uniformly random angle, the centre
 //! distance chosen as in 3D).
 
-use criterion::{Criterion, Throughput, criterion_group};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group};
+use pw85::QuadraticForm;
 use pw85::batch::{BatchPair, Pair, Pair2d, Parallelism, contact_functions, overlaps};
 use std::hint::black_box;
 use std::time::Instant;
@@ -34,11 +36,8 @@ fn pairs() -> Vec<Pair> {
             let q1 = ellipsoid(&mut rng);
             let q2 = ellipsoid(&mut rng);
             let dir = rng.direction();
-            let unit = pw85::contact_function(&dir, &q1, &q2)
-                .expect("valid pair")
-                .mu2;
             Pair {
-                r12: at_random_mu2(dir, unit, &mut rng),
+                r12: at_random_mu2(dir, &q1, &q2, &mut rng),
                 q1,
                 q2,
             }
@@ -46,8 +45,16 @@ fn pairs() -> Vec<Pair> {
         .collect()
 }
 
-/// `dir` (where μ² is `unit`) scaled so that μ² is log-uniform in [1/4, 4].
-fn at_random_mu2<const D: usize>(dir: [f64; D], unit: f64, rng: &mut Rng) -> [f64; D] {
+/// `dir` scaled so that μ² of the pair (`q1`, `q2`) is log-uniform in [1/4, 4].
+fn at_random_mu2<const D: usize, Q: QuadraticForm<Vector = [f64; D]>>(
+    dir: [f64; D],
+    q1: &Q,
+    q2: &Q,
+    rng: &mut Rng,
+) -> [f64; D] {
+    let unit = pw85::contact_function(&dir, q1, q2)
+        .expect("valid pair")
+        .mu2;
     let target = 2f64.powf(4.0 * rng.uniform() - 2.0);
     let scale = (target / unit).sqrt();
     dir.map(|x| x * scale)
@@ -66,11 +73,8 @@ fn pairs_2d() -> Vec<Pair2d> {
             let q2 = ellipse(&mut rng);
             let angle = std::f64::consts::TAU * rng.uniform();
             let dir = [angle.cos(), angle.sin()];
-            let unit = pw85::contact_function(&dir, &q1, &q2)
-                .expect("valid pair")
-                .mu2;
             Pair2d {
-                r12: at_random_mu2(dir, unit, &mut rng),
+                r12: at_random_mu2(dir, &q1, &q2, &mut rng),
                 q1,
                 q2,
             }
@@ -78,16 +82,31 @@ fn pairs_2d() -> Vec<Pair2d> {
         .collect()
 }
 
-/// The sum of μ² over `pairs` through `contact`, one pair at a time; a failed pair counts 0.
-fn scalar_sum<P>(pairs: &[P], contact: impl Fn(&P) -> Result<pw85::Contact, pw85::Error>) -> f64 {
-    pairs
-        .iter()
-        .map(|p| contact(p).map_or(0.0, |c| c.mu2))
-        .sum()
+/// A pair of ellipsoids or of ellipses, for the scalar contact function.
+trait Scalar {
+    /// The contact function of the pair.
+    fn contact(&self) -> Result<pw85::Contact, pw85::Error>;
 }
 
-fn scalar_contact_2d(pairs: &[Pair2d]) -> f64 {
-    scalar_sum(pairs, |p| pw85::contact_function(&p.r12, &p.q1, &p.q2))
+impl Scalar for Pair {
+    fn contact(&self) -> Result<pw85::Contact, pw85::Error> {
+        pw85::contact_function(&self.r12, &self.q1, &self.q2)
+    }
+}
+
+impl Scalar for Pair2d {
+    fn contact(&self) -> Result<pw85::Contact, pw85::Error> {
+        pw85::contact_function(&self.r12, &self.q1, &self.q2)
+    }
+}
+
+/// The sum of μ² over `pairs` (of ellipsoids or of ellipses), one pair at a time; a failed pair
+/// counts 0.
+fn scalar_contact<P: Scalar>(pairs: &[P]) -> f64 {
+    pairs
+        .iter()
+        .map(|p| p.contact().map_or(0.0, |c| c.mu2))
+        .sum()
 }
 
 fn baseline_brent(pairs: &[Pair]) -> f64 {
@@ -95,10 +114,6 @@ fn baseline_brent(pairs: &[Pair]) -> f64 {
         .iter()
         .map(|p| pw85::baseline::brent(&p.r12, &p.q1, &p.q2, 1e-10).mu2)
         .sum()
-}
-
-fn scalar_contact(pairs: &[Pair]) -> f64 {
-    scalar_sum(pairs, |p| pw85::contact_function(&p.r12, &p.q1, &p.q2))
 }
 
 fn scalar_overlap(pairs: &[Pair]) -> usize {
@@ -119,13 +134,19 @@ fn batch_overlap(pairs: &[Pair], out: &mut [Result<bool, pw85::Error>]) -> usize
     out.iter().filter(|v| matches!(v, Ok(true))).count()
 }
 
+/// The benchmark group `name`, in pairs per second over all pairs, ten samples.
+fn pair_group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
+    let mut group = c.benchmark_group(name);
+    group.throughput(Throughput::Elements(PAIRS as u64));
+    group.sample_size(10);
+    group
+}
+
 fn bench(c: &mut Criterion) {
     let data = pairs();
     let mut contacts = vec![Ok(pw85::batch::EMPTY_CONTACT); PAIRS];
     let mut verdicts = vec![Ok(false); PAIRS];
-    let mut group = c.benchmark_group("contact_1e5_pairs");
-    group.throughput(Throughput::Elements(PAIRS as u64));
-    group.sample_size(10);
+    let mut group = pair_group(c, "contact_1e5_pairs");
     group.bench_function("baseline_brent_ldlt", |b| {
         b.iter(|| baseline_brent(black_box(&data)))
     });
@@ -141,11 +162,9 @@ fn bench(c: &mut Criterion) {
     });
     group.finish();
     let data_2d = pairs_2d();
-    let mut group = c.benchmark_group("contact_2d_1e5_pairs");
-    group.throughput(Throughput::Elements(PAIRS as u64));
-    group.sample_size(10);
+    let mut group = pair_group(c, "contact_2d_1e5_pairs");
     group.bench_function("contact_function_2d", |b| {
-        b.iter(|| scalar_contact_2d(black_box(&data_2d)))
+        b.iter(|| scalar_contact(black_box(&data_2d)))
     });
     group.bench_function("batch_contact_functions_2d", |b| {
         b.iter(|| batch_contact(black_box(&data_2d), &mut contacts))
@@ -199,7 +218,7 @@ fn ratios() {
         verdict / batch_verdict
     );
     let data_2d = pairs_2d();
-    let contact_2d = ns_per_pair(10, || scalar_contact_2d(&data_2d));
+    let contact_2d = ns_per_pair(10, || scalar_contact(&data_2d));
     let batch_2d = ns_per_pair(10, || batch_contact(&data_2d, &mut contacts));
     println!("contact_function_2d          {contact_2d:8.1} ns/pair");
     println!(

@@ -52,6 +52,33 @@ fn rel(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
 }
 
+/// Runs `check` on `count` pairs from [`random_pair`] with the given spread, drawn from a
+/// generator seeded with `seed` that `check` may draw from too.
+fn each_random_pair(
+    seed: u64,
+    count: usize,
+    max_aspect_decades: f64,
+    distance: (f64, f64),
+    mut check: impl FnMut(&mut Rng, Sym3, Sym3, [f64; 3]),
+) {
+    let mut rng = Rng::new(seed);
+    for _ in 0..count {
+        let (q1, q2, r) = random_pair(&mut rng, max_aspect_decades, distance);
+        check(&mut rng, q1, q2, r);
+    }
+}
+
+/// Asserts that `c` has the μ² of `base` within the relative tolerance `tol`; `what` names
+/// the change between them.
+fn assert_same_mu2(what: &str, c: pw85::Contact, base: pw85::Contact, tol: f64) {
+    assert!(
+        rel(c.mu2, base.mu2) < tol,
+        "{what}: {} vs {}",
+        c.mu2,
+        base.mu2
+    );
+}
+
 #[test]
 fn spheres_have_the_closed_form() {
     let mut rng = Rng::new(1);
@@ -70,55 +97,33 @@ fn spheres_have_the_closed_form() {
 
 #[test]
 fn invariant_under_rotation_scaling_swap_and_translation() {
-    let mut rng = Rng::new(2);
-    for _ in 0..2000 {
-        let (q1, q2, r) = random_pair(&mut rng, 1.0, (0.1, 4.0));
+    each_random_pair(2, 2000, 1.0, (0.1, 4.0), |rng, q1, q2, r| {
         let base = contact_function(&r, &q1, &q2).unwrap();
 
         let rot = rotation_from_quaternion(&rng.unit_quaternion()).unwrap();
         let rr: [f64; 3] = core::array::from_fn(|i| (0..3).map(|k| rot[i][k] * r[k]).sum());
         let c = contact_function(&rr, &rotate(&q1, &rot), &rotate(&q2, &rot)).unwrap();
-        assert!(
-            rel(c.mu2, base.mu2) < 1e-13,
-            "rotation: {} vs {}",
-            c.mu2,
-            base.mu2
-        );
+        assert_same_mu2("rotation", c, base, 1e-13);
 
         let (r_nu, q1_nu, q2_nu) = scaled(rng.range(1e-3, 1e3), r, q1, q2);
         let c = contact_function(&r_nu, &q1_nu, &q2_nu).unwrap();
-        assert!(
-            rel(c.mu2, base.mu2) < 1e-13,
-            "scaling: {} vs {}",
-            c.mu2,
-            base.mu2
-        );
+        assert_same_mu2("scaling", c, base, 1e-13);
 
         let c = contact_function(&r.map(|x| -x), &q2, &q1).unwrap();
-        assert!(
-            rel(c.mu2, base.mu2) < 1e-14,
-            "swap: {} vs {}",
-            c.mu2,
-            base.mu2
-        );
+        assert_same_mu2("swap", c, base, 1e-14);
         assert!((c.lambda - (1.0 - base.lambda)).abs() < 1e-7, "swap: λ");
 
         // Translating both centres: r12 = (c2 + t) − (c1 + t), rounded.
-        let t = direction(&mut rng).map(|x| 10.0 * x);
-        let c1 = direction(&mut rng);
+        let t = direction(rng).map(|x| 10.0 * x);
+        let c1 = direction(rng);
         let c2: [f64; 3] = core::array::from_fn(|k| c1[k] + r[k]);
         let moved: [f64; 3] = core::array::from_fn(|k| (c2[k] + t[k]) - (c1[k] + t[k]));
         let direct: [f64; 3] = core::array::from_fn(|k| c2[k] - c1[k]);
         let a = contact_function(&moved, &q1, &q2).unwrap();
         let b = contact_function(&direct, &q1, &q2).unwrap();
         // Only the rounding of the translated centres (≈ 1e-15 · 10 / |r|) separates them.
-        assert!(
-            rel(a.mu2, b.mu2) < 1e-13,
-            "translation: {} vs {}",
-            a.mu2,
-            b.mu2
-        );
-    }
+        assert_same_mu2("translation", a, b, 1e-13);
+    });
 }
 
 #[test]
@@ -173,9 +178,7 @@ fn central_difference<const K: usize>(x: [f64; K], k: usize, f: impl Fn(&[f64; K
 
 #[test]
 fn gradients_match_central_differences() {
-    let mut rng = Rng::new(4);
-    for _ in 0..300 {
-        let (q1, q2, r) = random_pair(&mut rng, 0.7, (0.3, 3.0));
+    each_random_pair(4, 300, 0.7, (0.3, 3.0), |_, q1, q2, r| {
         let d = contact_details(&r, &q1, &q2).unwrap();
         let mu2 = |r: &[f64; 3], q1: &Sym3, q2: &Sym3| contact_function(r, q1, q2).unwrap().mu2;
         for k in 0..3 {
@@ -212,7 +215,7 @@ fn gradients_match_central_differences() {
         for k in 0..3 {
             assert!((n1[k] / norm - d.normal[k]).abs() < 1e-10);
         }
-    }
+    });
 }
 
 #[test]
@@ -261,13 +264,10 @@ fn every_non_finite_input_is_named() {
                 3..9 => q1[index] = bad,
                 _ => q2[index] = bad,
             }
-            for result in [
-                contact_function(&r, &q1, &q2).map(|_| ()),
-                overlap(&r, &q1, &q2).map(|_| ()),
-            ] {
+            for result in both_results(&r, &q1, &q2) {
                 assert_eq!(
-                    non_finite(&result),
-                    Some((argument, index)),
+                    refusal(&result),
+                    Some(Refusal::NonFinite(argument, index)),
                     "{bad} at {position}: {result:?}"
                 );
             }
@@ -276,22 +276,33 @@ fn every_non_finite_input_is_named() {
     assert!(contact_function(&r, &q1, &q2).is_ok());
 }
 
-/// The argument and index of a `NonFinite` error; `None` for any other result.
-fn non_finite<T>(result: &Result<T, Error>) -> Option<(Argument, usize)> {
+/// The results of the contact function and of the overlap test on one pair, without their
+/// values, so that a test can check that both refuse it alike.
+fn both_results(r: &[f64; 3], q1: &Sym3, q2: &Sym3) -> [Result<(), Error>; 2] {
+    [
+        contact_function(r, q1, q2).map(|_| ()),
+        overlap(r, q1, q2).map(|_| ()),
+    ]
+}
+
+/// The refusals whose argument and position the tests check, without the offending value.
+#[derive(Debug, PartialEq)]
+enum Refusal {
+    /// `Error::NonFinite`: the argument and the index of the entry.
+    NonFinite(Argument, usize),
+    /// `Error::NotPositiveDefinite`: the argument and the order of the failing minor.
+    NotPositiveDefinite(Argument, usize),
+}
+
+/// The refusal of `result`; `None` for an answer or any other error.
+fn refusal<T>(result: &Result<T, Error>) -> Option<Refusal> {
     match result {
         Err(Error::NonFinite {
             argument, index, ..
-        }) => Some((*argument, *index)),
-        _ => None,
-    }
-}
-
-/// The argument and minor order of a `NotPositiveDefinite` error; `None` for any other result.
-fn not_positive_definite<T>(result: &Result<T, Error>) -> Option<(Argument, usize)> {
-    match result {
+        }) => Some(Refusal::NonFinite(*argument, *index)),
         Err(Error::NotPositiveDefinite {
             argument, minor, ..
-        }) => Some((*argument, *minor)),
+        }) => Some(Refusal::NotPositiveDefinite(*argument, *minor)),
         _ => None,
     }
 }
@@ -303,12 +314,12 @@ fn bad_input_gives_typed_errors() {
     let mut bad = q;
     bad[4] = f64::NAN;
     assert_eq!(
-        non_finite(&contact_function(&r, &q, &bad)),
-        Some((Argument::Q2, 4))
+        refusal(&contact_function(&r, &q, &bad)),
+        Some(Refusal::NonFinite(Argument::Q2, 4))
     );
     assert_eq!(
-        non_finite(&overlap(&[0.0, f64::INFINITY, 0.0], &q, &q)),
-        Some((Argument::R12, 1))
+        refusal(&overlap(&[0.0, f64::INFINITY, 0.0], &q, &q)),
+        Some(Refusal::NonFinite(Argument::R12, 1))
     );
     // Each leading minor in turn.
     let cases: [(Sym3, usize); 4] = [
@@ -318,13 +329,10 @@ fn bad_input_gives_typed_errors() {
         ([0.0; 6], 1),
     ];
     for (m, minor) in cases {
-        for result in [
-            contact_function(&r, &m, &q).map(|_| ()),
-            overlap(&r, &m, &q).map(|_| ()),
-        ] {
+        for result in both_results(&r, &m, &q) {
             assert_eq!(
-                not_positive_definite(&result),
-                Some((Argument::Q1, minor)),
+                refusal(&result),
+                Some(Refusal::NotPositiveDefinite(Argument::Q1, minor)),
                 "{m:?}: {result:?}"
             );
         }
@@ -332,16 +340,16 @@ fn bad_input_gives_typed_errors() {
     // Singular by one ulp: rank-one needle plus a perturbation below f64 resolution of det.
     let singular = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
     assert_eq!(
-        not_positive_definite(&contact_function(&r, &q, &singular)),
-        Some((Argument::Q2, 2))
+        refusal(&contact_function(&r, &q, &singular)),
+        Some(Refusal::NotPositiveDefinite(Argument::Q2, 2))
     );
     assert_eq!(
-        not_positive_definite(&contact_function(
+        refusal(&contact_function(
             &[1.0, 0.0],
             &[1.0, 1.0, 1.0],
             &[1.0, 0.0, 1.0]
         )),
-        Some((Argument::Q1, 2))
+        Some(Refusal::NotPositiveDefinite(Argument::Q1, 2))
     );
     let message = contact_function(&r, &[1.0, 2.0, 0.0, 1.0, 0.0, 1.0], &q)
         .unwrap_err()
@@ -395,9 +403,7 @@ proptest! {
 
 #[test]
 fn refined_path_agrees_with_the_fast_path_within_its_bound() {
-    let mut rng = Rng::new(6);
-    for _ in 0..2000 {
-        let (q1, q2, r) = random_pair(&mut rng, 1.5, (0.05, 5.0));
+    each_random_pair(6, 2000, 1.5, (0.05, 5.0), |_, q1, q2, r| {
         let fast = contact_function(&r, &q1, &q2).unwrap();
         let exact = pw85::contact_function_refined(&r, &q1, &q2).unwrap();
         assert!(exact.refined);
@@ -410,7 +416,7 @@ fn refined_path_agrees_with_the_fast_path_within_its_bound() {
             exact.mu2,
             fast.error_estimate
         );
-    }
+    });
 }
 
 /// A pair on which the Halley iteration once stopped at its start: there h = p/V has h′ ≈ 0,
@@ -509,6 +515,21 @@ fn power_of_two_scalings_give_the_same_bits() {
     }
 }
 
+/// The two shapes and the centre distance of extreme pair `i`: `shape` draws each shape with
+/// its axes spread over 0.5, 2, 4 or 8 decades (by `i`), the first shape of every third pair is
+/// scaled by 10^U (U uniform in [−6, 6]), and the distance is log-uniform in [1e-4, 1e2].
+fn extreme_shapes<const S: usize>(
+    rng: &mut Rng,
+    i: usize,
+    shape: impl Fn(&mut Rng, f64) -> [f64; S],
+) -> ([f64; S], [f64; S], f64) {
+    let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
+    let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i.is_multiple_of(3)));
+    let q1 = shape(rng, decades).map(|x| x * size * size);
+    let q2 = shape(rng, decades);
+    (q1, q2, 10f64.powf(rng.range(-4.0, 2.0)))
+}
+
 /// The 2D batch (lane-wise solve shared with 3D) equals `contact_function` on ellipses bit for bit,
 /// typed errors, coincident centres, refinements and extreme shapes included.
 #[test]
@@ -516,15 +537,10 @@ fn batch_2d_equals_scalar_bit_for_bit() {
     let mut rng = Rng::new(0x2D_BA7C);
     let pairs: Vec<pw85::batch::Pair2d> = (0..20_003)
         .map(|i| {
-            let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
-            let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i % 3 == 0));
-            let ellipse = |rng: &mut Rng| {
+            let (mut q1, q2, dist) = extreme_shapes(&mut rng, i, |rng, decades| {
                 let axes = [0, 1].map(|_| 10f64.powf(rng.range(-decades, 0.0)));
                 from_axes_angle_2d(&axes, rng.range(0.0, 6.3)).unwrap()
-            };
-            let mut q1 = ellipse(&mut rng).map(|x| x * size * size);
-            let q2 = ellipse(&mut rng);
-            let dist = 10f64.powf(rng.range(-4.0, 2.0));
+            });
             let angle = rng.range(0.0, 6.3);
             let mut r12 = [dist * angle.cos(), dist * angle.sin()];
             match i % 101 {
@@ -562,11 +578,7 @@ fn batch_equals_scalar_bit_for_bit_on_extreme_pairs() {
     let mut rng = Rng::new(0x0BA7_C4E5);
     let pairs: Vec<pw85::batch::Pair> = (0..20_000)
         .map(|i| {
-            let decades = [0.5, 2.0, 4.0, 8.0][i % 4];
-            let size = 10f64.powf(rng.range(-6.0, 6.0) * f64::from(i % 3 == 0));
-            let q1 = ellipsoid(&mut rng, decades).map(|x| x * size * size);
-            let q2 = ellipsoid(&mut rng, decades);
-            let dist = 10f64.powf(rng.range(-4.0, 2.0));
+            let (q1, q2, dist) = extreme_shapes(&mut rng, i, ellipsoid);
             pw85::batch::Pair {
                 r12: direction(&mut rng).map(|x| x * dist),
                 q1,

@@ -188,6 +188,25 @@ pub fn folder_with(name: &str, file: &str, text: impl AsRef<[u8]>) -> (TempDir, 
     (dir, path)
 }
 
+/// A fresh test folder `name` holding a hand-made packing: `packing.csv` with the text `csv`
+/// and `summary.json` with the text `summary`.
+pub fn packing_folder(name: &str, csv: &str, summary: &str) -> TempDir {
+    let dir = temp_dir(name);
+    std::fs::write(dir.join("packing.csv"), csv).unwrap();
+    std::fs::write(dir.join("summary.json"), summary).unwrap();
+    dir
+}
+
+/// `ellipack verify <packing> --container periodic --size <size>`, run to its end.
+pub fn verify_periodic(packing: &Path, size: &str) -> Output {
+    ellipack()
+        .arg("verify")
+        .arg(packing)
+        .args(["--container", "periodic", "--size", size])
+        .output()
+        .unwrap()
+}
+
 /// The names in `dir`, sorted, so that tests can compare a folder's whole listing.
 pub fn names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
