@@ -21,15 +21,24 @@
 //!   fraction or until jammed.
 //!
 //! ```
-//! use ellipsoid_packer::{LocalSettings, local_minimisation, starts::lattice_start};
-//! use implicit_packing::{ContainerShape, Model};
+//! use ellipsoid_packer::{Goal, MultiStartSettings, Outcome, Packer, Problem, Settings};
+//! use implicit_packing::ContainerShape;
 //!
-//! // Five ellipses (2, 1) in the smallest disc the solver finds from the paper's start.
-//! let mut problem = Model::<2>::new(vec![[2.0, 1.0]; 5], ContainerShape::Ball)?;
-//! let x0 = lattice_start(&problem);
-//! let result = local_minimisation(&mut problem, &x0, &LocalSettings::default(), &mut |_| false)?;
-//! assert!(result.certificate.is_feasible());
-//! assert!(result.density > 0.5);
+//! // Five ellipses (2, 1) in the smallest disc that two local minimisations find.
+//! let problem = Problem {
+//!     semi_axes: vec![[2.0, 1.0]; 5],
+//!     shape: ContainerShape::Ball,
+//!     goal: Goal::Densest,
+//!     resume: None,
+//! };
+//! let mut multistart = MultiStartSettings::recommended(2, 1);
+//! multistart.max_local_minimisations = 2;
+//! let settings = Settings { multistart, orientations: Vec::new() };
+//! let Outcome::Packed(packed) = Packer::new(problem, settings)?.run(&mut ())? else {
+//!     unreachable!("a container the run chooses is always filled");
+//! };
+//! assert!(packed.certificate.is_feasible());
+//! assert!(packed.configuration.density() > 0.5);
 //! # Ok::<(), ellipsoid_packer::Error>(())
 //! ```
 //!
@@ -56,6 +65,8 @@ pub mod tiling;
 pub use error::{Error, StartDefects};
 pub use fixed::fill;
 pub use local::{LocalResult, LocalSettings, local_minimisation};
-pub use multistart::{MultiStartResult, MultiStartSettings, multistart};
+pub use multistart::{
+    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, multistart,
+};
 pub use random::{RandomPacking, RandomSettings, Target, random_packing};
 pub use run::{Configuration, Goal, Outcome, Packed, Packer, Problem, Repair, Settings, Unfilled};
