@@ -385,6 +385,26 @@ fn as_scene_says(e: ellipsoid_packer::Error) -> PackError {
     }
 }
 
+/// A configuration of the packer as the files hold it, with its summary: the container's
+/// measure as the objective, the run's wall time and local minimisations, the certificate.
+fn written<const N: usize>(
+    configuration: &Configuration<N>,
+    kind: ContainerKind,
+    wall_time: Duration,
+    local_minimisations: usize,
+    certificate: &implicit_packing::Certificate,
+) -> Result<(Packing, Summary), PackError> {
+    let packing = packing_of(configuration, kind)?;
+    let summary = Summary::new(
+        &packing,
+        configuration.container.measure().0,
+        wall_time.as_secs_f64(),
+        local_minimisations as u64,
+        certificate_of(certificate),
+    );
+    Ok((packing, summary))
+}
+
 /// The run's outcome as the files hold it.
 fn packed_outcome<const N: usize>(
     packed: Packed<N>,
@@ -392,14 +412,13 @@ fn packed_outcome<const N: usize>(
     options: &RunOptions,
     seed: u64,
 ) -> Result<RunOutcome, PackError> {
-    let packing = packing_of(&packed.configuration, kind)?;
-    let mut summary = Summary::new(
-        &packing,
-        packed.configuration.container.measure().0,
-        packed.wall_time.as_secs_f64(),
-        packed.local_minimisations as u64,
-        certificate_of(&packed.certificate),
-    );
+    let (packing, mut summary) = written(
+        &packed.configuration,
+        kind,
+        packed.wall_time,
+        packed.local_minimisations,
+        &packed.certificate,
+    )?;
     summary.repair = packed.repair.map(|r| crate::packing::Repair {
         dilation: r.dilation,
         density_before: r.density_before,
@@ -433,14 +452,13 @@ fn not_reached<const N: usize>(
     u: Unfilled<N>,
     kind: ContainerKind,
 ) -> Result<PackError, PackError> {
-    let packing = packing_of(&u.configuration, kind)?;
-    let mut summary = Summary::new(
-        &packing,
-        u.configuration.container.measure().0,
-        u.wall_time.as_secs_f64(),
-        u.local_minimisations as u64,
-        certificate_of(&u.certificate),
-    );
+    let (packing, mut summary) = written(
+        &u.configuration,
+        kind,
+        u.wall_time,
+        u.local_minimisations,
+        &u.certificate,
+    )?;
     summary.not_reached = true;
     summary.fixed_container = true;
     Ok(PackError::NotReached(Box::new(Unfinished {

@@ -666,19 +666,23 @@ fn place_on_sites<const N: usize>(
             }
             item += 1;
         }
-        let mut k = 0;
-        while k < N {
-            n[k] += 1;
-            if n[k] < counts[k] {
-                break;
-            }
-            n[k] = 0;
-            k += 1;
-        }
-        if k == N {
+        if !next_cell(&mut n, counts) {
             return;
         }
     }
+}
+
+/// Steps the unit cell `n` of a supercell of `counts` cells to the next one, the first axis
+/// fastest; `false` after the last.
+pub(crate) fn next_cell<const N: usize>(n: &mut [usize; N], counts: &[usize; N]) -> bool {
+    for k in 0..N {
+        n[k] += 1;
+        if n[k] < counts[k] {
+            return true;
+        }
+        n[k] = 0;
+    }
+    false
 }
 
 /// A start that fills a fixed periodic cell with diagonal `heights` (`l_x, l_y, l_z`): items

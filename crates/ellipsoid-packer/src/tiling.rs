@@ -127,16 +127,7 @@ fn tiled<const N: usize>(x: &[f64], k: usize, m: usize) -> Vec<f64> {
             }
             out.extend_from_slice(&body[N..]);
         }
-        let mut d = 0;
-        while d < N {
-            n[d] += 1;
-            if n[d] < counts[d] {
-                break;
-            }
-            n[d] = 0;
-            d += 1;
-        }
-        if d == N {
+        if !crate::starts::next_cell(&mut n, &counts) {
             break;
         }
     }
