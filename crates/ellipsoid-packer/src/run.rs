@@ -40,16 +40,7 @@ pub struct Configuration<const N: usize> {
 impl<const N: usize> Configuration<N> {
     /// Item area (2D) or volume (3D) over the container's.
     pub fn density(&self) -> f64 {
-        let unit = if N == 2 {
-            std::f64::consts::PI
-        } else {
-            4.0 * std::f64::consts::PI / 3.0
-        };
-        let items: f64 = self
-            .items
-            .iter()
-            .map(|i| unit * i.semi_axes.iter().product::<f64>())
-            .sum();
+        let items = crate::settings::measure_of(self.items.iter().map(|i| i.semi_axes));
         items / self.container.measure().0
     }
 }

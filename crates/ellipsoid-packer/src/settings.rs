@@ -142,16 +142,17 @@ pub struct LocalResult {
 
 /// Item area (2D) or volume (3D) of all the problem's items.
 pub fn item_measure<const N: usize>(problem: &Model<N>) -> f64 {
+    measure_of(problem.semi_axes().iter().copied())
+}
+
+/// Area (2D) or volume (3D) of items of these semi-axes: π ab, or 4π abc / 3, summed.
+pub(crate) fn measure_of<const N: usize>(semi_axes: impl Iterator<Item = [f64; N]>) -> f64 {
     let unit = if N == 2 {
         std::f64::consts::PI
     } else {
         4.0 * std::f64::consts::PI / 3.0
     };
-    problem
-        .semi_axes()
-        .iter()
-        .map(|l| unit * l.iter().product::<f64>())
-        .sum()
+    semi_axes.map(|l| unit * l.iter().product::<f64>()).sum()
 }
 
 /// How far `x` is from a packing: the model's overlap plus its containment violation (both 0
