@@ -4,7 +4,7 @@
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of};
-use ellipack::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing, Summary};
+use ellipack::packing::{Container, Item, Items, Packing, Summary};
 use ellipack::scene::{Overrides, Scene};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{
@@ -115,8 +115,8 @@ impl PyPacking {
     fn item_rows<'py>(
         &self,
         py: Python<'py>,
-        ellipse: impl Fn(&EllipseItem) -> Vec<f64>,
-        ellipsoid: impl Fn(&EllipsoidItem) -> Vec<f64>,
+        ellipse: impl Fn(&Item<2>) -> Vec<f64>,
+        ellipsoid: impl Fn(&Item<3>) -> Vec<f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let rows: Vec<Vec<f64>> = match self.packing.items() {
             Items::Ellipses(v) => v.iter().map(ellipse).collect(),
@@ -145,7 +145,7 @@ impl PyPacking {
     /// The centres, shape (m, dimension).
     #[getter]
     fn centres<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.item_rows(py, |e| e.center.to_vec(), |e| e.center.to_vec())
+        self.item_rows(py, |e| e.centre.to_vec(), |e| e.centre.to_vec())
     }
 
     /// The semi-axes, shape (m, dimension): semi-axis k lies along column k of the rotation.
@@ -160,7 +160,7 @@ impl PyPacking {
         match self.packing.items() {
             Items::Ellipses(_) => Ok(None),
             Items::Ellipsoids(v) => {
-                let rows: Vec<Vec<f64>> = v.iter().map(|e| e.quaternion.to_vec()).collect();
+                let rows: Vec<Vec<f64>> = v.iter().map(|e| e.quaternion().to_vec()).collect();
                 PyArray2::from_vec2(py, &rows)
                     .map(Some)
                     .map_err(value_error)
@@ -172,7 +172,7 @@ impl PyPacking {
     #[getter]
     fn angles<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
         match self.packing.items() {
-            Items::Ellipses(v) => Some(PyArray1::from_iter(py, v.iter().map(|e| e.theta))),
+            Items::Ellipses(v) => Some(PyArray1::from_iter(py, v.iter().map(|e| e.theta()))),
             Items::Ellipsoids(_) => None,
         }
     }
@@ -506,21 +506,19 @@ pub fn _packing_from_arrays(
         let o = matrix_rows("orientations", &orientations, 1)?;
         Items::Ellipses(
             rows.zip(o)
-                .map(|((c, a), o)| EllipseItem {
-                    center: [c[0], c[1]],
-                    semi_axes: [a[0], a[1]],
-                    theta: o[0],
-                })
+                .map(|((c, a), o)| Item::ellipse([c[0], c[1]], [a[0], a[1]], o[0]))
                 .collect(),
         )
     } else {
         let o = matrix_rows("orientations", &orientations, 4)?;
         Items::Ellipsoids(
             rows.zip(o)
-                .map(|((c, a), q)| EllipsoidItem {
-                    center: [c[0], c[1], c[2]],
-                    semi_axes: [a[0], a[1], a[2]],
-                    quaternion: [q[0], q[1], q[2], q[3]],
+                .map(|((c, a), q)| {
+                    Item::ellipsoid(
+                        [c[0], c[1], c[2]],
+                        [a[0], a[1], a[2]],
+                        [q[0], q[1], q[2], q[3]],
+                    )
                 })
                 .collect(),
         )

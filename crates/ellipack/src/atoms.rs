@@ -113,10 +113,10 @@ pub fn bodies(items: &Items) -> Vec<Body> {
         Items::Ellipses(v) => v
             .iter()
             .map(|e| {
-                let (s, c) = (0.5 * e.theta).sin_cos();
+                let (s, c) = (0.5 * e.theta()).sin_cos();
                 let [a, b] = e.semi_axes;
                 Body {
-                    center: [e.center[0], e.center[1], 0.0],
+                    center: [e.centre[0], e.centre[1], 0.0],
                     semi_axes: [a, b, a.min(b)],
                     quaternion: [c, 0.0, 0.0, s],
                 }
@@ -125,9 +125,9 @@ pub fn bodies(items: &Items) -> Vec<Body> {
         Items::Ellipsoids(v) => v
             .iter()
             .map(|e| Body {
-                center: e.center,
+                center: e.centre,
                 semi_axes: e.semi_axes,
-                quaternion: unit(e.quaternion),
+                quaternion: unit(e.quaternion()),
             })
             .collect(),
     }

@@ -7,8 +7,7 @@
 //! relative to its container's centre.
 
 use crate::packing::{
-    CertificateCounts, Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing,
-    PackingError, Summary,
+    CertificateCounts, Container, ContainerKind, Items, Packing, PackingError, Summary,
 };
 use crate::scene::{RandomGoal, Scene};
 use ellipsoid_packer::Target;
@@ -19,7 +18,7 @@ use ellipsoid_packer::run::{
     Configuration, Goal, Outcome, Packed, Packer, Problem, Settings, Unfilled,
 };
 use implicit_packing::certificate::{bodies_of as stated_bodies, certify_items, shown_mu2};
-use implicit_packing::{Body, Container as SizedContainer, ContainerShape, Item, Orientation};
+use implicit_packing::{Body, Container as SizedContainer, ContainerShape, Item};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -617,33 +616,15 @@ fn sized<const N: usize>(
 fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N>, PackError> {
     let container = packing.container();
     let centre = container.center();
-    let at = |v: &[f64], k: usize| v.get(k).copied().unwrap_or(f64::NAN);
-    let item = |c: &[f64], l: &[f64], orientation| Item {
-        centre: std::array::from_fn(|k| at(c, k) - at(centre, k)),
-        semi_axes: std::array::from_fn(|k| at(l, k)),
-        orientation,
-    };
-    let items: Vec<Item<N>> = match packing.items() {
-        Items::Ellipses(v) if N == 2 => v
-            .iter()
-            .map(|e| item(&e.center, &e.semi_axes, Orientation::Angle(e.theta)))
-            .collect(),
-        Items::Ellipsoids(v) if N == 3 => v
-            .iter()
-            .map(|e| {
-                item(
-                    &e.center,
-                    &e.semi_axes,
-                    Orientation::Quaternion(e.quaternion),
-                )
-            })
-            .collect(),
-        _ => {
-            return Err(PackError::Mismatch(
-                "the packing has the other dimension".into(),
-            ));
+    let mut items: Vec<Item<N>> = packing
+        .items()
+        .in_dimension()
+        .ok_or_else(|| PackError::Mismatch("the packing has the other dimension".into()))?;
+    for item in &mut items {
+        for (x, c) in item.centre.iter_mut().zip(centre) {
+            *x -= c;
         }
-    };
+    }
     let container = sized::<N>(container, model_container(container.kind()))?;
     Ok(Configuration { items, container })
 }
@@ -653,38 +634,7 @@ fn packing_of<const N: usize>(
     configuration: &Configuration<N>,
     kind: ContainerKind,
 ) -> Result<Packing, PackError> {
-    let items = &configuration.items;
-    let angle = |o: &Orientation| match *o {
-        Orientation::Angle(theta) => theta,
-        Orientation::Quaternion(_) => f64::NAN,
-    };
-    let quaternion = |o: &Orientation| match *o {
-        Orientation::Quaternion(q) => q,
-        Orientation::Angle(_) => [f64::NAN; 4],
-    };
-    let items = if N == 2 {
-        Items::Ellipses(
-            items
-                .iter()
-                .map(|i| EllipseItem {
-                    center: [i.centre[0], i.centre[1]],
-                    semi_axes: [i.semi_axes[0], i.semi_axes[1]],
-                    theta: angle(&i.orientation),
-                })
-                .collect(),
-        )
-    } else {
-        Items::Ellipsoids(
-            items
-                .iter()
-                .map(|i| EllipsoidItem {
-                    center: std::array::from_fn(|k| i.centre[k]),
-                    semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
-                    quaternion: quaternion(&i.orientation),
-                })
-                .collect(),
-        )
-    };
+    let items = Items::of(&configuration.items);
     let dims: Vec<f64> = match configuration.container {
         SizedContainer::Ball { radius } => vec![radius; N],
         other => other.dimensions(),
@@ -747,11 +697,7 @@ mod tests {
 
     #[test]
     fn verify_rejects_an_overlapping_pair_and_an_item_outside() {
-        let unit_disc_at = |x| EllipseItem {
-            center: [x, 0.0],
-            semi_axes: [1.0, 1.0],
-            theta: 0.0,
-        };
+        let unit_disc_at = |x| Item::ellipse([x, 0.0], [1.0, 1.0], 0.0);
         let items = Items::Ellipses(vec![unit_disc_at(0.0), unit_disc_at(1.5)]);
         let packing = Packing::new(
             Container::Circle {
@@ -784,11 +730,7 @@ mod tests {
         // An ellipse (2, 1) turned by 90° at (0, 3); the containers are centred at (1, 1), so
         // relative to their centre the item's boundary is (−1 − sin s, 2 + 2 cos s). The scale
         // is the largest value of the container's gauge on that boundary (sampled densely).
-        let item = EllipseItem {
-            center: [0.0, 3.0],
-            semi_axes: [2.0, 1.0],
-            theta: std::f64::consts::FRAC_PI_2,
-        };
+        let item = Item::ellipse([0.0, 3.0], [2.0, 1.0], std::f64::consts::FRAC_PI_2);
         let gauge_max = |gauge: &dyn Fn(f64, f64) -> f64| {
             (0..400_000)
                 .map(|k| {

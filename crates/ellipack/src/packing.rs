@@ -16,6 +16,7 @@
 //! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
 //! * `packing.xyz`: extended XYZ for ASE and OVITO ([`crate::xyz`]).
 
+pub use implicit_packing::Item;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::fmt;
@@ -557,70 +558,52 @@ impl Container {
     }
 }
 
-/// An ellipse: centre, semi-axes (a along the rotated x axis) and angle θ (radians).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EllipseItem {
-    /// Its centre (x, y).
-    pub center: [f64; 2],
-    /// Its semi-axes (a, b); a lies along the first column of R(θ).
-    pub semi_axes: [f64; 2],
-    /// The angle θ of eq. 1, in radians.
-    pub theta: f64,
-}
-
-impl EllipseItem {
-    /// Its area πab.
-    pub fn area(&self) -> f64 {
-        PI * self.semi_axes[0] * self.semi_axes[1]
-    }
-
-    /// Its quadratic form M = R diag(a², b²) Rᵀ as [M11, M12, M22].
-    ///
-    /// # Errors
-    /// [`pw85::Error`] for a semi-axis that is not positive and finite or a non-finite angle.
-    pub fn quadratic_form(&self) -> Result<pw85::Sym2, pw85::Error> {
-        pw85::shape::from_axes_angle_2d(&self.semi_axes, self.theta)
-    }
-}
-
-/// An ellipsoid: centre, semi-axes (a, b, c along the columns of R) and unit quaternion
-/// (w, x, y, z).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EllipsoidItem {
-    /// Its centre (x, y, z).
-    pub center: [f64; 3],
-    /// Its semi-axes (a, b, c); semi-axis k lies along column k of R(q).
-    pub semi_axes: [f64; 3],
-    /// Its orientation (w, x, y, z), Hamilton active rotation; normalised where used.
-    pub quaternion: [f64; 4],
-}
-
-impl EllipsoidItem {
-    /// Its volume 4/3 πabc.
-    pub fn volume(&self) -> f64 {
-        4.0 / 3.0 * PI * self.semi_axes[0] * self.semi_axes[1] * self.semi_axes[2]
-    }
-
-    /// Its quadratic form M = R diag(a², b², c²) Rᵀ as [M11, M12, M13, M22, M23, M33].
-    ///
-    /// # Errors
-    /// [`pw85::Error`] for a semi-axis that is not positive and finite or a zero or
-    /// non-finite quaternion.
-    pub fn quadratic_form(&self) -> Result<pw85::Sym3, pw85::Error> {
-        pw85::shape::from_axes_quaternion(&self.semi_axes, &self.quaternion)
-    }
-}
-
 /// The items of a packing, all ellipses or all ellipsoids.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Items {
     /// 2D.
-    Ellipses(Vec<EllipseItem>),
+    Ellipses(Vec<Item<2>>),
     /// 3D.
-    Ellipsoids(Vec<EllipsoidItem>),
+    Ellipsoids(Vec<Item<3>>),
 }
 
 impl Items {
+    /// The items of a dimension known only as a parameter: [`Items::Ellipses`] for `N = 2`,
+    /// else [`Items::Ellipsoids`].
+    pub fn of<const N: usize>(items: &[Item<N>]) -> Items {
+        fn resized<const N: usize, const M: usize>(i: &Item<N>) -> Item<M> {
+            Item {
+                centre: std::array::from_fn(|k| i.centre[k]),
+                semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
+                orientation: i.orientation,
+            }
+        }
+        if N == 2 {
+            Items::Ellipses(items.iter().map(resized).collect())
+        } else {
+            Items::Ellipsoids(items.iter().map(resized).collect())
+        }
+    }
+
+    /// The items as `Item<N>`, `None` when they have the other dimension.
+    pub fn in_dimension<const N: usize>(&self) -> Option<Vec<Item<N>>> {
+        fn resized<const M: usize, const N: usize>(v: &[Item<M>]) -> Option<Vec<Item<N>>> {
+            (M == N).then(|| {
+                v.iter()
+                    .map(|i| Item {
+                        centre: std::array::from_fn(|k| i.centre[k]),
+                        semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
+                        orientation: i.orientation,
+                    })
+                    .collect()
+            })
+        }
+        match self {
+            Items::Ellipses(v) => resized(v),
+            Items::Ellipsoids(v) => resized(v),
+        }
+    }
+
     /// How many.
     pub fn len(&self) -> usize {
         match self {
@@ -646,8 +629,8 @@ impl Items {
     pub fn total_measure(&self) -> f64 {
         // A fold from +0.0: `sum()` of no floats is −0.0, which prints as a density "-0".
         match self {
-            Items::Ellipses(v) => v.iter().map(EllipseItem::area).fold(0.0, |a, x| a + x),
-            Items::Ellipsoids(v) => v.iter().map(EllipsoidItem::volume).fold(0.0, |a, x| a + x),
+            Items::Ellipses(v) => v.iter().map(Item::measure).fold(0.0, |a, x| a + x),
+            Items::Ellipsoids(v) => v.iter().map(Item::measure).fold(0.0, |a, x| a + x),
         }
     }
 
@@ -702,14 +685,14 @@ impl Packing {
             Items::Ellipses(items) => {
                 let h = reduced_cell::<2>(lengths, tilts);
                 for item in items.iter_mut() {
-                    item.center = wrapped_into(&h, origin, item.center);
+                    item.centre = wrapped_into(&h, origin, item.centre);
                 }
                 packing.container = periodic_container(origin, &h);
             }
             Items::Ellipsoids(items) => {
                 let h = reduced_cell::<3>(lengths, tilts);
                 for item in items.iter_mut() {
-                    item.center = wrapped_into(&h, origin, item.center);
+                    item.centre = wrapped_into(&h, origin, item.centre);
                 }
                 packing.container = periodic_container(origin, &h);
             }
@@ -766,17 +749,17 @@ impl Packing {
         match &items {
             Items::Ellipses(v) => {
                 for (id, e) in v.iter().enumerate() {
-                    let [x, y] = e.center;
+                    let [x, y] = e.centre;
                     let [a, b] = e.semi_axes;
-                    let fields = [("x", x), ("y", y), ("a", a), ("b", b), ("theta", e.theta)];
+                    let fields = [("x", x), ("y", y), ("a", a), ("b", b), ("theta", e.theta())];
                     check(id, &fields, &e.semi_axes)?;
                 }
             }
             Items::Ellipsoids(v) => {
                 for (id, e) in v.iter().enumerate() {
-                    let [x, y, z] = e.center;
+                    let [x, y, z] = e.centre;
                     let [a, b, c] = e.semi_axes;
-                    let [qw, qx, qy, qz] = e.quaternion;
+                    let [qw, qx, qy, qz] = e.quaternion();
                     let fields = [
                         ("x", x),
                         ("y", y),
@@ -790,7 +773,7 @@ impl Packing {
                         ("qz", qz),
                     ];
                     check(id, &fields, &e.semi_axes)?;
-                    if e.quaternion.iter().all(|q| *q == 0.0) {
+                    if e.quaternion().iter().all(|q| *q == 0.0) {
                         return Err(inconsistent(format!("item {id}: the quaternion is zero")));
                     }
                 }
@@ -1006,16 +989,16 @@ pub fn csv_string(items: &Items) -> String {
     match items {
         Items::Ellipses(v) => {
             for (id, e) in v.iter().enumerate() {
-                let [x, y] = e.center;
+                let [x, y] = e.centre;
                 let [a, b] = e.semi_axes;
-                row(id, &[x, y, a, b, e.theta]);
+                row(id, &[x, y, a, b, e.theta()]);
             }
         }
         Items::Ellipsoids(v) => {
             for (id, e) in v.iter().enumerate() {
-                let [x, y, z] = e.center;
+                let [x, y, z] = e.centre;
                 let [a, b, c] = e.semi_axes;
-                let [qw, qx, qy, qz] = e.quaternion;
+                let [qw, qx, qy, qz] = e.quaternion();
                 row(id, &[x, y, z, a, b, c, qw, qx, qy, qz]);
             }
         }
@@ -1163,18 +1146,10 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
                     "the quaternion (qw, qx, qy, qz) is zero".to_string(),
                 ));
             }
-            ellipsoids.push(EllipsoidItem {
-                center: [x, y, z],
-                semi_axes: [a, b, c],
-                quaternion: [qw, qx, qy, qz],
-            });
+            ellipsoids.push(Item::ellipsoid([x, y, z], [a, b, c], [qw, qx, qy, qz]));
         } else {
             let [x, y, a, b, theta, ..] = values;
-            ellipses.push(EllipseItem {
-                center: [x, y],
-                semi_axes: [a, b],
-                theta,
-            });
+            ellipses.push(Item::ellipse([x, y], [a, b], theta));
         }
     }
     if ellipses.is_empty() && ellipsoids.is_empty() {

@@ -492,23 +492,23 @@ fn quadratic_forms(items: &Items) -> Vec<(Vec<f64>, [[f64; 3]; 3])> {
         Items::Ellipses(v) => v
             .iter()
             .filter_map(|e| {
-                let q = e.quadratic_form().ok()?;
+                let q = pw85::shape::from_axes_angle_2d(&e.semi_axes, e.theta()).ok()?;
                 let m = [[q[0], q[1], 0.0], [q[1], q[2], 0.0], [0.0, 0.0, 0.0]];
-                e.center
+                e.centre
                     .iter()
                     .all(|c| c.is_finite())
-                    .then(|| (e.center.to_vec(), m))
+                    .then(|| (e.centre.to_vec(), m))
             })
             .collect(),
         Items::Ellipsoids(v) => v
             .iter()
             .filter_map(|e| {
-                let q = e.quadratic_form().ok()?;
+                let q = pw85::shape::from_axes_quaternion(&e.semi_axes, &e.quaternion()).ok()?;
                 let m = [[q[0], q[1], q[2]], [q[1], q[3], q[4]], [q[2], q[4], q[5]]];
-                e.center
+                e.centre
                     .iter()
                     .all(|c| c.is_finite())
-                    .then(|| (e.center.to_vec(), m))
+                    .then(|| (e.centre.to_vec(), m))
             })
             .collect(),
     }
@@ -910,7 +910,7 @@ mod tests {
 
     #[test]
     fn broken_data_draws_what_it_can_without_panicking() {
-        use crate::packing::{Container, EllipseItem, EllipsoidItem, Items, Packing};
+        use crate::packing::{Container, Item, Items, Packing};
         // Built by hand, bypassing Packing::new's checks.
         let packing = Packing {
             container: Container::Circle {
@@ -918,21 +918,9 @@ mod tests {
                 radius: -1.0,
             },
             items: Items::Ellipses(vec![
-                EllipseItem {
-                    center: [f64::NAN, 0.0],
-                    semi_axes: [1.0, 1.0],
-                    theta: 0.0,
-                },
-                EllipseItem {
-                    center: [0.0, 0.0],
-                    semi_axes: [0.0, 1.0],
-                    theta: 0.0,
-                },
-                EllipseItem {
-                    center: [1e300, -1e300],
-                    semi_axes: [1.0, 1e-300],
-                    theta: 1e300,
-                },
+                Item::ellipse([f64::NAN, 0.0], [1.0, 1.0], 0.0),
+                Item::ellipse([0.0, 0.0], [0.0, 1.0], 0.0),
+                Item::ellipse([1e300, -1e300], [1.0, 1e-300], 1e300),
             ]),
         };
         png_bytes(&packing, &RenderOptions::default()).unwrap();
@@ -942,11 +930,7 @@ mod tests {
                 center: [0.0; 3],
                 radius: f64::INFINITY,
             },
-            items: Items::Ellipsoids(vec![EllipsoidItem {
-                center: [0.0; 3],
-                semi_axes: [1e6, 1e-6, 1.0],
-                quaternion: [0.0; 4],
-            }]),
+            items: Items::Ellipsoids(vec![Item::ellipsoid([0.0; 3], [1e6, 1e-6, 1.0], [0.0; 4])]),
         };
         png_bytes(
             &packing,
@@ -962,13 +946,13 @@ mod tests {
     /// inside the ellipse of the 2×2 sub-block of M, and some reach its boundary.
     #[test]
     fn projections_use_the_sub_block_of_m() {
-        let item = crate::packing::EllipsoidItem {
-            center: [0.3, -1.0, 2.0],
-            semi_axes: [2.0, 0.7, 0.3],
-            quaternion: [0.8, 0.3, -0.5, 0.2],
-        };
-        let r = pw85::shape::rotation_from_quaternion(&item.quaternion).unwrap();
-        let q = item.quadratic_form().unwrap();
+        let item = crate::packing::Item::ellipsoid(
+            [0.3, -1.0, 2.0],
+            [2.0, 0.7, 0.3],
+            [0.8, 0.3, -0.5, 0.2],
+        );
+        let r = pw85::shape::rotation_from_quaternion(&item.quaternion()).unwrap();
+        let q = pw85::shape::from_axes_quaternion(&item.semi_axes, &item.quaternion()).unwrap();
         let m = [[q[0], q[1], q[2]], [q[1], q[3], q[4]], [q[2], q[4], q[5]]];
         for (u, v) in [(0, 1), (0, 2), (1, 2)] {
             let (a, b, c) = (m[u][u], m[u][v], m[v][v]);

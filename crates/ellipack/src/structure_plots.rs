@@ -89,7 +89,7 @@ fn orientations_svg(packing: &Packing, s: &Structure) -> Result<String, String> 
         Items::Ellipses(items) => (
             items
                 .iter()
-                .map(|e| e.theta.rem_euclid(std::f64::consts::PI).to_degrees())
+                .map(|e| e.theta().rem_euclid(std::f64::consts::PI).to_degrees())
                 .collect(),
             180.0,
             "angle of the first axis (degrees)",
@@ -98,7 +98,7 @@ fn orientations_svg(packing: &Packing, s: &Structure) -> Result<String, String> 
             items
                 .iter()
                 .map(|e| {
-                    let [w, x, y, z] = e.quaternion;
+                    let [w, x, y, z] = e.quaternion();
                     // The first column of the rotation of (w, x, y, z).
                     let u = [
                         1.0 - 2.0 * (y * y + z * z),

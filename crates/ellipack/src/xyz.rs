@@ -2,8 +2,7 @@
 
 use crate::atoms::{Cell, GROUP_ELEMENTS, bodies, shape_groups};
 use crate::packing::{
-    Container, ContainerKind, EllipseItem, EllipsoidItem, Items, Packing, PackingError, num,
-    write_text,
+    Container, ContainerKind, Item, Items, Packing, PackingError, num, write_text,
 };
 use std::path::Path;
 
@@ -247,17 +246,9 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
             return Err(bad_value(line, k + 5, message));
         }
         if kind.dimension() == 2 {
-            ellipses.push(EllipseItem {
-                center: [x, y],
-                semi_axes: [a, b],
-                theta: 2.0 * qz.atan2(qw),
-            });
+            ellipses.push(Item::ellipse([x, y], [a, b], 2.0 * qz.atan2(qw)));
         } else {
-            ellipsoids.push(EllipsoidItem {
-                center: [x, y, z],
-                semi_axes: [a, b, c],
-                quaternion: [qw, qx, qy, qz],
-            });
+            ellipsoids.push(Item::ellipsoid([x, y, z], [a, b, c], [qw, qx, qy, qz]));
         }
     }
     if rows != count {

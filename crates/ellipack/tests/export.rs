@@ -8,9 +8,7 @@ mod common;
 use ellipack::export::{
     self, Body, Cell, ExportError, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
 };
-use ellipack::packing::{
-    self, Container, EllipseItem, EllipsoidItem, Items, Packing, PackingError,
-};
+use ellipack::packing::{self, Container, Item, Items, Packing, PackingError};
 use std::collections::HashMap;
 
 /// Every kind of container with items of its dimension; the 2D items of several sizes (so
@@ -49,16 +47,8 @@ fn every_kind() -> Vec<Packing> {
                 radius: 3.0,
             },
             Items::Ellipsoids(vec![
-                EllipsoidItem {
-                    center: [11.0, -5.0, 2.5],
-                    semi_axes: [1.0, 0.75, 0.5],
-                    quaternion: [2.0, 0.0, 0.0, 2.0],
-                },
-                EllipsoidItem {
-                    center: [8.5, -5.0, 2.5],
-                    semi_axes: [0.5, 0.5, 0.5],
-                    quaternion: [1.0, 0.0, 0.0, 0.0],
-                },
+                Item::ellipsoid([11.0, -5.0, 2.5], [1.0, 0.75, 0.5], [2.0, 0.0, 0.0, 2.0]),
+                Item::ellipsoid([8.5, -5.0, 2.5], [0.5, 0.5, 0.5], [1.0, 0.0, 0.0, 0.0]),
             ]),
         )
         .unwrap(),
@@ -74,21 +64,9 @@ fn bodies_are_unit_quaternion_ellipsoids_and_groups_are_distinct_semi_axes() {
             radius: 10.0,
         },
         Items::Ellipses(vec![
-            EllipseItem {
-                center: [1.0, 2.0],
-                semi_axes: [2.0, 1.0],
-                theta: std::f64::consts::PI,
-            },
-            EllipseItem {
-                center: [-3.0, 2.0],
-                semi_axes: [1.0, 1.0],
-                theta: 0.0,
-            },
-            EllipseItem {
-                center: [4.0, -4.0],
-                semi_axes: [2.0, 1.0],
-                theta: 0.5,
-            },
+            Item::ellipse([1.0, 2.0], [2.0, 1.0], std::f64::consts::PI),
+            Item::ellipse([-3.0, 2.0], [1.0, 1.0], 0.0),
+            Item::ellipse([4.0, -4.0], [2.0, 1.0], 0.5),
         ]),
     )
     .unwrap();
@@ -157,11 +135,11 @@ fn the_cell_encloses_the_container_and_the_items_centred_on_the_container() {
             center: [0.0; 3],
             half_sides: [1.0, 1.0, 1.0],
         },
-        Items::Ellipsoids(vec![EllipsoidItem {
-            center: [1.0, 0.0, 0.0],
-            semi_axes: [0.5, 0.25, 0.25],
-            quaternion: [1.0, 0.0, 0.0, 0.0],
-        }]),
+        Items::Ellipsoids(vec![Item::ellipsoid(
+            [1.0, 0.0, 0.0],
+            [0.5, 0.25, 0.25],
+            [1.0, 0.0, 0.0, 0.0],
+        )]),
     )
     .unwrap();
     let cell = Cell::enclosing(&p);
@@ -206,16 +184,16 @@ fn the_lammps_data_file_reads_back_exactly() {
                 for ((_, _, _, _, x), (e, (_, _, q))) in
                     data.atoms.iter().zip(v.iter().zip(&data.ellipsoids))
                 {
-                    assert_eq!(x[..2], e.center);
+                    assert_eq!(x[..2], e.centre);
                     assert_eq!(x[2], 0.0);
                     assert_eq!((q[1], q[2]), (0.0, 0.0), "rotation about z only");
-                    let turns = (2.0 * q[3].atan2(q[0]) - e.theta) / (2.0 * std::f64::consts::PI);
+                    let turns = (2.0 * q[3].atan2(q[0]) - e.theta()) / (2.0 * std::f64::consts::PI);
                     assert!((turns - turns.round()).abs() < 1e-14);
                 }
             }
             Items::Ellipsoids(v) => {
                 for ((_, _, _, _, x), e) in data.atoms.iter().zip(v) {
-                    assert_eq!(*x, e.center);
+                    assert_eq!(*x, e.centre);
                 }
             }
         }

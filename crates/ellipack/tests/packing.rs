@@ -4,8 +4,7 @@
 mod common;
 
 use ellipack::packing::{
-    self, CertificateCounts, Container, EllipseItem, EllipsoidItem, Items, Packing, PackingError,
-    Summary,
+    self, CertificateCounts, Container, Item, Items, Packing, PackingError, Summary,
 };
 use std::f64::consts::PI;
 
@@ -123,14 +122,7 @@ fn the_summary_has_the_documented_keys() {
 
 #[test]
 fn density_is_item_measure_over_container_measure() {
-    let items = Items::Ellipses(vec![
-        EllipseItem {
-            center: [0.0, 0.0],
-            semi_axes: [2.0, 1.0],
-            theta: 0.3,
-        };
-        3
-    ]);
+    let items = Items::Ellipses(vec![Item::ellipse([0.0, 0.0], [2.0, 1.0], 0.3); 3]);
     let circle = Container::Circle {
         center: [0.0, 0.0],
         radius: 4.0,
@@ -141,11 +133,11 @@ fn density_is_item_measure_over_container_measure() {
         half_sides: [3.0, 2.0],
     };
     assert!((packing::density(&rectangle, &items) - 6.0 * PI / 24.0).abs() < 1e-15);
-    let items = Items::Ellipsoids(vec![EllipsoidItem {
-        center: [0.0; 3],
-        semi_axes: [1.0, 0.75, 0.5],
-        quaternion: [1.0, 0.0, 0.0, 0.0],
-    }]);
+    let items = Items::Ellipsoids(vec![Item::ellipsoid(
+        [0.0; 3],
+        [1.0, 0.75, 0.5],
+        [1.0, 0.0, 0.0, 0.0],
+    )]);
     let ball = Container::Ball {
         center: [0.0; 3],
         radius: 2.0,
@@ -183,24 +175,24 @@ fn xyz_round_trip_keeps_positions_shapes_and_orientations() {
                 let unit = ellipack::export::bodies(p.items());
                 assert_eq!(a.len(), b.len());
                 for ((x, y), u) in a.iter().zip(b).zip(&unit) {
-                    assert_eq!((x.center, x.semi_axes), (y.center, y.semi_axes));
-                    assert_eq!(x.quaternion, u.quaternion);
+                    assert_eq!((x.centre, x.semi_axes), (y.centre, y.semi_axes));
+                    assert_eq!(x.quaternion(), u.quaternion);
                     for k in 0..4 {
-                        assert!((x.quaternion[k] - y.quaternion[k]).abs() < 1e-15);
+                        assert!((x.quaternion()[k] - y.quaternion()[k]).abs() < 1e-15);
                     }
                 }
             }
             (Items::Ellipses(a), Items::Ellipses(b)) => {
                 assert_eq!(a.len(), b.len());
                 for (x, y) in a.iter().zip(b) {
-                    assert_eq!((x.center, x.semi_axes), (y.center, y.semi_axes));
+                    assert_eq!((x.centre, x.semi_axes), (y.centre, y.semi_axes));
                     // Same orientation: θ may come back shifted by a multiple of 2π.
-                    let turns = (x.theta - y.theta) / (2.0 * PI);
+                    let turns = (x.theta() - y.theta()) / (2.0 * PI);
                     assert!(
                         (turns - turns.round()).abs() < 1e-14,
                         "{} {}",
-                        x.theta,
-                        y.theta
+                        x.theta(),
+                        y.theta()
                     );
                 }
             }
@@ -232,11 +224,11 @@ fn xyz_orientation_is_in_ovito_order() {
             center: [0.0; 3],
             radius: 5.0,
         },
-        Items::Ellipsoids(vec![EllipsoidItem {
-            center: [1.0, 2.0, 3.0],
-            semi_axes: [1.0, 0.75, 0.5],
-            quaternion: [c, 0.0, 0.0, s],
-        }]),
+        Items::Ellipsoids(vec![Item::ellipsoid(
+            [1.0, 2.0, 3.0],
+            [1.0, 0.75, 0.5],
+            [c, 0.0, 0.0, s],
+        )]),
     )
     .unwrap();
     let row = first_xyz_row(&p);
@@ -250,11 +242,7 @@ fn xyz_orientation_is_in_ovito_order() {
             center: [0.0; 2],
             radius: 5.0,
         },
-        Items::Ellipses(vec![EllipseItem {
-            center: [1.0, 2.0],
-            semi_axes: [2.0, 1.0],
-            theta: PI / 2.0,
-        }]),
+        Items::Ellipses(vec![Item::ellipse([1.0, 2.0], [2.0, 1.0], PI / 2.0)]),
     )
     .unwrap();
     let row = first_xyz_row(&p2);
@@ -312,14 +300,7 @@ fn malformed_csv_names_file_line_and_column() {
     // Columns in another order, and extra columns, are fine.
     let shuffled = "theta,b,a,y,x,id,note\n0.5,1,2,2,1,0,hello\n";
     match packing::read_csv(shuffled, "p.csv").unwrap() {
-        Items::Ellipses(v) => assert_eq!(
-            v,
-            vec![EllipseItem {
-                center: [1.0, 2.0],
-                semi_axes: [2.0, 1.0],
-                theta: 0.5
-            }]
-        ),
+        Items::Ellipses(v) => assert_eq!(v, vec![Item::ellipse([1.0, 2.0], [2.0, 1.0], 0.5)]),
         Items::Ellipsoids(_) => panic!("2D expected"),
     }
 }
@@ -421,11 +402,7 @@ fn packings_refuse_impossible_items() {
         center: [0.0; 2],
         radius: 1.0,
     };
-    let bad = Items::Ellipses(vec![EllipseItem {
-        center: [0.0, f64::NAN],
-        semi_axes: [1.0, 1.0],
-        theta: 0.0,
-    }]);
+    let bad = Items::Ellipses(vec![Item::ellipse([0.0, f64::NAN], [1.0, 1.0], 0.0)]);
     assert!(Packing::new(c.clone(), bad).is_err());
     let three_d = Items::Ellipsoids(vec![]);
     assert!(Packing::new(c, three_d).is_err());

@@ -22,6 +22,7 @@
 //! variables for packing ellipsoids*, J. Global Optim. (2016), Section 3, eqs. (1)–(2).
 
 use crate::error::Error;
+use std::f64::consts::PI;
 
 /// Largest magnitude accepted for a coordinate or a semi-axis, and the reciprocal of the smallest
 /// semi-axis: keeps every intermediate quantity (ratios of semi-axes squared, squared distances in
@@ -468,6 +469,52 @@ impl<const N: usize> Item<N> {
     /// Those of [`Body::oriented`], naming no item: callers name it.
     pub fn body(&self) -> Result<Body<N>, Error> {
         Body::oriented(self.centre, self.semi_axes, self.orientation.values())
+    }
+
+    /// Its area πab (2D) or volume 4/3 πabc (3D).
+    pub fn measure(&self) -> f64 {
+        let unit = if N == 2 { PI } else { 4.0 / 3.0 * PI };
+        self.semi_axes.iter().fold(unit, |m, l| m * l)
+    }
+}
+
+impl Item<2> {
+    /// The ellipse with centre `c`, semi-axes `(a, b)` and the angle θ of eq. 1.
+    pub fn ellipse(centre: [f64; 2], semi_axes: [f64; 2], theta: f64) -> Self {
+        Item {
+            centre,
+            semi_axes,
+            orientation: Orientation::Angle(theta),
+        }
+    }
+
+    /// The angle θ of eq. 1; NaN when the orientation is a quaternion (which no ellipse has,
+    /// and which [`Item::body`] refuses).
+    pub fn theta(&self) -> f64 {
+        match self.orientation {
+            Orientation::Angle(theta) => theta,
+            Orientation::Quaternion(_) => f64::NAN,
+        }
+    }
+}
+
+impl Item<3> {
+    /// The ellipsoid with centre `c`, semi-axes `(a, b, c)` and the quaternion `(w, x, y, z)`.
+    pub fn ellipsoid(centre: [f64; 3], semi_axes: [f64; 3], quaternion: [f64; 4]) -> Self {
+        Item {
+            centre,
+            semi_axes,
+            orientation: Orientation::Quaternion(quaternion),
+        }
+    }
+
+    /// The quaternion `(w, x, y, z)`; NaNs when the orientation is an angle (which no
+    /// ellipsoid has, and which [`Item::body`] refuses).
+    pub fn quaternion(&self) -> [f64; 4] {
+        match self.orientation {
+            Orientation::Quaternion(q) => q,
+            Orientation::Angle(_) => [f64::NAN; 4],
+        }
     }
 }
 

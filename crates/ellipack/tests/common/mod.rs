@@ -3,9 +3,7 @@
 
 #![allow(dead_code)]
 
-use ellipack::packing::{
-    CertificateCounts, Container, EllipseItem, EllipsoidItem, Items, Packing, Summary,
-};
+use ellipack::packing::{CertificateCounts, Container, Item, Items, Packing, Summary};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use testkit::Rng;
@@ -72,11 +70,11 @@ pub fn ellipses(n_side: usize, mixed: bool, seed: u64) -> Packing {
             } else {
                 (2.0, 1.0)
             };
-            items.push(EllipseItem {
-                center: [(i as f64 - half) * step, (j as f64 - half) * step],
-                semi_axes: [a, b],
-                theta: rng.range(-3.2, 3.2),
-            });
+            items.push(Item::ellipse(
+                [(i as f64 - half) * step, (j as f64 - half) * step],
+                [a, b],
+                rng.range(-3.2, 3.2),
+            ));
         }
     }
     // Cells reach half·step + 2.1 from the centre along each axis; an ellipse with semi-axes
@@ -106,15 +104,15 @@ pub fn ellipsoids(n_side: usize, ball: bool, seed: u64) -> Packing {
                     rng.range(-1.0, 1.0),
                 ];
                 let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-                items.push(EllipsoidItem {
-                    center: [
+                items.push(Item::ellipsoid(
+                    [
                         (i as f64 - half) * step,
                         (j as f64 - half) * step,
                         (k as f64 - half) * step,
                     ],
-                    semi_axes: [1.0, 0.75, 0.5],
-                    quaternion: q.map(|x| x / norm),
-                });
+                    [1.0, 0.75, 0.5],
+                    q.map(|x| x / norm),
+                ));
             }
         }
     }
