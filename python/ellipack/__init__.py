@@ -232,6 +232,18 @@ def _pair(
     return result[:, 0], result[:, 1]
 
 
+def _fast_or_evaluate(
+    kind: str, args: list, out_width: int, out: Any, threads: Optional[int]
+) -> Any:
+    """`_evaluate` for kernels whose fast-path result (`_one`) is already the final one: a
+    single row of `args` without a thread count is read as it is, anything else vectorised."""
+    if threads is None:
+        one = _one(kind, out, *(value for _, value, _ in args))
+        if one is not None:
+            return one
+    return _evaluate(kind, args, out_width, out, threads)
+
+
 def _output_shape(args: list, width: int) -> tuple:
     counted = []
     for name, value, w in args:
@@ -243,12 +255,8 @@ def _output_shape(args: list, width: int) -> tuple:
 
 
 def contact_function(
-    r12: npt.ArrayLike,
-    q1: npt.ArrayLike,
-    q2: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> Tuple[Any, Any]:
     """The PW85 contact function mu^2 of two ellipsoids and its maximiser lambda.
 
@@ -267,12 +275,8 @@ def contact_function(
 
 
 def contact_function_2d(
-    r12: npt.ArrayLike,
-    q1: npt.ArrayLike,
-    q2: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> Tuple[Any, Any]:
     """The contact function of two ellipses: as :func:`contact_function` with r12 (2,) or
     (n, 2) and q1, q2 ``[Q11, Q12, Q22]`` (3,) or (n, 3)."""
@@ -296,12 +300,8 @@ def _verdict(kind, r12, q1, q2, dim, out, threads):
 
 
 def overlap(
-    r12: npt.ArrayLike,
-    q1: npt.ArrayLike,
-    q2: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> Any:
     """Whether two ellipsoids overlap (mu^2 < 1), decided without computing mu^2 to full
     precision (early exit): the same verdict as ``contact_function(...)[0] < 1``.
@@ -313,12 +313,8 @@ def overlap(
 
 
 def overlap_2d(
-    r12: npt.ArrayLike,
-    q1: npt.ArrayLike,
-    q2: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> Any:
     """Whether two ellipses overlap: :func:`overlap` in 2D."""
     return _verdict("overlap2", r12, q1, q2, 2, out, threads)
@@ -344,20 +340,35 @@ class ContactDetails(NamedTuple):
     """d mu^2 / d q2, as grad_q1."""
 
 
+# A row of the details kernels' output is mu2, lam, then the vector fields of ContactDetails
+# (point, normal, grad_r12, grad_q1, grad_q2): per dimension, their columns and the row's width.
+_DETAIL_COLUMNS = {
+    3: ((slice(2, 5), slice(5, 8), slice(8, 11), slice(11, 17), slice(17, 23)), 23),
+    2: ((slice(2, 4), slice(4, 6), slice(6, 8), slice(8, 11), slice(11, 14)), 14),
+}
+
+
+def _details(
+    kind: str, dim: int, r12: Any, q1: Any, q2: Any, threads: Optional[int]
+) -> ContactDetails:
+    """The ContactDetails of ellipsoids (dim 3) or ellipses (dim 2) from the kernel `kind`."""
+    columns, width = _DETAIL_COLUMNS[dim]
+    d = None if threads is not None else _one(kind, None, r12, q1, q2)
+    if d is None:
+        d = _evaluate(kind, _pair_args(r12, q1, q2, dim), width, None, threads)
+    vectors = [d[..., c] for c in columns]
+    if d.ndim == 1:
+        return ContactDetails(float(d[0]), float(d[1]), *vectors)
+    return ContactDetails(d[..., 0], d[..., 1], *vectors)
+
+
 def contact_details(
     r12: npt.ArrayLike, q1: npt.ArrayLike, q2: npt.ArrayLike, *, threads: Optional[int] = None
 ) -> ContactDetails:
     """mu^2, lambda, the contact point, the common normal and the gradients of mu^2 with
     respect to r12, q1 and q2 (see :class:`ContactDetails`). Shapes as
     :func:`contact_function`."""
-    d = None if threads is not None else _one("details3", None, r12, q1, q2)
-    if d is None:
-        d = _evaluate("details3", _pair_args(r12, q1, q2, 3), 23, None, threads)
-    if d.ndim == 1:
-        return ContactDetails(float(d[0]), float(d[1]), d[2:5], d[5:8], d[8:11], d[11:17], d[17:23])
-    return ContactDetails(
-        d[..., 0], d[..., 1], d[..., 2:5], d[..., 5:8], d[..., 8:11], d[..., 11:17], d[..., 17:23]
-    )
+    return _details("details3", 3, r12, q1, q2, threads)
 
 
 def contact_details_2d(
@@ -367,14 +378,7 @@ def contact_details_2d(
     (3,) or (n, 3); the point, normal and ``grad_r12`` have 2 entries, ``grad_q1`` and
     ``grad_q2`` 3 (off-diagonal entries counted twice). mu^2 and lambda are those of
     :func:`contact_function_2d`."""
-    d = None if threads is not None else _one("details2", None, r12, q1, q2)
-    if d is None:
-        d = _evaluate("details2", _pair_args(r12, q1, q2, 2), 14, None, threads)
-    if d.ndim == 1:
-        return ContactDetails(float(d[0]), float(d[1]), d[2:4], d[4:6], d[6:8], d[8:11], d[11:14])
-    return ContactDetails(
-        d[..., 0], d[..., 1], d[..., 2:4], d[..., 4:6], d[..., 6:8], d[..., 8:11], d[..., 11:14]
-    )
+    return _details("details2", 2, r12, q1, q2, threads)
 
 
 def f_neg(
@@ -400,12 +404,8 @@ def f_neg(
 
 
 def spheroid(
-    a: npt.ArrayLike,
-    c: npt.ArrayLike,
-    n: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    a: npt.ArrayLike, c: npt.ArrayLike, n: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> np.ndarray:
     """The quadratic form of the spheroid with equatorial semi-axis ``a``, polar semi-axis
     ``c`` and axis of revolution ``n``: Q = a^2 I + (c^2 - a^2) n n^T, with ``n`` as given, as
@@ -417,39 +417,25 @@ def spheroid(
     square overflows or underflows float64 (beyond about 1.3e154 or below 1.5e-154), n not
     finite or zero, and a Q that overflows or is not positive definite (c < a with |n| > 1).
     """
-    if threads is None:
-        one = _one("spheroid", out, a, c, n)
-        if one is not None:
-            return one
     args = [("a", a, 1), ("c", c, 1), ("n", n, 3)]
-    return _evaluate("spheroid", args, 6, out, threads)
+    return _fast_or_evaluate("spheroid", args, 6, out, threads)
 
 
 def from_axes_quaternion(
-    axes: npt.ArrayLike,
-    quaternion: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    axes: npt.ArrayLike, quaternion: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and quaternions (w, x, y, z) (4,) or
     (n, 4), normalised here. Returns shape (6,) or (n, 6). A semi-axis whose square overflows
     or underflows float64 (beyond about 1.3e154 or below 1.5e-154) raises ValueError naming
     it."""
-    if threads is None:
-        one = _one("axes_quaternion", out, axes, quaternion)
-        if one is not None:
-            return one
     args = [("axes", axes, 3), ("quaternion", quaternion, 4)]
-    return _evaluate("axes_quaternion", args, 6, out, threads)
+    return _fast_or_evaluate("axes_quaternion", args, 6, out, threads)
 
 
 def from_axes_rotation(
-    axes: npt.ArrayLike,
-    rotation: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    axes: npt.ArrayLike, rotation: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> np.ndarray:
     """Q = R diag(axes^2) R^T for semi-axes (3,) or (n, 3) and rotation matrices (3, 3) or
     (n, 3, 3) whose column k is the direction of semi-axis k (orthogonal within 1e-6,
@@ -466,21 +452,14 @@ def from_axes_rotation(
 
 
 def from_axes_angle_2d(
-    axes: npt.ArrayLike,
-    theta: npt.ArrayLike,
-    out: Optional[np.ndarray] = None,
-    *,
-    threads: Optional[int] = None,
+    axes: npt.ArrayLike, theta: npt.ArrayLike, out: Optional[np.ndarray] = None,
+    *, threads: Optional[int] = None,
 ) -> np.ndarray:
     """The ellipse's Q = R(theta) diag(a^2, b^2) R(theta)^T, R(theta) = [[cos, -sin], [sin,
     cos]], for semi-axes (2,) or (n, 2) and angles (radians), a number or shape (n,). Returns
     ``[Q11, Q12, Q22]``, shape (3,) or (n, 3). Semi-axes as :func:`from_axes_quaternion`."""
-    if threads is None:
-        one = _one("axes_angle_2d", out, axes, theta)
-        if one is not None:
-            return one
     args = [("axes", axes, 2), ("theta", theta, 1)]
-    return _evaluate("axes_angle_2d", args, 3, out, threads)
+    return _fast_or_evaluate("axes_angle_2d", args, 3, out, threads)
 
 
 class OverlapMeasure(NamedTuple):

@@ -128,33 +128,16 @@ impl<const D: usize> PairList<D> {
     ///
     /// Read in the order of `states`, the pairs come in the order of the serial scan, whatever
     /// the scheduling, and the cut depends on the list alone: a sum over the states in order
-    /// is the same on every run, with any number of threads. The states keep their memory from call to call, so a state that
-    /// collects pairs allocates only when a range holds more of them than ever before.
+    /// is the same on every run, with any number of threads. The states keep their memory from
+    /// call to call, so a state that collects pairs allocates only when a range holds more of
+    /// them than ever before.
+    ///
+    /// `rows` is `0..points.len()` for all pairs, else the range of first items `i` whose pairs
+    /// are wanted (as [`for_each_close_pair_from`](Self::for_each_close_pair_from)).
     ///
     /// # Errors
     /// Those of [`refresh`](Self::refresh); `states` is left as it was then.
     pub fn par_fold_close_pairs_into<T, S, G>(
-        &mut self,
-        points: &[[f64; D]],
-        states: &mut Vec<T>,
-        start: S,
-        fold: G,
-    ) -> Result<(), Error>
-    where
-        T: Send + Default,
-        S: Fn(&mut T) + Sync + Send,
-        G: Fn(&mut T, usize, usize, [f64; D], f64) + Sync + Send,
-    {
-        self.par_fold_close_pairs_from_into(points, 0..points.len(), states, start, fold)
-    }
-
-    /// As [`par_fold_close_pairs_into`](Self::par_fold_close_pairs_into), for the pairs whose
-    /// first item `i` is in `rows` only (as
-    /// [`for_each_close_pair_from`](Self::for_each_close_pair_from)).
-    ///
-    /// # Errors
-    /// Those of [`refresh`](Self::refresh); `states` is left as it was then.
-    pub fn par_fold_close_pairs_from_into<T, S, G>(
         &mut self,
         points: &[[f64; D]],
         rows: std::ops::Range<usize>,

@@ -240,9 +240,13 @@ fn the_parallel_fold_gives_the_serial_pairs_in_order() {
     // states already full starts each over.
     let mut states = vec![vec![(0, 0, [0.0; 3], 0.0)]];
     for _ in 0..2 {
-        list.par_fold_close_pairs_into(&pts, &mut states, Vec::clear, |acc, i, j, d, d2| {
-            acc.push((i, j, d, d2))
-        })
+        list.par_fold_close_pairs_into(
+            &pts,
+            0..pts.len(),
+            &mut states,
+            Vec::clear,
+            |acc, i, j, d, d2| acc.push((i, j, d, d2)),
+        )
         .expect("valid");
         assert!(states.len() > 1);
         assert_eq!(serial, states.concat());
@@ -262,7 +266,7 @@ fn the_parallel_fold_gives_the_serial_pairs_in_order() {
             .expect("a pool");
         let mut states: Vec<Reported<3>> = Vec::new();
         pool.install(|| {
-            list.par_fold_close_pairs_from_into(
+            list.par_fold_close_pairs_into(
                 &pts,
                 rows.clone(),
                 &mut states,

@@ -5,6 +5,7 @@
 use crate::folder::{ORIENTATIONS_PICTURE, RDF_PICTURE};
 use crate::packing::{Items, Packing};
 use crate::render::{FONT, RenderError, register_font};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 use structure::Structure;
@@ -49,15 +50,35 @@ fn rdf_svg(s: &Structure) -> Result<String, String> {
         .collect();
     let x_max = points.last().map_or(1.0, |p| p.0) * 1.02;
     let y_max = points.iter().map(|p| p.1).fold(1.0_f64, f64::max) * 1.1;
+    let caption = format!("g(r) of {} centres, density {:.4}", s.items, s.density);
+    let axes = ("r / mean equivalent diameter", "g(r)");
+    chart_svg(&caption, axes, (x_max, y_max), |chart| {
+        chart
+            .draw_series(LineSeries::new(points, BLUE.stroke_width(2)))
+            .map(|_| ())
+    })
+}
+
+/// The chart both pictures share: a caption, the axes `[0, x_max] × [0, y_max]` with their
+/// labels, what `draw` puts on them, and the line y = 1 (an ideal gas's g, an isotropic
+/// histogram).
+fn chart_svg<D>(
+    caption: &str,
+    (x_desc, y_desc): (&str, &str),
+    (x_max, y_max): (f64, f64),
+    draw: D,
+) -> Result<String, String>
+where
+    D: FnOnce(
+        &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    ) -> Result<(), DrawingAreaErrorKind<std::io::Error>>,
+{
     let mut text = String::new();
     {
         let area = SVGBackend::with_string(&mut text, (800, 500)).into_drawing_area();
         area.fill(&WHITE).map_err(|e| e.to_string())?;
         let mut chart = ChartBuilder::on(&area)
-            .caption(
-                format!("g(r) of {} centres, density {:.4}", s.items, s.density),
-                (FONT, 20),
-            )
+            .caption(caption, (FONT, 20))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(50)
@@ -65,14 +86,12 @@ fn rdf_svg(s: &Structure) -> Result<String, String> {
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
-            .x_desc("r / mean equivalent diameter")
-            .y_desc("g(r)")
+            .x_desc(x_desc)
+            .y_desc(y_desc)
             .label_style((FONT, 14))
             .draw()
             .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(LineSeries::new(points, BLUE.stroke_width(2)))
-            .map_err(|e| e.to_string())?;
+        draw(&mut chart).map_err(|e| e.to_string())?;
         chart
             .draw_series(LineSeries::new([(0.0, 1.0), (x_max, 1.0)], BLACK.mix(0.4)))
             .map_err(|e| e.to_string())?;
@@ -132,41 +151,22 @@ fn orientations_svg(packing: &Packing, s: &Structure) -> Result<String, String> 
         .collect();
     let y_max = density.iter().copied().fold(2.0_f64, f64::max) * 1.1;
     let width = range / ORIENTATION_BINS as f64;
-    let mut text = String::new();
-    {
-        let area = SVGBackend::with_string(&mut text, (800, 500)).into_drawing_area();
-        area.fill(&WHITE).map_err(|e| e.to_string())?;
-        let order = s.nematic.first().map_or(0.0, |n| n.order);
-        let mut chart = ChartBuilder::on(&area)
-            .caption(
-                format!(
-                    "orientations of {} items, nematic order S = {order:.3}",
-                    s.items
-                ),
-                (FONT, 20),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(0.0..range, 0.0..y_max)
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc(label)
-            .y_desc("items per bin / isotropic")
-            .label_style((FONT, 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(density.iter().enumerate().map(|(k, &h)| {
-                let x = k as f64 * width;
-                Rectangle::new([(x, 0.0), (x + width, h)], BLUE.mix(0.5).filled())
-            }))
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(LineSeries::new([(0.0, 1.0), (range, 1.0)], BLACK.mix(0.4)))
-            .map_err(|e| e.to_string())?;
-        area.present().map_err(|e| e.to_string())?;
-    }
-    Ok(text)
+    let order = s.nematic.first().map_or(0.0, |n| n.order);
+    let caption = format!(
+        "orientations of {} items, nematic order S = {order:.3}",
+        s.items
+    );
+    chart_svg(
+        &caption,
+        (label, "items per bin / isotropic"),
+        (range, y_max),
+        |chart| {
+            chart
+                .draw_series(density.iter().enumerate().map(|(k, &h)| {
+                    let x = k as f64 * width;
+                    Rectangle::new([(x, 0.0), (x + width, h)], BLUE.mix(0.5).filled())
+                }))
+                .map(|_| ())
+        },
+    )
 }

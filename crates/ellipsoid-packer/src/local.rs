@@ -319,16 +319,22 @@ mod tests {
         assert!(r.repair_factor >= 1.0 && r.density <= r.density_before_repair);
     }
 
-    #[test]
-    fn repair_holds_an_item_outside_by_scaling_the_container_alone() {
+    /// Two unit spheres at `x₁` and `x₂` on the x axis in a ball of `radius`, repaired: the
+    /// variables before and after, and the dilation; the repair is certified.
+    fn two_unit_spheres_repaired(x1: f64, x2: f64, radius: f64) -> (Vec<f64>, Vec<f64>, f64) {
         let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
-        // A unit sphere at 2.5 from the centre of a ball of radius 3 sticks out by 0.5: the
-        // container needs t = 3.5/3, a uniform dilation s = 2 (2.5 s + 1 ≤ 3 s).
-        let x = vec![
-            2.5, 0.0, 0.0, 0.0, 0.0, 0.0, -1.5, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
-        ];
+        let mut x = vec![0.0; 13];
+        (x[0], x[6], x[12]) = (x1, x2, radius);
         let (y, s, cert) = repair(&mut p, &x).unwrap();
         assert!(cert.is_feasible());
+        (x, y, s)
+    }
+
+    #[test]
+    fn repair_holds_an_item_outside_by_scaling_the_container_alone() {
+        // A unit sphere at 2.5 from the centre of a ball of radius 3 sticks out by 0.5: the
+        // container needs t = 3.5/3, a uniform dilation s = 2 (2.5 s + 1 ≤ 3 s).
+        let (x, y, s) = two_unit_spheres_repaired(2.5, -1.5, 3.0);
         assert!((s - 3.5 / 3.0).abs() < 1e-9, "{s}");
         assert_eq!(y[..12], x[..12]);
         assert!((y[12] - 3.5).abs() < 1e-9);
@@ -349,14 +355,9 @@ mod tests {
 
     #[test]
     fn repair_separates_then_holds_by_the_product_of_the_two_factors() {
-        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
         // Unit spheres 1.5 apart in a ball of radius 1.2: s = 4/3 moves them to ±1 in a ball
         // of radius 1.6, which t = 2/1.6 then makes 2. A uniform dilation needs 1/0.45.
-        let x = vec![
-            0.75, 0.0, 0.0, 0.0, 0.0, 0.0, -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 1.2,
-        ];
-        let (y, s, cert) = repair(&mut p, &x).unwrap();
-        assert!(cert.is_feasible());
+        let (_, y, s) = two_unit_spheres_repaired(0.75, -0.75, 1.2);
         assert!((s - 4.0 / 3.0 * 1.25).abs() < 1e-9, "{s}");
         assert!((y[0] - 1.0).abs() < 1e-9 && (y[6] + 1.0).abs() < 1e-9);
         assert!((y[12] - 2.0).abs() < 1e-9, "{}", y[12]);
@@ -364,13 +365,8 @@ mod tests {
 
     #[test]
     fn repair_separates_overlapping_items_by_the_least_dilation() {
-        let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
         // Two unit spheres 1.5 apart in a ball of radius 3: μ = 0.75, s = 4/3.
-        let x = vec![
-            -0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.75, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0,
-        ];
-        let (y, s, cert) = repair(&mut p, &x).unwrap();
-        assert!(cert.is_feasible());
+        let (_, y, s) = two_unit_spheres_repaired(-0.75, 0.75, 3.0);
         assert!((s - 4.0 / 3.0).abs() < 1e-9, "{s}");
         assert!((y[6] - y[0] - 2.0).abs() < 1e-9);
     }

@@ -991,6 +991,7 @@ fn pair_sum_value<const N: usize>(
 ) -> Result<(f64, usize), Error> {
     list.par_fold_close_pairs_into(
         centres,
+        0..centres.len(),
         &mut ranges.values,
         |s| s.kept = (0.0, 0, ()),
         |s, i, j, _, _| add_value(s, bodies, i, j),
@@ -1241,6 +1242,7 @@ fn pair_sum_gradient<const N: usize>(
     {
         list.par_fold_close_pairs_into(
             centres,
+            0..centres.len(),
             &mut ranges.gradients,
             restart_terms,
             |s, i, j, _, _| add_term(s, bodies, i, j),

@@ -463,7 +463,7 @@ impl<const N: usize> Lattice<N> {
     }
 
     /// [`Lattice::for_each_pair`] on rayon's pool: the item rows of the list cut into ranges
-    /// (cell-grid's `par_fold_close_pairs_from_into`, a cut that depends on the list alone),
+    /// (cell-grid's `par_fold_close_pairs_into`, a cut that depends on the list alone),
     /// range `k` folding its representative pairs, in ascending `(a, b)`, into `states[k]`
     /// after `start(&mut states[k])`. Read in the order of `states`, the pairs come in the
     /// order of [`Lattice::for_each_pair`], on any number of threads.
@@ -477,7 +477,7 @@ impl<const N: usize> Lattice<N> {
         let (images, points, bodies) = (&self.images, &self.points, &self.extended);
         match &mut self.list {
             Some(list) => list
-                .par_fold_close_pairs_from_into(
+                .par_fold_close_pairs_into(
                     points,
                     0..images.items,
                     states,

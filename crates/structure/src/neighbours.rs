@@ -194,13 +194,8 @@ mod tests {
     #[test]
     fn bonds_in_a_sheared_cell_match_brute_force_over_images() {
         let cell = [[5.0, 2.2, -1.1], [0.0, 4.0, 1.7], [0.0, 0.0, 4.5]];
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = testkit::Rng::new(12345);
+        let mut next = || rng.uniform();
         let centres: Vec<[f64; 3]> = (0..40)
             .map(|_| [9.0 * next() - 3.0, 9.0 * next() - 3.0, 9.0 * next()])
             .collect();

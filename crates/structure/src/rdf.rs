@@ -64,13 +64,8 @@ mod tests {
     /// An ideal gas has g = 1: the normalisation by m ρ V_shell is right in 2D and 3D.
     #[test]
     fn uniform_points_have_g_one() {
-        let mut state = 7u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = testkit::Rng::new(7);
+        let mut next = || rng.uniform();
         let points: Vec<[f64; 2]> = (0..4000).map(|_| [40.0 * next(), 40.0 * next()]).collect();
         let cell = [[40.0, 0.0], [0.0, 40.0]];
         let g = rdf(&points, Some(&cell), 1600.0, 8.0, 8).unwrap();

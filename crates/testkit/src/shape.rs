@@ -8,29 +8,29 @@
 
 use crate::Rng;
 
-/// The rotation matrix of a quaternion (w, x, y, z), which need not be exactly unit.
+/// The rotation matrix of a quaternion (w, x, y, z), which need not be exactly unit: column k
+/// is the image of axis k under v ↦ q v q*, computed as v + 2w (u × v) + 2 u × (u × v) for the
+/// normalised q = (w, u) — another route than the matrix formula the crates use, so that a
+/// test comparing the two can fail.
 pub fn rotation(q: [f64; 4]) -> [[f64; 3]; 3] {
-    let [w, x, y, z] = q;
-    // Dividing by the squared norm once keeps the matrix orthogonal to rounding for a
-    // quaternion that is unit only to 1e-16 (as the stored ones are).
-    let s = 2.0 / (w * w + x * x + y * y + z * z);
-    [
+    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let [w, x, y, z] = q.map(|v| v / norm);
+    let u = [x, y, z];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
         [
-            1.0 - s * (y * y + z * z),
-            s * (x * y - w * z),
-            s * (x * z + w * y),
-        ],
-        [
-            s * (x * y + w * z),
-            1.0 - s * (x * x + z * z),
-            s * (y * z - w * x),
-        ],
-        [
-            s * (x * z - w * y),
-            s * (y * z + w * x),
-            1.0 - s * (x * x + y * y),
-        ],
-    ]
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let image = |k: usize| {
+        let v: [f64; 3] = std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 });
+        let t = cross(u, v);
+        let tt = cross(u, t);
+        std::array::from_fn(|i| v[i] + 2.0 * w * t[i] + 2.0 * tt[i])
+    };
+    let columns: [[f64; 3]; 3] = std::array::from_fn(image);
+    std::array::from_fn(|row| std::array::from_fn(|col| columns[col][row]))
 }
 
 /// `R diag(a²) Rᵀ` for the semi-axes `axes` and the rotation of the quaternion `q`.
