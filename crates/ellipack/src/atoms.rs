@@ -2,7 +2,7 @@
 //! cell, every item an ellipsoid with a unit quaternion (an ellipse flattened at z = 0), and
 //! the shape groups that become atom types and element names.
 
-use crate::packing::{Container, Items, Packing};
+use crate::packing::{Items, Packing};
 
 /// The simulation cell the files state: a parallelepiped with lower corner `lo`, edge lengths
 /// `lengths` and LAMMPS tilt factors (xy, xz, yz), periodic or not along each axis.
@@ -43,12 +43,9 @@ impl Cell {
                 half[k] = half[k].max((body.center[k] - center[k]).abs() + reach);
             }
         }
-        if let Container::Periodic {
-            origin,
-            lengths,
-            tilts,
-        } = container
-        {
+        if container.kind().is_periodic() {
+            let size = container.size();
+            let (lengths, tilts) = size.split_at(dimension);
             // The periodic cell itself; in 2D a slab around z = 0 as above.
             let mut cell = Cell {
                 lo: [0.0, 0.0, -half[2]],
@@ -57,7 +54,7 @@ impl Cell {
                 periodic: [true, true, dimension == 3],
                 dimension,
             };
-            cell.lo[..dimension].copy_from_slice(origin);
+            cell.lo[..dimension].copy_from_slice(container.center());
             cell.lengths[..dimension].copy_from_slice(lengths);
             cell.tilt[..tilts.len()].copy_from_slice(tilts);
             return cell;

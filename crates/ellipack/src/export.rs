@@ -16,7 +16,8 @@
 //!   their first item appears.
 
 pub use crate::atoms::{Body, Cell, GROUP_ELEMENTS, ShapeGroups, bodies, group_name, shape_groups};
-use crate::packing::{Container, Packing, PackingError, num};
+use crate::packing::{Container, ContainerKind, Packing, PackingError, num};
+use implicit_packing::ContainerShape;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -571,8 +572,9 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
     let mut faces: Vec<Vec<usize>> = Vec::new();
     let c = container.center();
     let half = container.half_extents();
-    match container {
-        Container::Ball { .. } | Container::Ellipsoid { .. } => {
+    let periodic = container.kind().is_periodic();
+    match container.kind().shape() {
+        ContainerShape::Ball | ContainerShape::Ellipsoid if container.dimension() == 3 => {
             let r = [half[0], half[1], half[2]];
             let point = |polar: f64, azimuth: f64| {
                 let (sp, cp) = polar.sin_cos();
@@ -615,11 +617,11 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
                 ]);
             }
         }
-        Container::Cuboid { .. } | Container::Periodic { .. } if container.dimension() == 3 => {
+        ContainerShape::Box | ContainerShape::Periodic if container.dimension() == 3 => {
             let edges = cell.vectors();
             for k in 0..8 {
                 let bit = |j: usize| k & (1 << j) != 0;
-                vertices.push(if let Container::Periodic { .. } = container {
+                vertices.push(if periodic {
                     // The cell spanned by its edge vectors (right-handed: det H > 0).
                     [0, 1, 2].map(|i| {
                         cell.lo[i] + (0..3).filter(|&j| bit(j)).map(|j| edges[j][i]).sum::<f64>()
@@ -640,7 +642,7 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
         }
         _ => {
             let edges = cell.vectors();
-            let outline: Vec<[f64; 2]> = if let Container::Periodic { .. } = container {
+            let outline: Vec<[f64; 2]> = if periodic {
                 let [x0, y0, _] = cell.lo;
                 let ([ax, ay, _], [bx, by, _]) = (edges[0], edges[1]);
                 vec![
@@ -649,7 +651,7 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
                     [x0 + ax + bx, y0 + ay + by],
                     [x0 + bx, y0 + by],
                 ]
-            } else if let Container::Rectangle { .. } = container {
+            } else if container.kind() == ContainerKind::Rectangle {
                 vec![
                     [c[0] - half[0], c[1] - half[1]],
                     [c[0] + half[0], c[1] - half[1]],

@@ -18,7 +18,7 @@ use ellipsoid_packer::run::{
     Configuration, Goal, Outcome, Packed, Packer, Problem, Settings, Unfilled,
 };
 use implicit_packing::certificate::{bodies_of as stated_bodies, certify_items, shown_mu2};
-use implicit_packing::{Body, Container as SizedContainer, ContainerShape, Item};
+use implicit_packing::{Body, Container as SizedContainer, Item};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -294,17 +294,17 @@ fn run_n<const N: usize>(
     options: &RunOptions,
     observer: &mut dyn Observer,
 ) -> Result<RunOutcome, PackError> {
-    let shape = model_container(scene.container);
+    let shape = scene.container.shape();
     let goal = match (scene.random_goal(), scene.fixed_container()) {
         (Some(RandomGoal::Fraction(c)), _) => Goal::Random {
             target: Target::Fraction,
-            container: sized::<N>(&c, shape)?,
+            container: sized::<N>(&c)?,
         },
         (Some(RandomGoal::Jammed(c)), _) => Goal::Random {
             target: Target::Jammed,
-            container: sized::<N>(&c, shape)?,
+            container: sized::<N>(&c)?,
         },
-        (None, Some(c)) => Goal::Fill(sized::<N>(&c, shape)?),
+        (None, Some(c)) => Goal::Fill(sized::<N>(&c)?),
         (None, None) => Goal::Densest,
     };
     let resume = match &options.resume_from {
@@ -323,8 +323,8 @@ fn run_n<const N: usize>(
         .and_then(|packer| packer.run(observer))
         .map_err(as_scene_says)?;
     match outcome {
-        Outcome::Packed(packed) => packed_outcome(packed, scene.container, options, seed),
-        Outcome::Unfilled(unfilled) => Err(not_reached(unfilled, scene.container)?),
+        Outcome::Packed(packed) => packed_outcome(packed, options, seed),
+        Outcome::Unfilled(unfilled) => Err(not_reached(unfilled)?),
     }
 }
 
@@ -388,12 +388,11 @@ fn as_scene_says(e: ellipsoid_packer::Error) -> PackError {
 /// measure as the objective, the run's wall time and local minimisations, the certificate.
 fn written<const N: usize>(
     configuration: &Configuration<N>,
-    kind: ContainerKind,
     wall_time: Duration,
     local_minimisations: usize,
     certificate: &implicit_packing::Certificate,
 ) -> Result<(Packing, Summary), PackError> {
-    let packing = packing_of(configuration, kind)?;
+    let packing = packing_of(configuration)?;
     let summary = Summary::new(
         &packing,
         configuration.container.measure().0,
@@ -407,13 +406,11 @@ fn written<const N: usize>(
 /// The run's outcome as the files hold it.
 fn packed_outcome<const N: usize>(
     packed: Packed<N>,
-    kind: ContainerKind,
     options: &RunOptions,
     seed: u64,
 ) -> Result<RunOutcome, PackError> {
     let (packing, mut summary) = written(
         &packed.configuration,
-        kind,
         packed.wall_time,
         packed.local_minimisations,
         &packed.certificate,
@@ -447,13 +444,9 @@ fn packed_outcome<const N: usize>(
 
 /// The error of a fixed-container run that found no packing, with its least overlapping
 /// configuration as the files hold it.
-fn not_reached<const N: usize>(
-    u: Unfilled<N>,
-    kind: ContainerKind,
-) -> Result<PackError, PackError> {
+fn not_reached<const N: usize>(u: Unfilled<N>) -> Result<PackError, PackError> {
     let (packing, mut summary) = written(
         &u.configuration,
-        kind,
         u.wall_time,
         u.local_minimisations,
         &u.certificate,
@@ -587,28 +580,10 @@ fn certificate_of(model: &implicit_packing::Certificate) -> CertificateCounts {
     }
 }
 
-/// The model's container shape for a container kind of the files.
-pub fn model_container(kind: ContainerKind) -> ContainerShape {
-    match kind {
-        ContainerKind::Circle | ContainerKind::Ball => ContainerShape::Ball,
-        ContainerKind::Ellipse | ContainerKind::Ellipsoid => ContainerShape::Ellipsoid,
-        ContainerKind::Rectangle | ContainerKind::Cuboid => ContainerShape::Box,
-        ContainerKind::Parallelogram | ContainerKind::Parallelepiped => ContainerShape::Periodic,
-    }
-}
-
-/// The container of the files as the packer's, centred at the origin: a ball's radius, else
-/// its semi-axes, half sides or cell entries.
-fn sized<const N: usize>(
-    container: &Container,
-    shape: ContainerShape,
-) -> Result<SizedContainer<N>, PackError> {
-    let size = container.size();
-    let dims = match shape {
-        ContainerShape::Ball => vec![size.first().copied().unwrap_or(0.0)],
-        _ => size,
-    };
-    Ok(SizedContainer::from_dimensions(shape, &dims)?)
+/// The container of the files as the packer's, centred at the origin, checked by the model.
+fn sized<const N: usize>(container: &Container) -> Result<SizedContainer<N>, PackError> {
+    let shape = container.kind().shape();
+    Ok(SizedContainer::from_dimensions(shape, &container.size())?)
 }
 
 /// The items of a packing relative to its container's centre, and its container, as the packer
@@ -625,21 +600,14 @@ fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N
             *x -= c;
         }
     }
-    let container = sized::<N>(container, model_container(container.kind()))?;
+    let container = sized::<N>(container)?;
     Ok(Configuration { items, container })
 }
 
 /// The packing the files hold of a configuration of the packer.
-fn packing_of<const N: usize>(
-    configuration: &Configuration<N>,
-    kind: ContainerKind,
-) -> Result<Packing, PackError> {
+fn packing_of<const N: usize>(configuration: &Configuration<N>) -> Result<Packing, PackError> {
     let items = Items::of(&configuration.items);
-    let dims: Vec<f64> = match configuration.container {
-        SizedContainer::Ball { radius } => vec![radius; N],
-        other => other.dimensions(),
-    };
-    let container = Container::unchecked(kind, &[0.0; N], &dims);
+    let container = Container::placed([0.0; N], &configuration.container);
     Ok(Packing::new(container, items)?)
 }
 
@@ -699,14 +667,7 @@ mod tests {
     fn verify_rejects_an_overlapping_pair_and_an_item_outside() {
         let unit_disc_at = |x| Item::ellipse([x, 0.0], [1.0, 1.0], 0.0);
         let items = Items::Ellipses(vec![unit_disc_at(0.0), unit_disc_at(1.5)]);
-        let packing = Packing::new(
-            Container::Circle {
-                center: [0.0, 0.0],
-                radius: 2.4,
-            },
-            items,
-        )
-        .unwrap();
+        let packing = Packing::new(Container::circle([0.0, 0.0], 2.4), items).unwrap();
         let c = verify(&packing).unwrap();
         assert_eq!(c.overlapping_pairs, 1);
         assert_eq!(
@@ -741,25 +702,16 @@ mod tests {
         };
         let cases: [(Container, f64); 3] = [
             (
-                Container::Ellipse {
-                    center: [1.0, 1.0],
-                    semi_axes: [4.0, 2.0],
-                },
+                Container::ellipse([1.0, 1.0], [4.0, 2.0]),
                 gauge_max(&|x, y| (x / 4.0).hypot(y / 2.0)),
             ),
             (
-                Container::Rectangle {
-                    center: [1.0, 1.0],
-                    half_sides: [4.0, 2.0],
-                },
+                Container::rectangle([1.0, 1.0], [4.0, 2.0]),
                 // max(2 / 4, 4 / 2): the top of the item, 4 above the centre.
                 2.0,
             ),
             (
-                Container::Circle {
-                    center: [1.0, 1.0],
-                    radius: 2.0,
-                },
+                Container::circle([1.0, 1.0], 2.0),
                 gauge_max(&|x, y| x.hypot(y) / 2.0),
             ),
         ];

@@ -16,6 +16,7 @@
 //! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
 //! * `packing.xyz`: extended XYZ for ASE and OVITO ([`crate::xyz`]).
 
+use implicit_packing::ContainerShape;
 pub use implicit_packing::Item;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -179,6 +180,33 @@ impl ContainerKind {
             .find(|k| k.name() == name && k.dimension() == dimension)
     }
 
+    /// The kind of the model's container `shape` in dimension `n` (2 or 3).
+    pub fn of(shape: ContainerShape, n: usize) -> Self {
+        let plane = n == 2;
+        match shape {
+            ContainerShape::Ball if plane => ContainerKind::Circle,
+            ContainerShape::Ball => ContainerKind::Ball,
+            ContainerShape::Ellipsoid if plane => ContainerKind::Ellipse,
+            ContainerShape::Ellipsoid => ContainerKind::Ellipsoid,
+            ContainerShape::Box if plane => ContainerKind::Rectangle,
+            ContainerShape::Box => ContainerKind::Cuboid,
+            ContainerShape::Periodic if plane => ContainerKind::Parallelogram,
+            ContainerShape::Periodic => ContainerKind::Parallelepiped,
+        }
+    }
+
+    /// The model's shape of this kind: a circle is a ball, a rectangle a box.
+    pub fn shape(self) -> ContainerShape {
+        match self {
+            ContainerKind::Circle | ContainerKind::Ball => ContainerShape::Ball,
+            ContainerKind::Ellipse | ContainerKind::Ellipsoid => ContainerShape::Ellipsoid,
+            ContainerKind::Rectangle | ContainerKind::Cuboid => ContainerShape::Box,
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => {
+                ContainerShape::Periodic
+            }
+        }
+    }
+
     /// 2 or 3.
     pub fn dimension(self) -> usize {
         match self {
@@ -223,76 +251,116 @@ impl fmt::Display for ContainerKind {
     }
 }
 
-/// An axis-aligned container with its size. In JSON: `{"kind": "ball", "center": [..],
+/// A container where a packing places it: the packing model's container
+/// ([`implicit_packing::Container`], centred at the origin; a periodic cell by its
+/// upper-triangular cell matrix) moved to `center`, the corner of a periodic cell.
+///
+/// In JSON, as `summary.json` and scene files state it: `{"kind": "ball", "center": [..],
 /// "radius": r}`, with `half_sides` for a rectangle or cuboid and `semi_axes` for an ellipse or
-/// ellipsoid; a missing `center` is the origin.
+/// ellipsoid; a missing `center` is the origin. A periodic cell is LAMMPS's triclinic box,
+/// `{"kind": "periodic", "origin": [..], "lengths": [l_x, l_y, l_z], "tilts": [xy, xz, yz]}`
+/// (2D: `[l_x, l_y]`, `[xy]`): lattice vectors `a = (l_x, 0, 0)`, `b = (xy, l_y, 0)`,
+/// `c = (xz, yz, l_z)` from `origin`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+#[serde(try_from = "ContainerForm", into = "ContainerForm")]
 pub enum Container {
-    /// The disc |x − center| ≤ radius.
-    Circle {
-        /// Its centre.
-        #[serde(default)]
+    /// A container in the plane.
+    Plane {
+        /// Its centre; a periodic cell's corner.
         center: [f64; 2],
-        /// Its radius.
-        radius: f64,
+        /// Its shape and size.
+        shape: Sized<2>,
     },
-    /// The ellipse Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
-    Ellipse {
-        /// Its centre.
-        #[serde(default)]
-        center: [f64; 2],
-        /// Its semi-axes along x and y.
-        semi_axes: [f64; 2],
-    },
-    /// The rectangle |xₖ − centerₖ| ≤ half_sidesₖ.
-    Rectangle {
-        /// Its centre.
-        #[serde(default)]
-        center: [f64; 2],
-        /// Half its width and half its height.
-        half_sides: [f64; 2],
-    },
-    /// The ball |x − center| ≤ radius.
-    Ball {
-        /// Its centre.
-        #[serde(default)]
+    /// A container in space.
+    Space {
+        /// Its centre; a periodic cell's corner.
         center: [f64; 3],
-        /// Its radius.
-        radius: f64,
-    },
-    /// The ellipsoid Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
-    Ellipsoid {
-        /// Its centre.
-        #[serde(default)]
-        center: [f64; 3],
-        /// Its semi-axes along x, y and z.
-        semi_axes: [f64; 3],
-    },
-    /// The cuboid |xₖ − centerₖ| ≤ half_sidesₖ.
-    Cuboid {
-        /// Its centre.
-        #[serde(default)]
-        center: [f64; 3],
-        /// Its half sides along x, y and z.
-        half_sides: [f64; 3],
-    },
-    /// A periodic cell, LAMMPS's triclinic box: lattice vectors `a = (l_x, 0, 0)`,
-    /// `b = (xy, l_y, 0)`, `c = (xz, yz, l_z)` (2D: `a = (l_x, 0)`, `b = (xy, l_y)`) from
-    /// `origin`; space is tiled by its translates.
-    Periodic {
-        /// The cell's corner (where the fractional coordinates are 0); the origin when a
-        /// summary leaves it out.
-        #[serde(default)]
-        origin: Vec<f64>,
-        /// `[l_x, l_y]` or `[l_x, l_y, l_z]`.
-        lengths: Vec<f64>,
-        /// `[xy]` or `[xy, xz, yz]`.
-        tilts: Vec<f64>,
+        /// Its shape and size.
+        shape: Sized<3>,
     },
 }
 
+/// The packing model's container: a shape with its size, centred at the origin.
+pub type Sized<const N: usize> = implicit_packing::Container<N>;
+
+/// `$body` with `$center` and `$shape` bound in either dimension.
+macro_rules! in_either_dimension {
+    ($container:expr, |$center:ident, $shape:ident| $body:expr) => {
+        match $container {
+            Container::Plane {
+                center: $center,
+                shape: $shape,
+            } => $body,
+            Container::Space {
+                center: $center,
+                shape: $shape,
+            } => $body,
+        }
+    };
+}
+
 impl Container {
+    /// The disc |x − center| ≤ radius.
+    pub fn circle(center: [f64; 2], radius: f64) -> Self {
+        let shape = Sized::Ball { radius };
+        Container::Plane { center, shape }
+    }
+
+    /// The ellipse Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
+    pub fn ellipse(center: [f64; 2], semi_axes: [f64; 2]) -> Self {
+        let shape = Sized::Ellipsoid { semi_axes };
+        Container::Plane { center, shape }
+    }
+
+    /// The rectangle |xₖ − centerₖ| ≤ half_sidesₖ.
+    pub fn rectangle(center: [f64; 2], half_sides: [f64; 2]) -> Self {
+        let shape = Sized::Box { half_sides };
+        Container::Plane { center, shape }
+    }
+
+    /// The ball |x − center| ≤ radius.
+    pub fn ball(center: [f64; 3], radius: f64) -> Self {
+        let shape = Sized::Ball { radius };
+        Container::Space { center, shape }
+    }
+
+    /// The ellipsoid Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
+    pub fn ellipsoid(center: [f64; 3], semi_axes: [f64; 3]) -> Self {
+        let shape = Sized::Ellipsoid { semi_axes };
+        Container::Space { center, shape }
+    }
+
+    /// The cuboid |xₖ − centerₖ| ≤ half_sidesₖ.
+    pub fn cuboid(center: [f64; 3], half_sides: [f64; 3]) -> Self {
+        let shape = Sized::Box { half_sides };
+        Container::Space { center, shape }
+    }
+
+    /// The periodic cell at `origin` (2 or 3 coordinates) with `lengths` and LAMMPS's `tilts`
+    /// (`[xy]`, or `[xy, xz, yz]`; missing tilts are zero), unchecked as
+    /// [`Container::unchecked`].
+    pub fn periodic(origin: &[f64], lengths: &[f64], tilts: &[f64]) -> Self {
+        let kind = if origin.len() == 2 {
+            ContainerKind::Parallelogram
+        } else {
+            ContainerKind::Parallelepiped
+        };
+        let size: Vec<f64> = lengths.iter().chain(tilts).copied().collect();
+        Container::unchecked(kind, origin, &size)
+    }
+
+    /// The model's `shape` at `center`, in dimension `N` (2 or 3).
+    pub fn placed<const N: usize>(center: [f64; N], shape: &Sized<N>) -> Self {
+        let kind = ContainerKind::of(shape.kind(), N);
+        Container::unchecked(kind, &center, &shape.dimensions())
+    }
+
+    /// The model's container of dimension `N`, centred at the origin; `None` for the other
+    /// dimension.
+    pub fn shape<const N: usize>(&self) -> Option<Sized<N>> {
+        (self.dimension() == N).then(|| sized_of(self.kind().shape(), &self.size()))
+    }
+
     /// The container of a kind from its centre and its size (`[r]`, the semi-axes or the half
     /// sides: the container variables of the solver, in that order).
     ///
@@ -312,12 +380,11 @@ impl Container {
         if center.len() != n {
             return Err(wrong("centre", n, center.len()));
         }
-        let size_len = match kind {
-            ContainerKind::Circle | ContainerKind::Ball => 1,
+        let size_len = match kind.shape() {
+            ContainerShape::Ball => 1,
             // A periodic cell's tilts may be left out: a rectangular cell.
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped if size.len() == n => n,
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => n * (n + 1) / 2,
-            _ => n,
+            ContainerShape::Periodic if size.len() == n => n,
+            shape => shape.dimension_count(n),
         };
         if size.len() != size_len {
             return Err(wrong("size", size_len, size.len()));
@@ -336,164 +403,93 @@ impl Container {
     /// reads them, without checks: a missing value is NaN (which [`Container::defect`] names)
     /// and missing tilts of a periodic cell are zero (a rectangular cell).
     pub(crate) fn unchecked(kind: ContainerKind, center: &[f64], size: &[f64]) -> Container {
-        let n = kind.dimension();
         let c = |k: usize| center.get(k).copied().unwrap_or(f64::NAN);
-        let d = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
-        match kind {
-            ContainerKind::Circle => Container::Circle {
+        if kind.dimension() == 2 {
+            Container::Plane {
                 center: [c(0), c(1)],
-                radius: d(0),
-            },
-            ContainerKind::Ellipse => Container::Ellipse {
-                center: [c(0), c(1)],
-                semi_axes: [d(0), d(1)],
-            },
-            ContainerKind::Rectangle => Container::Rectangle {
-                center: [c(0), c(1)],
-                half_sides: [d(0), d(1)],
-            },
-            ContainerKind::Ball => Container::Ball {
+                shape: sized_of(kind.shape(), size),
+            }
+        } else {
+            Container::Space {
                 center: [c(0), c(1), c(2)],
-                radius: d(0),
-            },
-            ContainerKind::Ellipsoid => Container::Ellipsoid {
-                center: [c(0), c(1), c(2)],
-                semi_axes: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Cuboid => Container::Cuboid {
-                center: [c(0), c(1), c(2)],
-                half_sides: [d(0), d(1), d(2)],
-            },
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => Container::Periodic {
-                origin: (0..n).map(c).collect(),
-                lengths: (0..n).map(d).collect(),
-                tilts: (n..n * (n + 1) / 2)
-                    .map(|k| size.get(k).copied().unwrap_or(0.0))
-                    .collect(),
-            },
+                shape: sized_of(kind.shape(), size),
+            }
         }
     }
 
     /// Its kind.
     pub fn kind(&self) -> ContainerKind {
-        match self {
-            Container::Circle { .. } => ContainerKind::Circle,
-            Container::Ellipse { .. } => ContainerKind::Ellipse,
-            Container::Rectangle { .. } => ContainerKind::Rectangle,
-            Container::Ball { .. } => ContainerKind::Ball,
-            Container::Ellipsoid { .. } => ContainerKind::Ellipsoid,
-            Container::Cuboid { .. } => ContainerKind::Cuboid,
-            Container::Periodic { lengths, .. } => {
-                if lengths.len() == 2 {
-                    ContainerKind::Parallelogram
-                } else {
-                    ContainerKind::Parallelepiped
-                }
-            }
-        }
+        let shape = in_either_dimension!(self, |_c, shape| shape.kind());
+        ContainerKind::of(shape, self.dimension())
     }
 
     /// The cell matrix of a periodic cell (rows, upper triangular: columns are the lattice
-    /// vectors), `None` for the other containers or a cell of the wrong size.
+    /// vectors), `None` for the other containers.
     pub fn cell_matrix(&self) -> Option<Vec<Vec<f64>>> {
-        let Container::Periodic { lengths, tilts, .. } = self else {
-            return None;
-        };
-        match (lengths.as_slice(), tilts.as_slice()) {
-            ([lx, ly], [xy]) => Some(vec![vec![*lx, *xy], vec![0.0, *ly]]),
-            ([lx, ly, lz], [xy, xz, yz]) => Some(vec![
-                vec![*lx, *xy, *xz],
-                vec![0.0, *ly, *yz],
-                vec![0.0, 0.0, *lz],
-            ]),
+        in_either_dimension!(self, |_c, shape| match shape {
+            Sized::Periodic { cell } => Some(cell.iter().map(|row| row.to_vec()).collect()),
             _ => None,
-        }
+        })
     }
 
     /// 2 or 3.
     pub fn dimension(&self) -> usize {
-        self.kind().dimension()
+        self.center().len()
     }
 
-    /// Its centre (2 or 3 coordinates).
+    /// Its centre (2 or 3 coordinates); a periodic cell's corner.
     pub fn center(&self) -> &[f64] {
-        match self {
-            Container::Circle { center, .. }
-            | Container::Ellipse { center, .. }
-            | Container::Rectangle { center, .. } => center,
-            Container::Ball { center, .. }
-            | Container::Ellipsoid { center, .. }
-            | Container::Cuboid { center, .. } => center,
-            Container::Periodic { origin, .. } => origin,
-        }
+        in_either_dimension!(self, |center, _s| center)
     }
 
-    /// Its size: `[radius]`, the semi-axes or the half sides.
+    /// Its size: `[radius]`, the semi-axes, the half sides, or a periodic cell's lengths and
+    /// then its tilts.
     pub fn size(&self) -> Vec<f64> {
-        match self {
-            Container::Circle { radius, .. } | Container::Ball { radius, .. } => vec![*radius],
-            Container::Ellipse { semi_axes, .. } => semi_axes.to_vec(),
-            Container::Rectangle { half_sides, .. } => half_sides.to_vec(),
-            Container::Ellipsoid { semi_axes, .. } => semi_axes.to_vec(),
-            Container::Cuboid { half_sides, .. } => half_sides.to_vec(),
-            Container::Periodic { lengths, tilts, .. } => {
-                lengths.iter().chain(tilts.iter()).copied().collect()
-            }
-        }
+        in_either_dimension!(self, |_c, shape| shape.dimensions())
     }
 
     /// The name of [`Container::size`] in `summary.json`: `radius`, `semi_axes`,
     /// `half_sides`, or `lengths` (a periodic cell, whose size is its lengths and then its
     /// tilts).
     pub fn size_name(&self) -> &'static str {
-        match self.kind() {
-            ContainerKind::Circle | ContainerKind::Ball => "radius",
-            ContainerKind::Ellipse | ContainerKind::Ellipsoid => "semi_axes",
-            ContainerKind::Rectangle | ContainerKind::Cuboid => "half_sides",
-            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => "lengths",
+        match self.kind().shape() {
+            ContainerShape::Ball => "radius",
+            ContainerShape::Ellipsoid => "semi_axes",
+            ContainerShape::Box => "half_sides",
+            ContainerShape::Periodic => "lengths",
         }
     }
 
     /// Half the extent of its bounding box along each axis (of one cell, for a periodic cell).
     pub fn half_extents(&self) -> Vec<f64> {
-        match self {
-            Container::Circle { radius, .. } => vec![*radius; 2],
-            Container::Ball { radius, .. } => vec![*radius; 3],
-            Container::Periodic { .. } => {
-                let h = self.cell_matrix().unwrap_or_default();
-                h.iter()
-                    .map(|row| {
-                        let (lo, hi) = row.iter().fold((0.0f64, 0.0f64), |(lo, hi), &v| {
-                            (lo + v.min(0.0), hi + v.max(0.0))
-                        });
-                        0.5 * (hi - lo)
-                    })
-                    .collect()
-            }
-            _ => self.size(),
+        let n = self.dimension();
+        match self.cell_matrix() {
+            Some(h) => h
+                .iter()
+                .map(|row| {
+                    let (lo, hi) = row.iter().fold((0.0f64, 0.0f64), |(lo, hi), &v| {
+                        (lo + v.min(0.0), hi + v.max(0.0))
+                    });
+                    0.5 * (hi - lo)
+                })
+                .collect(),
+            None if self.kind().shape() == ContainerShape::Ball => vec![self.size()[0]; n],
+            None => self.size(),
         }
     }
 
-    /// Its area (2D) or volume (3D): πr², πab, 4ab; 4/3 πr³, 4/3 πabc, 8abc.
+    /// Its area (2D) or volume (3D): πr², πab, 4ab; 4/3 πr³, 4/3 πabc, 8abc; a cell's
+    /// determinant.
     pub fn measure(&self) -> f64 {
-        match self {
-            Container::Circle { radius, .. } => PI * radius * radius,
-            Container::Ellipse {
-                semi_axes: [a, b], ..
-            } => PI * a * b,
-            Container::Rectangle {
-                half_sides: [a, b], ..
-            } => 4.0 * a * b,
-            Container::Ball { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
-            Container::Ellipsoid {
-                semi_axes: [a, b, c],
-                ..
-            } => 4.0 / 3.0 * PI * a * b * c,
-            Container::Cuboid {
-                half_sides: [a, b, c],
-                ..
-            } => 8.0 * a * b * c,
-            Container::Periodic { lengths, .. } => lengths.iter().product(),
+        let size = self.size();
+        let n = self.dimension();
+        match self.kind().shape() {
+            ContainerShape::Ball if n == 2 => PI * size[0] * size[0],
+            ContainerShape::Ball => 4.0 / 3.0 * PI * size[0].powi(3),
+            ContainerShape::Ellipsoid if n == 2 => PI * size[0] * size[1],
+            ContainerShape::Ellipsoid => 4.0 / 3.0 * PI * size[0] * size[1] * size[2],
+            ContainerShape::Box => size.iter().fold(2f64.powi(n as i32), |m, l| m * l),
+            ContainerShape::Periodic => size[..n].iter().product(),
         }
     }
 
@@ -510,50 +506,185 @@ impl Container {
                 format!("the centre has a coordinate {x}, beyond ±{MAX:e}"),
             ));
         }
-        if let Container::Periodic {
-            origin,
-            lengths,
-            tilts,
-        } = self
-        {
-            let n = lengths.len();
-            if !(n == 2 || n == 3) || origin.len() != n || tilts.len() != n * (n - 1) / 2 {
-                return Some((
-                    "lengths",
-                    format!(
-                        "a periodic cell has 2 or 3 lengths, as many origin coordinates and \
-                         1 or 3 tilts, not {n}, {} and {}",
+        let n = self.dimension();
+        let size = self.size();
+        let (sizes, tilts) = match self.kind().shape() {
+            ContainerShape::Periodic => size.split_at(n),
+            _ => (&size[..], &[][..]),
+        };
+        if let Some(t) = tilts.iter().find(|t| !within(**t)) {
+            return Some((
+                "tilts",
+                format!("tilts must be finite, within ±{MAX:e}, not {t}"),
+            ));
+        }
+        sizes.iter().find(|s| !in_range(**s)).map(|s| {
+            let name = self.size_name();
+            let message = format!(
+                "{name} must be positive, in [{:e}, {MAX:e}], not {s}",
+                1.0 / MAX
+            );
+            (name, message)
+        })
+    }
+}
+
+/// The model's container of a shape and a size as [`Container::size`] states it; a missing
+/// value is NaN, a missing tilt zero.
+fn sized_of<const N: usize>(shape: ContainerShape, size: &[f64]) -> Sized<N> {
+    let d = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
+    match shape {
+        ContainerShape::Ball => Sized::Ball { radius: d(0) },
+        ContainerShape::Ellipsoid => Sized::Ellipsoid {
+            semi_axes: std::array::from_fn(d),
+        },
+        ContainerShape::Box => Sized::Box {
+            half_sides: std::array::from_fn(d),
+        },
+        ContainerShape::Periodic => Sized::Periodic {
+            cell: cell_of(size),
+        },
+    }
+}
+
+/// The upper-triangular cell matrix of a periodic cell's size (lengths, then LAMMPS's tilts
+/// `xy, xz, yz`); missing lengths are NaN, missing tilts zero.
+fn cell_of<const N: usize>(size: &[f64]) -> [[f64; N]; N] {
+    let mut cell = [[0.0; N]; N];
+    for k in 0..N * (N + 1) / 2 {
+        let (r, c) = implicit_packing::periodic::entry::<N>(k);
+        let missing = if r == c { f64::NAN } else { 0.0 };
+        cell[r][c] = size.get(k).copied().unwrap_or(missing);
+    }
+    cell
+}
+
+/// [`Container`] as JSON states it (see there).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+enum ContainerForm {
+    Circle {
+        #[serde(default)]
+        center: [f64; 2],
+        radius: f64,
+    },
+    Ellipse {
+        #[serde(default)]
+        center: [f64; 2],
+        semi_axes: [f64; 2],
+    },
+    Rectangle {
+        #[serde(default)]
+        center: [f64; 2],
+        half_sides: [f64; 2],
+    },
+    Ball {
+        #[serde(default)]
+        center: [f64; 3],
+        radius: f64,
+    },
+    Ellipsoid {
+        #[serde(default)]
+        center: [f64; 3],
+        semi_axes: [f64; 3],
+    },
+    Cuboid {
+        #[serde(default)]
+        center: [f64; 3],
+        half_sides: [f64; 3],
+    },
+    Periodic {
+        // A missing origin is the origin.
+        #[serde(default)]
+        origin: Vec<f64>,
+        lengths: Vec<f64>,
+        tilts: Vec<f64>,
+    },
+}
+
+impl From<Container> for ContainerForm {
+    fn from(c: Container) -> Self {
+        use ContainerForm as F;
+        let size = c.size();
+        let n = c.dimension();
+        let first = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
+        let two = || [first(0), first(1)];
+        let three = || [first(0), first(1), first(2)];
+        match (&c, c.kind().shape()) {
+            (_, ContainerShape::Periodic) => F::Periodic {
+                origin: c.center().to_vec(),
+                lengths: size[..n].to_vec(),
+                tilts: size[n..].to_vec(),
+            },
+            (Container::Plane { center, .. }, shape) => {
+                let center = *center;
+                match shape {
+                    ContainerShape::Ball => F::Circle {
+                        center,
+                        radius: first(0),
+                    },
+                    ContainerShape::Ellipsoid => F::Ellipse {
+                        center,
+                        semi_axes: two(),
+                    },
+                    _ => F::Rectangle {
+                        center,
+                        half_sides: two(),
+                    },
+                }
+            }
+            (Container::Space { center, .. }, shape) => {
+                let center = *center;
+                match shape {
+                    ContainerShape::Ball => F::Ball {
+                        center,
+                        radius: first(0),
+                    },
+                    ContainerShape::Ellipsoid => F::Ellipsoid {
+                        center,
+                        semi_axes: three(),
+                    },
+                    _ => F::Cuboid {
+                        center,
+                        half_sides: three(),
+                    },
+                }
+            }
+        }
+    }
+}
+
+impl TryFrom<ContainerForm> for Container {
+    type Error = String;
+
+    fn try_from(form: ContainerForm) -> Result<Self, String> {
+        use ContainerForm as F;
+        Ok(match form {
+            F::Circle { center, radius } => Container::circle(center, radius),
+            F::Ellipse { center, semi_axes } => Container::ellipse(center, semi_axes),
+            F::Rectangle { center, half_sides } => Container::rectangle(center, half_sides),
+            F::Ball { center, radius } => Container::ball(center, radius),
+            F::Ellipsoid { center, semi_axes } => Container::ellipsoid(center, semi_axes),
+            F::Cuboid { center, half_sides } => Container::cuboid(center, half_sides),
+            F::Periodic {
+                mut origin,
+                lengths,
+                tilts,
+            } => {
+                let n = lengths.len();
+                if origin.is_empty() {
+                    origin = vec![0.0; n];
+                }
+                if !(n == 2 || n == 3) || origin.len() != n || tilts.len() != n * (n - 1) / 2 {
+                    return Err(format!(
+                        "a periodic cell has 2 or 3 lengths, as many origin coordinates and 1 \
+                         or 3 tilts, not {n}, {} and {}",
                         origin.len(),
                         tilts.len()
-                    ),
-                ));
+                    ));
+                }
+                Container::periodic(&origin, &lengths, &tilts)
             }
-            if let Some(t) = tilts.iter().find(|t| !within(**t)) {
-                return Some((
-                    "tilts",
-                    format!("tilts must be finite, within ±{MAX:e}, not {t}"),
-                ));
-            }
-            return lengths.iter().find(|s| !in_range(**s)).map(|s| {
-                (
-                    "lengths",
-                    format!(
-                        "lengths must be positive, in [{:e}, {MAX:e}], not {s}",
-                        1.0 / MAX
-                    ),
-                )
-            });
-        }
-        let size = self.size();
-        size.iter().find(|s| !in_range(**s)).map(|s| {
-            (
-                self.size_name(),
-                format!(
-                    "{} must be positive, in [{:e}, {MAX:e}], not {s}",
-                    self.size_name(),
-                    1.0 / MAX
-                ),
-            )
         })
     }
 }
@@ -672,30 +803,23 @@ impl Packing {
     /// same lattice) and every centre moved by a lattice translation into the cell (fractional
     /// coordinates in `[0, 1)` from the origin). Other containers are returned as they are.
     pub fn in_reduced_cell(&self) -> Packing {
-        let Container::Periodic {
-            origin,
-            lengths,
-            tilts,
-        } = &self.container
-        else {
-            return self.clone();
-        };
         let mut packing = self.clone();
-        match &mut packing.items {
-            Items::Ellipses(items) => {
-                let h = reduced_cell::<2>(lengths, tilts);
-                for item in items.iter_mut() {
-                    item.centre = wrapped_into(&h, origin, item.centre);
-                }
-                packing.container = periodic_container(origin, &h);
-            }
-            Items::Ellipsoids(items) => {
-                let h = reduced_cell::<3>(lengths, tilts);
-                for item in items.iter_mut() {
-                    item.centre = wrapped_into(&h, origin, item.centre);
-                }
-                packing.container = periodic_container(origin, &h);
-            }
+        match (&mut packing.container, &mut packing.items) {
+            (
+                Container::Plane {
+                    center,
+                    shape: Sized::Periodic { cell },
+                },
+                Items::Ellipses(items),
+            ) => wrap_into_reduced(center, cell, items),
+            (
+                Container::Space {
+                    center,
+                    shape: Sized::Periodic { cell },
+                },
+                Items::Ellipsoids(items),
+            ) => wrap_into_reduced(center, cell, items),
+            _ => {}
         }
         packing
     }
@@ -918,50 +1042,20 @@ impl Summary {
     }
 }
 
-/// The upper-triangular cell matrix of `lengths` and `tilts` (columns are the lattice
-/// vectors), reduced ([`implicit_packing::periodic::reduced`]).
-fn reduced_cell<const N: usize>(lengths: &[f64], tilts: &[f64]) -> [[f64; N]; N] {
-    let mut h: [[f64; N]; N] = std::array::from_fn(|r| {
-        std::array::from_fn(|c| {
-            if r == c {
-                lengths.get(r).copied().unwrap_or(f64::NAN)
-            } else {
-                0.0
-            }
-        })
-    });
-    // Tilts in LAMMPS order: xy, xz, yz.
-    let entries: &[(usize, usize)] = if N == 2 {
-        &[(0, 1)]
-    } else {
-        &[(0, 1), (0, 2), (1, 2)]
-    };
-    for (&(r, c), t) in entries.iter().zip(tilts) {
-        h[r][c] = *t;
-    }
-    implicit_packing::periodic::reduced(&h)
-}
-
-/// `c` moved by a lattice translation of `h` into the cell at `origin`.
-fn wrapped_into<const N: usize>(h: &[[f64; N]; N], origin: &[f64], c: [f64; N]) -> [f64; N] {
-    use implicit_packing::periodic::{to_cartesian, to_fractional};
-    let relative: [f64; N] = std::array::from_fn(|k| c[k] - origin[k]);
-    let s = to_fractional(h, &relative);
-    let inside = to_cartesian(h, &s.map(|v| v - v.floor()));
-    std::array::from_fn(|k| origin[k] + inside[k])
-}
-
-/// The periodic container at `origin` with the cell matrix `h`.
-fn periodic_container<const N: usize>(origin: &[f64], h: &[[f64; N]; N]) -> Container {
-    let tilts = if N == 2 {
-        vec![h[0][1]]
-    } else {
-        vec![h[0][1], h[0][2], h[1][2]]
-    };
-    Container::Periodic {
-        origin: origin.to_vec(),
-        lengths: (0..N).map(|k| h[k][k]).collect(),
-        tilts,
+/// The cell at `origin` reduced ([`implicit_packing::periodic::reduced`]) and every item
+/// moved by a lattice translation into it.
+fn wrap_into_reduced<const N: usize>(
+    origin: &[f64; N],
+    cell: &mut [[f64; N]; N],
+    items: &mut [Item<N>],
+) {
+    use implicit_packing::periodic::{reduced, to_cartesian, to_fractional};
+    *cell = reduced(cell);
+    for item in items {
+        let relative: [f64; N] = std::array::from_fn(|k| item.centre[k] - origin[k]);
+        let s = to_fractional(cell, &relative);
+        let inside = to_cartesian(cell, &s.map(|v| v - v.floor()));
+        item.centre = std::array::from_fn(|k| origin[k] + inside[k]);
     }
 }
 
@@ -1224,29 +1318,21 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError>
 /// [`PackingError::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
 /// wrong type; [`PackingError::Inconsistent`] for a container size that is not positive.
 pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingError> {
-    summary_of(text, source_name, |s: &mut Summary| &mut s.container)
+    summary_of(text, source_name, |s: &Summary| &s.container)
 }
 
 /// A summary of type `T` parsed from JSON `text`, with its container (`container_of`) checked.
 fn summary_of<T: serde::de::DeserializeOwned>(
     text: &str,
     source_name: &str,
-    container_of: impl Fn(&mut T) -> &mut Container,
+    container_of: impl Fn(&T) -> &Container,
 ) -> Result<T, PackingError> {
-    let mut summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+    let summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
         source_name: source_name.to_string(),
         line: e.line() as u64,
         message: format!("column {}: {e}", e.column()),
     })?;
-    // A missing origin of a periodic cell is the origin, as a missing centre is elsewhere.
-    if let Container::Periodic {
-        origin, lengths, ..
-    } = container_of(&mut summary)
-        && origin.is_empty()
-    {
-        *origin = vec![0.0; lengths.len()];
-    }
-    if let Some((field, message)) = container_of(&mut summary).defect() {
+    if let Some((field, message)) = container_of(&summary).defect() {
         return Err(PackingError::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),
@@ -1332,7 +1418,7 @@ pub struct StatedSummary {
 /// # Errors
 /// As [`read_summary`].
 pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, PackingError> {
-    summary_of(text, source_name, |s: &mut StatedSummary| &mut s.container)
+    summary_of(text, source_name, |s: &StatedSummary| &s.container)
 }
 
 /// Reads `packing.csv` as a [`Table`] and puts its items into `container`, checking that they

@@ -14,6 +14,7 @@
 //! fast. An empty packing draws its container alone.
 
 use crate::packing::{Container, Items, Packing};
+use implicit_packing::ContainerShape;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -844,8 +845,8 @@ fn container_outline(container: &Container, panel: &Panel, scale: f64) -> Option
     let c = container.center();
     let half = container.half_extents();
     let (cu, cv, hu, hv) = (c[panel.u], c[panel.v], half[panel.u], half[panel.v]);
-    match container {
-        Container::Rectangle { .. } | Container::Cuboid { .. } => Some(vec![
+    match container.kind().shape() {
+        ContainerShape::Box => Some(vec![
             panel.to_pixel(scale, cu - hu, cv - hv),
             panel.to_pixel(scale, cu + hu, cv - hv),
             panel.to_pixel(scale, cu + hu, cv + hv),
@@ -913,10 +914,7 @@ mod tests {
         use crate::packing::{Container, Item, Items, Packing};
         // Built by hand, bypassing Packing::new's checks.
         let packing = Packing {
-            container: Container::Circle {
-                center: [0.0, 0.0],
-                radius: -1.0,
-            },
+            container: Container::circle([0.0, 0.0], -1.0),
             items: Items::Ellipses(vec![
                 Item::ellipse([f64::NAN, 0.0], [1.0, 1.0], 0.0),
                 Item::ellipse([0.0, 0.0], [0.0, 1.0], 0.0),
@@ -926,10 +924,7 @@ mod tests {
         png_bytes(&packing, &RenderOptions::default()).unwrap();
         svg_string(&packing, &RenderOptions::default()).unwrap();
         let packing = Packing {
-            container: Container::Ball {
-                center: [0.0; 3],
-                radius: f64::INFINITY,
-            },
+            container: Container::ball([0.0; 3], f64::INFINITY),
             items: Items::Ellipsoids(vec![Item::ellipsoid([0.0; 3], [1e6, 1e-6, 1.0], [0.0; 4])]),
         };
         png_bytes(

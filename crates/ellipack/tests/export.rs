@@ -8,7 +8,7 @@ mod common;
 use ellipack::export::{
     self, Body, Cell, ExportError, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
 };
-use ellipack::packing::{self, Container, Item, Items, Packing, PackingError};
+use ellipack::packing::{self, Container, ContainerKind, Item, Items, Packing, PackingError};
 use std::collections::HashMap;
 
 /// Every kind of container with items of its dimension; the 2D items of several sizes (so
@@ -19,33 +19,18 @@ fn every_kind() -> Vec<Packing> {
     let r2 = e2.container().half_extents()[0];
     let r3 = e3.container().half_extents()[0];
     let containers = [
-        Container::Circle {
-            center: [0.0, 0.0],
-            radius: r2 * 1.1,
-        },
+        Container::circle([0.0, 0.0], r2 * 1.1),
         e2.container().clone(),
-        Container::Rectangle {
-            center: [0.0, 0.0],
-            half_sides: [r2, r2 * 0.9],
-        },
+        Container::rectangle([0.0, 0.0], [r2, r2 * 0.9]),
         e3.container().clone(),
-        Container::Ellipsoid {
-            center: [0.0; 3],
-            semi_axes: [r3, r3 * 1.1, r3 * 1.2],
-        },
-        Container::Cuboid {
-            center: [0.0; 3],
-            half_sides: [r3, r3, r3],
-        },
+        Container::ellipsoid([0.0; 3], [r3, r3 * 1.1, r3 * 1.2]),
+        Container::cuboid([0.0; 3], [r3, r3, r3]),
     ];
     let mut out = common::filled(containers, &e2, &e3);
     // Off the origin, with a quaternion that is not of norm 1.
     out.push(
         Packing::new(
-            Container::Ball {
-                center: [10.0, -5.0, 2.5],
-                radius: 3.0,
-            },
+            Container::ball([10.0, -5.0, 2.5], 3.0),
             Items::Ellipsoids(vec![
                 Item::ellipsoid([11.0, -5.0, 2.5], [1.0, 0.75, 0.5], [2.0, 0.0, 0.0, 2.0]),
                 Item::ellipsoid([8.5, -5.0, 2.5], [0.5, 0.5, 0.5], [1.0, 0.0, 0.0, 0.0]),
@@ -59,10 +44,7 @@ fn every_kind() -> Vec<Packing> {
 #[test]
 fn bodies_are_unit_quaternion_ellipsoids_and_groups_are_distinct_semi_axes() {
     let p = Packing::new(
-        Container::Circle {
-            center: [0.0; 2],
-            radius: 10.0,
-        },
+        Container::circle([0.0; 2], 10.0),
         Items::Ellipses(vec![
             Item::ellipse([1.0, 2.0], [2.0, 1.0], std::f64::consts::PI),
             Item::ellipse([-3.0, 2.0], [1.0, 1.0], 0.0),
@@ -131,10 +113,7 @@ fn the_cell_encloses_the_container_and_the_items_centred_on_the_container() {
     }
     // An item sticking out of its container widens the cell.
     let p = Packing::new(
-        Container::Cuboid {
-            center: [0.0; 3],
-            half_sides: [1.0, 1.0, 1.0],
-        },
+        Container::cuboid([0.0; 3], [1.0, 1.0, 1.0]),
         Items::Ellipsoids(vec![Item::ellipsoid(
             [1.0, 0.0, 0.0],
             [0.5, 0.25, 0.25],
@@ -489,8 +468,8 @@ fn the_container_mesh_is_an_outward_surface_on_the_container() {
             let r: Vec<f64> = (0..c.dimension())
                 .map(|k| (v[k] - center[k]) / half[k])
                 .collect();
-            let on = match c {
-                Container::Rectangle { .. } | Container::Cuboid { .. } => {
+            let on = match c.kind() {
+                ContainerKind::Rectangle | ContainerKind::Cuboid => {
                     r.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
                 }
                 _ => r.iter().map(|x| x * x).sum::<f64>(),

@@ -5,7 +5,7 @@
 
 mod common;
 use common::{ellipack, pack_into, pack_into_with, succeeded, summary_json, temp_dir, text};
-use ellipack::packing::Container;
+use ellipack::packing::ContainerKind;
 use ellipack::scene::Scene;
 use std::path::Path;
 use std::process::Output;
@@ -41,12 +41,12 @@ fn a_ball_at_fraction_045_ends_certified_with_the_given_radius() {
     let o = pack(&dir, BALL, &out);
     let said = text(&o.stdout) + &text(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{said}");
-    let Some(Container::Ball { radius, .. }) = Scene::from_toml_str(BALL, "ball.toml")
+    let container = Scene::from_toml_str(BALL, "ball.toml")
         .unwrap()
         .fixed_container()
-    else {
-        panic!("no fixed ball");
-    };
+        .expect("a fixed ball");
+    assert_eq!(container.kind(), ContainerKind::Ball);
+    let radius = container.size()[0];
     let s = summary_json(&out);
     assert_eq!(s["container"]["kind"], "ball");
     assert_eq!(s["container"]["radius"].as_f64(), Some(radius), "{s}");

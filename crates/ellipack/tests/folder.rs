@@ -120,7 +120,11 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
     // staging folder; the write fails after the first file.
     let (packing, _) = read_packing_dir(&out).unwrap();
     let (mut container, items) = packing.into_parts();
-    if let ellipack::packing::Container::Circle { radius, .. } = &mut container {
+    if let ellipack::packing::Container::Plane {
+        shape: ellipack::packing::Sized::Ball { radius },
+        ..
+    } = &mut container
+    {
         *radius *= 0.5;
     }
     let packing = ellipack::packing::Packing::new(container, items).unwrap();

@@ -27,30 +27,12 @@ fn every_kind() -> Vec<Packing> {
     let e2 = common::ellipses(4, true, 11);
     let e3 = common::ellipsoids(3, true, 12);
     let containers = [
-        Container::Circle {
-            center: [0.5, -0.25],
-            radius: 40.0,
-        },
-        Container::Ellipse {
-            center: [0.0, 0.0],
-            semi_axes: [41.5, 40.0 + 1e-13],
-        },
-        Container::Rectangle {
-            center: [1.0 / 3.0, 0.0],
-            half_sides: [30.0, 31.0],
-        },
-        Container::Ball {
-            center: [0.0, 0.0, 0.0],
-            radius: 9.75,
-        },
-        Container::Ellipsoid {
-            center: [1.0, 2.0, 3.0],
-            semi_axes: [10.0, 11.0, 12.0],
-        },
-        Container::Cuboid {
-            center: [0.0, -1e-300, 0.0],
-            half_sides: [7.0, 7.0, 7.5],
-        },
+        Container::circle([0.5, -0.25], 40.0),
+        Container::ellipse([0.0, 0.0], [41.5, 40.0 + 1e-13]),
+        Container::rectangle([1.0 / 3.0, 0.0], [30.0, 31.0]),
+        Container::ball([0.0, 0.0, 0.0], 9.75),
+        Container::ellipsoid([1.0, 2.0, 3.0], [10.0, 11.0, 12.0]),
+        Container::cuboid([0.0, -1e-300, 0.0], [7.0, 7.0, 7.5]),
     ];
     common::filled(containers, &e2, &e3)
 }
@@ -123,35 +105,20 @@ fn the_summary_has_the_documented_keys() {
 #[test]
 fn density_is_item_measure_over_container_measure() {
     let items = Items::Ellipses(vec![Item::ellipse([0.0, 0.0], [2.0, 1.0], 0.3); 3]);
-    let circle = Container::Circle {
-        center: [0.0, 0.0],
-        radius: 4.0,
-    };
+    let circle = Container::circle([0.0, 0.0], 4.0);
     assert!((packing::density(&circle, &items) - 3.0 * 2.0 * PI / (16.0 * PI)).abs() < 1e-15);
-    let rectangle = Container::Rectangle {
-        center: [0.0, 0.0],
-        half_sides: [3.0, 2.0],
-    };
+    let rectangle = Container::rectangle([0.0, 0.0], [3.0, 2.0]);
     assert!((packing::density(&rectangle, &items) - 6.0 * PI / 24.0).abs() < 1e-15);
     let items = Items::Ellipsoids(vec![Item::ellipsoid(
         [0.0; 3],
         [1.0, 0.75, 0.5],
         [1.0, 0.0, 0.0, 0.0],
     )]);
-    let ball = Container::Ball {
-        center: [0.0; 3],
-        radius: 2.0,
-    };
+    let ball = Container::ball([0.0; 3], 2.0);
     assert!((packing::density(&ball, &items) - 0.375 / 8.0).abs() < 1e-15);
-    let ellipsoid = Container::Ellipsoid {
-        center: [0.0; 3],
-        semi_axes: [1.0, 2.0, 3.0],
-    };
+    let ellipsoid = Container::ellipsoid([0.0; 3], [1.0, 2.0, 3.0]);
     assert!((packing::density(&ellipsoid, &items) - 0.375 / 6.0).abs() < 1e-15);
-    let cuboid = Container::Cuboid {
-        center: [0.0; 3],
-        half_sides: [1.0, 1.0, 1.0],
-    };
+    let cuboid = Container::cuboid([0.0; 3], [1.0, 1.0, 1.0]);
     assert!((packing::density(&cuboid, &items) - 4.0 / 3.0 * PI * 0.375 / 8.0).abs() < 1e-15);
 }
 
@@ -220,10 +187,7 @@ fn xyz_orientation_is_in_ovito_order() {
     // (x, y, z, w), so the last two columns are sin π/4 then cos π/4.
     let (s, c) = (PI / 4.0).sin_cos();
     let p = Packing::new(
-        Container::Ball {
-            center: [0.0; 3],
-            radius: 5.0,
-        },
+        Container::ball([0.0; 3], 5.0),
         Items::Ellipsoids(vec![Item::ellipsoid(
             [1.0, 2.0, 3.0],
             [1.0, 0.75, 0.5],
@@ -238,10 +202,7 @@ fn xyz_orientation_is_in_ovito_order() {
     );
     // The same rotation as an ellipse angle: θ = π/2.
     let p2 = Packing::new(
-        Container::Circle {
-            center: [0.0; 2],
-            radius: 5.0,
-        },
+        Container::circle([0.0; 2], 5.0),
         Items::Ellipses(vec![Item::ellipse([1.0, 2.0], [2.0, 1.0], PI / 2.0)]),
     )
     .unwrap();
@@ -398,10 +359,7 @@ fn malformed_xyz_is_an_error_with_the_line() {
 
 #[test]
 fn packings_refuse_impossible_items() {
-    let c = Container::Circle {
-        center: [0.0; 2],
-        radius: 1.0,
-    };
+    let c = Container::circle([0.0; 2], 1.0);
     let bad = Items::Ellipses(vec![Item::ellipse([0.0, f64::NAN], [1.0, 1.0], 0.0)]);
     assert!(Packing::new(c.clone(), bad).is_err());
     let three_d = Items::Ellipsoids(vec![]);

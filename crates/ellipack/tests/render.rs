@@ -68,10 +68,7 @@ fn three_dimensional_pictures() {
 #[test]
 fn a_tall_rectangle_stays_within_bounds() {
     let packing = Packing::new(
-        Container::Rectangle {
-            center: [0.0, 0.0],
-            half_sides: [7.0, 70.0],
-        },
+        Container::rectangle([0.0, 0.0], [7.0, 70.0]),
         common::ellipses(3, false, 5).items().clone(),
     )
     .unwrap();
@@ -80,20 +77,11 @@ fn a_tall_rectangle_stays_within_bounds() {
 
 #[test]
 fn an_empty_packing_draws_its_container() {
-    let packing = Packing::new(
-        Container::Circle {
-            center: [1.0, -2.0],
-            radius: 3.0,
-        },
-        Items::Ellipses(vec![]),
-    )
-    .unwrap();
+    let packing =
+        Packing::new(Container::circle([1.0, -2.0], 3.0), Items::Ellipses(vec![])).unwrap();
     check_pictures(&packing, "empty2d", 400);
     let packing = Packing::new(
-        Container::Ellipsoid {
-            center: [0.0, 0.0, 0.0],
-            semi_axes: [3.0, 2.0, 1.0],
-        },
+        Container::ellipsoid([0.0, 0.0, 0.0], [3.0, 2.0, 1.0]),
         Items::Ellipsoids(vec![]),
     )
     .unwrap();

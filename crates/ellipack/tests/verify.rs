@@ -226,13 +226,7 @@ fn a_minimal_summary_is_a_container_at_the_origin() {
     use ellipack::packing::{Container, read_stated_summary, read_summary};
     let s =
         read_stated_summary(r#"{"container": {"kind": "ball", "radius": 5}}"#, "s.json").unwrap();
-    assert_eq!(
-        s.container,
-        Container::Ball {
-            center: [0.0; 3],
-            radius: 5.0
-        }
-    );
+    assert_eq!(s.container, Container::ball([0.0; 3], 5.0));
     assert_eq!((s.items, s.certificate), (None, None));
     // A run's summary still needs its statistics.
     assert!(read_summary(r#"{"container": {"kind": "ball", "radius": 5}}"#, "s.json").is_err());

@@ -80,10 +80,7 @@ pub fn ellipses(n_side: usize, mixed: bool, seed: u64) -> Packing {
     // Cells reach half·step + 2.1 from the centre along each axis; an ellipse with semi-axes
     // √2 times that holds the bounding square.
     let reach = (half * step + 2.1) * std::f64::consts::SQRT_2;
-    let container = Container::Ellipse {
-        center: [0.0, 0.0],
-        semi_axes: [reach * 1.05, reach],
-    };
+    let container = Container::ellipse([0.0, 0.0], [reach * 1.05, reach]);
     Packing::new(container, Items::Ellipses(items)).unwrap()
 }
 
@@ -118,15 +115,9 @@ pub fn ellipsoids(n_side: usize, ball: bool, seed: u64) -> Packing {
     }
     let reach = half * step + 1.03;
     let container = if ball {
-        Container::Ball {
-            center: [0.0, 0.0, 0.0],
-            radius: reach * 3f64.sqrt(),
-        }
+        Container::ball([0.0, 0.0, 0.0], reach * 3f64.sqrt())
     } else {
-        Container::Cuboid {
-            center: [0.0, 0.0, 0.0],
-            half_sides: [reach, reach, reach],
-        }
+        Container::cuboid([0.0, 0.0, 0.0], [reach, reach, reach])
     };
     Packing::new(container, Items::Ellipsoids(items)).unwrap()
 }
