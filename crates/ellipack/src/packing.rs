@@ -116,9 +116,11 @@ pub enum PackingError {
     },
 }
 
-/// The shape of a container, as `summary.json` and scene files name it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+/// The shape of a container in a dimension, as `summary.json` and scene files name it. Read
+/// from its name; `periodic` reads as the plane's cell, which a scene of ellipsoids makes the
+/// cell in space ([`ContainerKind::named`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
+#[serde(try_from = "String")]
 pub enum ContainerKind {
     /// A disc (2D).
     Circle,
@@ -133,12 +135,22 @@ pub enum ContainerKind {
     /// An axis-aligned cuboid (3D).
     Cuboid,
     /// A periodic cell in the plane (2D), named `periodic`.
-    #[serde(rename = "periodic")]
     Parallelogram,
-    /// A periodic cell in space (3D), named `periodic` (read as [`ContainerKind::Parallelogram`]
-    /// and made 3D by [`ContainerKind::named`] where the dimension is known).
-    #[serde(rename = "periodic", skip_deserializing)]
+    /// A periodic cell in space (3D), named `periodic`.
     Parallelepiped,
+}
+
+impl TryFrom<String> for ContainerKind {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        ContainerKind::from_name(&name).ok_or_else(|| {
+            format!(
+                "unknown variant `{name}`, expected one of `circle`, `ellipse`, `rectangle`, \
+                 `ball`, `ellipsoid`, `cuboid`, `periodic`"
+            )
+        })
+    }
 }
 
 impl ContainerKind {
