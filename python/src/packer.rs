@@ -3,7 +3,7 @@
 //! packing object, reading a packing folder and verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
-use ellipack::pack::{MultiStartProgress, Observer, PackError, RunOptions, run, time_limit_of};
+use ellipack::pack::{MultiStartProgress, Observer, RunOptions, run, time_limit_of};
 use ellipack::packing::{Container, Item, Items, Packing, Summary};
 use ellipack::scene::{Overrides, Scene};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -382,9 +382,9 @@ pub fn _pack(
 /// The exception of a run that failed: [`NotReached`] with the least overlapping
 /// configuration as its `packing` for a fixed container that was not filled, ValueError
 /// otherwise.
-fn pack_error(py: Python<'_>, e: PackError, interrupted: bool) -> PyErr {
+fn pack_error(py: Python<'_>, e: ellipack::Error, interrupted: bool) -> PyErr {
     let message = e.to_string();
-    let PackError::NotReached(unfinished) = e else {
+    let ellipack::Error::NotReached(unfinished) = e else {
         return value_error(message);
     };
     let stopped = interrupted || unfinished.interrupted;
@@ -422,12 +422,10 @@ pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
         .detach(|| ellipack::packing::read_packing_dir(&folder))
         .map_err(|e| match &e {
             // A file that cannot be read is an OSError, as Python's own `open` raises.
-            ellipack::packing::PackingError::Read { source, .. }
-                if source.kind() == std::io::ErrorKind::NotFound =>
-            {
+            ellipack::Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
                 PyFileNotFoundError::new_err(e.to_string())
             }
-            ellipack::packing::PackingError::Read { .. } => PyOSError::new_err(e.to_string()),
+            ellipack::Error::Io { .. } => PyOSError::new_err(e.to_string()),
             _ => value_error(e),
         })?;
     Ok(PyPacking::without_run(packing, summary))

@@ -14,7 +14,7 @@ use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
 use ellipack::folder::write_files;
 use ellipack::instances::{INSTANCES, Instance, by_name, names};
-use ellipack::pack::{PackError, RunOptions, RunOutcome, run};
+use ellipack::pack::{RunOptions, RunOutcome, run};
 use ellipack::render::{RenderOptions, png_bytes, svg_string};
 use ellipack::scene::{Dimension, MethodName, Scene, SolverSettings};
 use ellipack::write_atomically;
@@ -279,7 +279,7 @@ pub(crate) fn run_noting_gains(
     scene: &Scene,
     options: &RunOptions,
     mut gained: impl FnMut(&MultiStartProgress) + Sync,
-) -> Result<RunOutcome, PackError> {
+) -> Result<RunOutcome, ellipack::Error> {
     let mut best = 0.0;
     run(
         scene,

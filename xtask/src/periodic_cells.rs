@@ -11,7 +11,7 @@
 //! Writes `validation/periodic_cells.csv` and the table between the markers of
 //! `docs/periodic.md`.
 
-use ellipack::pack::{PackError, RunOptions, run};
+use ellipack::pack::{RunOptions, run};
 use ellipack::scene::Scene;
 use ellipack::write_atomically;
 use ellipsoid_packer::multistart::Callbacks;
@@ -70,7 +70,7 @@ fn pack(scene_text: &str, seconds: f64, threads: usize) -> Result<(Option<f64>, 
             },
             outcome.summary.local_minimisations,
         )),
-        Err(PackError::NotReached(u)) => Ok((
+        Err(ellipack::Error::NotReached(u)) => Ok((
             None,
             start.elapsed().as_secs_f64(),
             u.summary.local_minimisations,

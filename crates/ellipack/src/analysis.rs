@@ -3,7 +3,7 @@
 //! and by `ellipack analyse` for any packing folder.
 
 use crate::error::Error;
-use crate::pack::{PackError, bodies_of};
+use crate::pack::bodies_of;
 use crate::packing::{Items, Packing};
 use serde_json::json;
 use std::path::Path;
@@ -34,9 +34,9 @@ pub fn stated_repair(summary_text: &str) -> Option<f64> {
 /// The structure of `packing` ([`structure::analyse`] on its items and container).
 ///
 /// # Errors
-/// [`PackError`] when the items do not form valid bodies, or the settings are refused
+/// [`Error`] when the items do not form valid bodies, or the settings are refused
 /// ([`structure::Error`]).
-pub fn analyse(packing: &Packing, settings: &Settings) -> Result<Structure, PackError> {
+pub fn analyse(packing: &Packing, settings: &Settings) -> Result<Structure, Error> {
     match packing.items() {
         Items::Ellipses(_) => {
             let (bodies, container) = bodies_of::<2>(packing)?;

@@ -3,14 +3,13 @@
 use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging, write_files};
 use ellipack::pack::{
-    MultiStartProgress, Observer, PackError, RunOptions, UNFINISHED_DIR, Unfinished,
-    probe_output_folder, resume_start, run, time_limit_of, verify_detailed as check,
+    MultiStartProgress, Observer, RunOptions, UNFINISHED_DIR, Unfinished, probe_output_folder,
+    resume_start, run, time_limit_of, verify_detailed as check,
 };
 use ellipack::packing::{
-    CSV_FILE, Container, ContainerKind, PackingError, SUMMARY_FILE, read_stated_summary,
-    read_table_into,
+    CSV_FILE, Container, ContainerKind, SUMMARY_FILE, read_stated_summary, read_table_into,
 };
-use ellipack::render::{RenderError, RenderOptions, write_pictures_until};
+use ellipack::render::{RenderOptions, write_pictures_until};
 use ellipack::scene::{Overrides, Scene};
 use implicit_packing::certificate::shown_mu2;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -121,7 +120,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
     bar.finish_and_clear();
     let outcome = match outcome {
         Ok(outcome) => outcome,
-        Err(PackError::NotReached(unfinished)) => {
+        Err(ellipack::Error::NotReached(unfinished)) => {
             return not_reached(&scene, &out, &unfinished);
         }
         Err(e) => return Err(e.into()),
@@ -173,7 +172,7 @@ pub fn pack(args: PackArgs) -> Result<ExitCode, Box<dyn Error>> {
                     )?;
                 }
             }
-            Err(RenderError::Stopped) => crate::note!(
+            Err(ellipack::Error::Stopped) => crate::note!(
                 "note: packing.svg and packing.png were not drawn: the run was stopped or \
                  drawing would have run past its time limit (`ellipack convert {} --pictures` \
                  draws them)",
@@ -224,7 +223,7 @@ fn not_reached(
     crate::say!("{}", scene.title());
     crate::note!(
         "error: {}{}",
-        PackError::NotReached(Box::new(unfinished.clone())),
+        ellipack::Error::NotReached(Box::new(unfinished.clone())),
         if unfinished.interrupted {
             " (stopped by a signal)"
         } else {
@@ -300,7 +299,7 @@ pub struct AnalyseArgs {
 /// `ellipack analyse`: the structure of a packing folder, written into it and summarised.
 pub fn analyse(args: &AnalyseArgs) -> Result<ExitCode, Box<dyn Error>> {
     let summary_path = args.folder.join(SUMMARY_FILE);
-    let text = std::fs::read_to_string(&summary_path).map_err(|source| PackingError::Read {
+    let text = std::fs::read_to_string(&summary_path).map_err(|source| ellipack::Error::Io {
         path: summary_path.clone(),
         source,
     })?;
@@ -443,7 +442,7 @@ pub fn verify(args: VerifyArgs) -> Result<ExitCode, Box<dyn Error>> {
                 .clone()
                 .unwrap_or_else(|| vec![0.0; kind.dimension()]);
             let container = Container::from_parts(kind, &center, size).map_err(|e| match e {
-                PackingError::Inconsistent { message, .. } => {
+                ellipack::Error::Inconsistent { message, .. } => {
                     format!("--container {kind}: {message}")
                 }
                 other => other.to_string(),

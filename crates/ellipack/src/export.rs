@@ -15,11 +15,12 @@
 //! * one type per shape group: items with the same semi-axes (exactly), numbered in the order
 //!   their first item appears.
 
+use crate::Error;
 pub use crate::atoms::{Body, Cell, GROUP_ELEMENTS, ShapeGroups, bodies, group_name, shape_groups};
-use crate::packing::{Container, ContainerKind, Packing, PackingError, num};
+use crate::packing::{Container, ContainerKind, Packing, num};
 use implicit_packing::ContainerShape;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The file name of the LAMMPS data file.
 pub const LAMMPS_FILE: &str = "packing.data";
@@ -27,48 +28,6 @@ pub const LAMMPS_FILE: &str = "packing.data";
 pub const GSD_FILE: &str = "packing.gsd";
 /// The file name of the container's surface mesh.
 pub const MESH_FILE: &str = "container.obj";
-
-/// Why a file for another program could not be written, or one of ours read back.
-#[derive(Debug, thiserror::Error)]
-pub enum ExportError {
-    /// A format name that is not one of [`Format::ALL`].
-    #[error("`{name}` is not a file format; the formats are lammps, gsd, xyz, obj")]
-    UnknownFormat {
-        /// The name given.
-        name: String,
-    },
-    /// The folder to convert does not exist or is not a folder.
-    #[error("{}: not a packing folder: {reason}", path.display())]
-    NotAFolder {
-        /// The path given.
-        path: PathBuf,
-        /// What it is instead.
-        reason: String,
-    },
-    /// The folder holds the least overlapping configuration of a fixed container's run that
-    /// did not reach its packing fraction, not a packing.
-    #[error(
-        "{}: the least overlapping configuration of an unfinished run ({overlapping_pairs} \
-         overlapping pairs, {outside} items outside), not a packing: a simulation started from \
-         its files would start from overlapping items; pass --unfinished to write them anyway",
-        path.display()
-    )]
-    Unfinished {
-        /// The folder.
-        path: PathBuf,
-        /// Its overlapping pairs.
-        overlapping_pairs: u64,
-        /// Its items outside the container.
-        outside: u64,
-    },
-    /// The packing could not be read, the XYZ file written, or a LAMMPS data file read by
-    /// [`read_lammps_data`] is not what [`lammps_data`] writes.
-    #[error(transparent)]
-    Packing(#[from] PackingError),
-    /// A file could not be written.
-    #[error(transparent)]
-    Write(#[from] crate::Error),
-}
 
 /// A file that `ellipack convert` and `ellipack pack` write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -110,13 +69,13 @@ impl Format {
     /// The format of a name (case-insensitive, surrounding blanks ignored).
     ///
     /// # Errors
-    /// [`ExportError::UnknownFormat`].
-    pub fn from_name(name: &str) -> Result<Format, ExportError> {
+    /// [`Error::UnknownFormat`].
+    pub fn from_name(name: &str) -> Result<Format, Error> {
         let wanted = name.trim();
         Format::ALL
             .into_iter()
             .find(|f| f.name().eq_ignore_ascii_case(wanted))
-            .ok_or_else(|| ExportError::UnknownFormat {
+            .ok_or_else(|| Error::UnknownFormat {
                 name: name.to_string(),
             })
     }
@@ -215,25 +174,23 @@ pub struct LammpsData {
 /// sections; not every data file LAMMPS reads). `source_name` names it in messages.
 ///
 /// # Errors
-/// [`PackingError::Malformed`] (as [`ExportError::Packing`]) naming the line: a header line or
+/// [`Error::Malformed`] naming the line: a header line or
 /// section that is not ours, a field that is not a number, a row with the wrong number of
 /// fields, counts that disagree.
-pub fn read_lammps_data(text: &str, source_name: &str) -> Result<LammpsData, ExportError> {
-    let bad = |line: usize, message: String| {
-        ExportError::Packing(PackingError::Malformed {
-            source_name: source_name.to_string(),
-            line: line as u64 + 1,
-            message,
-        })
+pub fn read_lammps_data(text: &str, source_name: &str) -> Result<LammpsData, Error> {
+    let bad = |line: usize, message: String| Error::Malformed {
+        source_name: source_name.to_string(),
+        line: line as u64 + 1,
+        message,
     };
-    let number = |line: usize, field: &str| -> Result<f64, ExportError> {
+    let number = |line: usize, field: &str| -> Result<f64, Error> {
         field
             .parse::<f64>()
             .ok()
             .filter(|x| x.is_finite())
             .ok_or_else(|| bad(line, format!("`{field}` is not a finite number")))
     };
-    let integer = |line: usize, field: &str| -> Result<u64, ExportError> {
+    let integer = |line: usize, field: &str| -> Result<u64, Error> {
         field
             .parse::<u64>()
             .map_err(|_| bad(line, format!("`{field}` is not a non-negative integer")))
@@ -701,14 +658,14 @@ pub fn mesh_obj(container: &Container, cell: &Cell) -> String {
 /// [`Cell::enclosing`] it) into `dir` (which must exist), each atomically.
 ///
 /// # Errors
-/// [`ExportError::Write`] naming the file that could not be written; the files before it are
+/// [`Error::Write`] naming the file that could not be written; the files before it are
 /// written.
 pub fn write_formats(
     dir: &Path,
     packing: &Packing,
     cell: &Cell,
     formats: &[Format],
-) -> Result<(), ExportError> {
+) -> Result<(), Error> {
     for format in formats {
         let path = dir.join(format.file_name());
         let bytes = match format {
@@ -729,22 +686,22 @@ pub fn write_formats(
 /// unless `unfinished`: its files would start a simulation from overlapping items.
 ///
 /// # Errors
-/// [`ExportError::NotAFolder`] when `dir` is not a folder, [`ExportError::Unfinished`], the
+/// [`Error::NotAFolder`] when `dir` is not a folder, [`Error::UnfinishedFolder`], the
 /// errors of
 /// [`crate::packing::read_packing_dir`] (a missing or broken packing.csv or summary.json,
 /// named with the line), and those of [`write_formats`].
-pub fn convert(dir: &Path, formats: &[Format], unfinished: bool) -> Result<Packing, ExportError> {
+pub fn convert(dir: &Path, formats: &[Format], unfinished: bool) -> Result<Packing, Error> {
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
         Ok(_) => {
-            return Err(ExportError::NotAFolder {
+            return Err(Error::NotAFolder {
                 path: dir.to_path_buf(),
                 reason: "it is a file; give the folder that holds packing.csv and summary.json"
                     .to_string(),
             });
         }
         Err(e) => {
-            return Err(ExportError::NotAFolder {
+            return Err(Error::NotAFolder {
                 path: dir.to_path_buf(),
                 reason: e.to_string(),
             });
@@ -752,7 +709,7 @@ pub fn convert(dir: &Path, formats: &[Format], unfinished: bool) -> Result<Packi
     }
     let (packing, summary) = crate::packing::read_packing_dir(dir)?;
     if summary.not_reached && !unfinished {
-        return Err(ExportError::Unfinished {
+        return Err(Error::UnfinishedFolder {
             path: dir.to_path_buf(),
             overlapping_pairs: summary.certificate.overlapping_pairs,
             outside: summary.certificate.containment_violations,

@@ -23,10 +23,9 @@
 //! The swap replaces the folder's directory entry: a shell whose working directory is the
 //! output folder still sees the old, removed folder until it changes into it again.
 
+use crate::Error;
 use crate::export::{GSD_FILE, LAMMPS_FILE, MESH_FILE};
-use crate::packing::{
-    CSV_FILE, Packing, PackingError, SUMMARY_FILE, Summary, write_csv, write_summary,
-};
+use crate::packing::{CSV_FILE, Packing, SUMMARY_FILE, Summary, write_csv, write_summary};
 use crate::xyz::{XYZ_FILE, write_xyz};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -71,34 +70,9 @@ const STAGING: &str = ".ellipack-staging-";
 pub const PROBE: &str = ".ellipack-probe-";
 const RETIRED: &str = ".ellipack-retired-";
 
-/// Why an output folder could not be staged or swapped.
-#[derive(Debug, thiserror::Error)]
-pub enum FolderError {
-    /// A file-system operation failed.
-    #[error("{path}: cannot {action}: {source}")]
-    Io {
-        /// The file or folder.
-        path: PathBuf,
-        /// What was being done.
-        action: &'static str,
-        /// What the system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The user's files in the output folder are not carried into the staging folder: too
-    /// many, on another file system, or too large to copy.
-    #[error("{path}: the user's files are not carried over: {reason}")]
-    Carry {
-        /// The folder or file.
-        path: PathBuf,
-        /// Why.
-        reason: &'static str,
-    },
-}
-
-fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> FolderError {
+fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> Error {
     let path = path.to_path_buf();
-    move |source| FolderError::Io {
+    move |source| Error::Folder {
         path,
         action,
         source,
@@ -112,7 +86,7 @@ pub enum Published {
     Swapped,
     /// File by file: no staging folder could be made beside the output folder (`None`), or
     /// the swap failed for the reason given.
-    InPlace(Option<FolderError>),
+    InPlace(Option<Error>),
 }
 
 /// A staging folder for the next set of files of an output folder. Dropping it without
@@ -130,8 +104,8 @@ impl Staging {
     /// empty staging folder for it.
     ///
     /// # Errors
-    /// [`FolderError::Io`] when `out` cannot be resolved or no staging folder can be made.
-    pub fn begin(out: &Path) -> Result<Staging, FolderError> {
+    /// [`Error::Folder`] when `out` cannot be resolved or no staging folder can be made.
+    pub fn begin(out: &Path) -> Result<Staging, Error> {
         // Symbolic links to the folder stay links: the real folder is the one swapped.
         let out = std::fs::canonicalize(out).map_err(io(out, "resolve the output folder"))?;
         clean_up(&out);
@@ -165,8 +139,8 @@ impl Staging {
     /// are renamed into place one by one rather than lost: [`Published::InPlace`] says why.
     ///
     /// # Errors
-    /// [`FolderError::Io`] when even that fails.
-    pub fn commit(mut self) -> Result<Published, FolderError> {
+    /// [`Error::Folder`] when even that fails.
+    pub fn commit(mut self) -> Result<Published, Error> {
         self.committed = true;
         let mut why = None;
         if !self.in_place {
@@ -180,7 +154,7 @@ impl Staging {
         result.map(|()| Published::InPlace(why))
     }
 
-    fn move_in_place(&self) -> Result<(), FolderError> {
+    fn move_in_place(&self) -> Result<(), Error> {
         let staged: Vec<&str> = RUN_FILES
             .into_iter()
             .filter(|name| self.dir.join(name).is_file())
@@ -197,7 +171,7 @@ impl Staging {
         Ok(())
     }
 
-    fn inside(out: PathBuf) -> Result<Staging, FolderError> {
+    fn inside(out: PathBuf) -> Result<Staging, Error> {
         let inside = out.join(format!("{STAGING}{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&inside);
         std::fs::create_dir(&inside).map_err(io(&inside, "create the staging folder"))?;
@@ -329,7 +303,7 @@ struct Budget {
 /// level, ellipack's own files are skipped. Refuses (so that the caller falls back to replacing
 /// files one by one) rather than mirror a large tree, cross into another file system or copy
 /// much data.
-fn carry(from: &Path, to: &Path, top: bool) -> Result<(), FolderError> {
+fn carry(from: &Path, to: &Path, top: bool) -> Result<(), Error> {
     let mut budget = Budget {
         entries: MAX_CARRIED_ENTRIES,
         bytes: MAX_COPIED_BYTES,
@@ -338,7 +312,7 @@ fn carry(from: &Path, to: &Path, top: bool) -> Result<(), FolderError> {
     carry_within(from, to, top, &mut budget)
 }
 
-fn carry_within(from: &Path, to: &Path, top: bool, budget: &mut Budget) -> Result<(), FolderError> {
+fn carry_within(from: &Path, to: &Path, top: bool, budget: &mut Budget) -> Result<(), Error> {
     let entries = std::fs::read_dir(from).map_err(io(from, "read the folder"))?;
     for entry in entries {
         let entry = entry.map_err(io(from, "read the folder"))?;
@@ -347,17 +321,14 @@ fn carry_within(from: &Path, to: &Path, top: bool, budget: &mut Budget) -> Resul
             continue;
         }
         let (src, dst) = (entry.path(), to.join(&name));
-        budget.entries = budget
-            .entries
-            .checked_sub(1)
-            .ok_or_else(|| FolderError::Carry {
-                path: from.to_path_buf(),
-                reason: "more than 10 000 of the user's files and folders",
-            })?;
+        budget.entries = budget.entries.checked_sub(1).ok_or_else(|| Error::Carry {
+            path: from.to_path_buf(),
+            reason: "more than 10 000 of the user's files and folders",
+        })?;
         let kind = entry.file_type().map_err(io(&src, "inspect"))?;
         if kind.is_dir() {
             if device_of(&src) != budget.device {
-                return Err(FolderError::Carry {
+                return Err(Error::Carry {
                     path: src,
                     reason: "another file system is mounted there",
                 });
@@ -369,13 +340,10 @@ fn carry_within(from: &Path, to: &Path, top: bool, budget: &mut Budget) -> Resul
             link_like(&src, &dst)?;
         } else if std::fs::hard_link(&src, &dst).is_err() {
             let len = entry.metadata().map_err(io(&src, "inspect"))?.len();
-            budget.bytes = budget
-                .bytes
-                .checked_sub(len)
-                .ok_or_else(|| FolderError::Carry {
-                    path: src.clone(),
-                    reason: "cannot be hard-linked and is too large to copy",
-                })?;
+            budget.bytes = budget.bytes.checked_sub(len).ok_or_else(|| Error::Carry {
+                path: src.clone(),
+                reason: "cannot be hard-linked and is too large to copy",
+            })?;
             std::fs::copy(&src, &dst).map_err(io(&src, "keep (copy)"))?;
         }
     }
@@ -394,13 +362,13 @@ fn device_of(_: &Path) -> Option<u64> {
 }
 
 #[cfg(unix)]
-fn link_like(src: &Path, dst: &Path) -> Result<(), FolderError> {
+fn link_like(src: &Path, dst: &Path) -> Result<(), Error> {
     let target = std::fs::read_link(src).map_err(io(src, "read the link"))?;
     std::os::unix::fs::symlink(target, dst).map_err(io(dst, "create the link"))
 }
 
 #[cfg(not(unix))]
-fn link_like(src: &Path, dst: &Path) -> Result<(), FolderError> {
+fn link_like(src: &Path, dst: &Path) -> Result<(), Error> {
     std::fs::copy(src, dst)
         .map(|_| ())
         .map_err(io(src, "keep (copy)"))
@@ -417,7 +385,7 @@ fn same_device(a: &Path, b: &Path) -> bool {
 }
 
 /// Puts the staging folder in the place of `out` and removes the previous set.
-fn swap(staging: &Path, out: &Path) -> Result<(), FolderError> {
+fn swap(staging: &Path, out: &Path) -> Result<(), Error> {
     match exchange(staging, out) {
         Ok(()) => {
             // `staging` now names the previous set. Left behind if this fails: the next run
@@ -434,7 +402,7 @@ fn swap(staging: &Path, out: &Path) -> Result<(), FolderError> {
 /// The swap where the file system cannot exchange: `out` is set aside under the retired name
 /// (which the next run puts back if this one dies before the second rename), then the staging
 /// folder takes its place.
-fn swap_by_renames(staging: &Path, out: &Path) -> Result<(), FolderError> {
+fn swap_by_renames(staging: &Path, out: &Path) -> Result<(), Error> {
     let retired = sibling(out, RETIRED, std::process::id())
         .unwrap_or_else(|| staging.with_extension("retired"));
     std::fs::rename(out, &retired).map_err(io(out, "set the previous files aside"))?;
@@ -494,7 +462,7 @@ pub fn write_files(
     packing: &Packing,
     summary: &Summary,
     xyz: bool,
-) -> Result<(), PackingError> {
+) -> Result<(), Error> {
     write_csv(&dir.join(CSV_FILE), &packing.items)?;
     write_summary(&dir.join(SUMMARY_FILE), summary)?;
     if xyz {
@@ -647,10 +615,7 @@ mod tests {
         std::fs::write(staging.path().join(CSV_FILE), "new").unwrap();
         let published = staging.commit().unwrap();
         assert!(
-            matches!(
-                &published,
-                Published::InPlace(Some(FolderError::Carry { .. }))
-            ),
+            matches!(&published, Published::InPlace(Some(Error::Carry { .. }))),
             "{published:?}"
         );
         assert_eq!(names(&out), ["data", CSV_FILE]);

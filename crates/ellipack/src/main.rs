@@ -311,7 +311,7 @@ const ROWS_FAILED: u8 = 3;
 fn open_input(path: &Path) -> Result<BufReader<File>, Error> {
     File::open(path)
         .map(BufReader::new)
-        .map_err(|source| Error::Io {
+        .map_err(|source| ellipack::Error::Io {
             path: path.to_path_buf(),
             source,
         })
@@ -337,7 +337,9 @@ fn deliver(
     let summary = match result {
         Ok(summary) => summary,
         // The reader has seen enough (`ellipack contact | head`): not a failure.
-        Err(Error::Write { source, .. } | Error::Io { source, .. }) if reader_gone(&source) => {
+        Err(Error::Write { source, .. } | ellipack::Error::Io { source, .. })
+            if reader_gone(&source) =>
+        {
             return Ok(ExitCode::SUCCESS);
         }
         Err(e) => return Err(e),

@@ -44,7 +44,7 @@ pub fn measure(text: &str, source_name: &str) -> Result<(String, usize), Error> 
 /// (`ciz` present: 3D).
 ///
 /// # Errors
-/// [`Error::MalformedCsv`] for broken CSV structure, [`Error::MissingColumn`] or
+/// [`Error::Malformed`] for broken CSV structure, [`Error::MissingColumn`] or
 /// [`Error::DuplicateColumn`] for the header, [`Error::Empty`] without rows (nothing is
 /// written then), [`Error::Write`] when `output` refuses the data.
 pub fn measure_stream<R: Read, W: Write + ?Sized>(

@@ -6,80 +6,13 @@
 //! items in the same kind of container; a packing already in the output folder takes part
 //! too, so a merge never replaces a better certified packing with a worse one.
 
-use crate::folder::{FolderError, Published, RUN_FILES, Staging};
-use crate::pack::{PackError, verify};
+use crate::Error;
+use crate::folder::{Published, RUN_FILES, Staging};
+use crate::pack::verify;
 use crate::packing::{
-    CSV_FILE, Container, ContainerKind, Items, Packing, PackingError, Summary, read_packing_dir,
+    CSV_FILE, Container, ContainerKind, Items, Packing, Summary, read_packing_dir,
 };
 use std::path::{Path, PathBuf};
-
-/// Why a merge wrote nothing.
-#[derive(Debug, thiserror::Error)]
-pub enum MergeError {
-    /// No input folder was given.
-    #[error("nothing to merge: give at least one packing folder")]
-    NoInputs,
-    /// An input (or the output folder's packing) could not be read.
-    #[error("{folder}: {source}")]
-    Read {
-        /// The folder.
-        folder: PathBuf,
-        /// What was wrong with its files.
-        #[source]
-        source: PackingError,
-    },
-    /// An input could not be verified (its items do not form a valid model).
-    #[error("{folder}: cannot verify: {source}")]
-    Verify {
-        /// The folder.
-        folder: PathBuf,
-        /// Why.
-        #[source]
-        source: PackError,
-    },
-    /// Two folders hold packings of different scenes.
-    #[error("{other} is not a packing of the same scene as {first}: {difference}")]
-    DifferentScenes {
-        /// The first input.
-        first: PathBuf,
-        /// The folder that differs.
-        other: PathBuf,
-        /// How they differ.
-        difference: String,
-    },
-    /// No input is a certified packing.
-    #[error(
-        "none of the {inputs} packings read is certified ({skipped} folders held no packing): \
-         nothing to keep"
-    )]
-    NoneCertified {
-        /// How many inputs were read.
-        inputs: usize,
-        /// How many folders held no packing.csv.
-        skipped: usize,
-    },
-    /// The output folder could not be created.
-    #[error("cannot create the output folder {path}: {source}")]
-    OutputFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the file system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The output folder could not be written.
-    #[error(transparent)]
-    Folder(#[from] FolderError),
-    /// A file of the best packing could not be copied into the output folder.
-    #[error("cannot copy {path}: {source}")]
-    Copy {
-        /// The file.
-        path: PathBuf,
-        /// What the file system said.
-        #[source]
-        source: std::io::Error,
-    },
-}
 
 /// One packing read for a merge, with its verification.
 #[derive(Clone, Debug)]
@@ -195,14 +128,14 @@ fn same_container(a: &Container, b: &Container) -> bool {
 }
 
 /// Reads and verifies `folder`.
-fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
-    let (packing, summary) = read_packing_dir(folder).map_err(|source| MergeError::Read {
+fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), Error> {
+    let (packing, summary) = read_packing_dir(folder).map_err(|source| Error::Unreadable {
         folder: folder.to_path_buf(),
-        source,
+        source: Box::new(source),
     })?;
-    let certificate = verify(&packing).map_err(|source| MergeError::Verify {
+    let certificate = verify(&packing).map_err(|source| Error::Unverifiable {
         folder: folder.to_path_buf(),
-        source,
+        source: Box::new(source),
     })?;
     let key = SceneKey::of(&packing, &summary);
     Ok((
@@ -222,11 +155,11 @@ fn candidate(folder: &Path) -> Result<(Candidate, SceneKey), MergeError> {
 /// part: if it is the densest, nothing is written.
 ///
 /// # Errors
-/// [`MergeError`]: an unreadable input, different scenes, no certified input, or an output
+/// [`Error`]: an unreadable input, different scenes, no certified input, or an output
 /// folder that cannot be written. Nothing is written then.
-pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError> {
+pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, Error> {
     if inputs.is_empty() {
-        return Err(MergeError::NoInputs);
+        return Err(Error::NoInputs);
     }
     let mut candidates = Vec::with_capacity(inputs.len() + 1);
     let mut skipped = Vec::new();
@@ -247,7 +180,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
             None => first_key = Some((folder.to_path_buf(), key)),
             Some((first_folder, first)) => {
                 if let Some(difference) = first.difference(&key) {
-                    return Err(MergeError::DifferentScenes {
+                    return Err(Error::DifferentScenes {
                         first: first_folder.clone(),
                         other: folder.to_path_buf(),
                         difference,
@@ -265,7 +198,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
             Some(b) if candidates[b].density >= c.density => Some(b),
             _ => Some(k),
         })
-        .ok_or(MergeError::NoneCertified {
+        .ok_or(Error::NoneCertified {
             inputs: candidates.len(),
             skipped: skipped.len(),
         })?;
@@ -278,7 +211,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
             skipped,
         });
     }
-    std::fs::create_dir_all(out).map_err(|source| MergeError::OutputFolder {
+    std::fs::create_dir_all(out).map_err(|source| Error::OutputFolder {
         path: out.to_path_buf(),
         source,
     })?;
@@ -287,7 +220,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, MergeError>
         let from = candidates[best].folder.join(name);
         if from.is_file() {
             std::fs::copy(&from, staging.path().join(name))
-                .map_err(|source| MergeError::Copy { path: from, source })?;
+                .map_err(|source| Error::NotCopied { path: from, source })?;
         }
     }
     let published = staging.commit()?;

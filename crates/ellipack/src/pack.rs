@@ -6,9 +6,8 @@
 //! Containers are centred at the origin in the packer; a packing's items are its items
 //! relative to its container's centre.
 
-use crate::packing::{
-    CertificateCounts, Container, ContainerKind, Items, Packing, PackingError, Summary,
-};
+use crate::Error;
+use crate::packing::{CertificateCounts, Container, Items, Packing, Summary};
 use crate::scene::{RandomGoal, Scene};
 use ellipsoid_packer::Target;
 use ellipsoid_packer::local::LocalSettings;
@@ -17,102 +16,10 @@ pub use ellipsoid_packer::multistart::{MultiStartProgress, Observer, Shard};
 use ellipsoid_packer::run::{
     Configuration, Goal, Outcome, Packed, Packer, Problem, Settings, Unfilled,
 };
-use implicit_packing::certificate::{bodies_of as stated_bodies, certify_items, shown_mu2};
+use implicit_packing::certificate::{bodies_of as stated_bodies, certify_items};
 use implicit_packing::{Body, Container as SizedContainer, Item};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
-
-/// Why a run or a check failed.
-#[derive(Debug, thiserror::Error)]
-pub enum PackError {
-    /// The structure of a packing could not be measured.
-    #[error("structure: {0}")]
-    Structure(#[from] structure::Error),
-    /// The model refused the problem.
-    #[error("{0}")]
-    Model(#[from] implicit_packing::Error),
-    /// The packer could not give a certified packing.
-    #[error("{0}")]
-    Packer(#[from] ellipsoid_packer::Error),
-    /// A packing file could not be read or written.
-    #[error("{0}")]
-    Packing(#[from] PackingError),
-    /// A packing given to resume from does not match the scene.
-    #[error("cannot resume: {0}")]
-    Mismatch(String),
-    /// A value of an item or of the container that the model cannot hold, named as the
-    /// packing states it (not as a model variable).
-    #[error("{what} is {value}; {rule}")]
-    OutOfRange {
-        /// The item and coordinate, or the container's value.
-        what: String,
-        /// The value, as the model saw it.
-        value: String,
-        /// What the model accepts.
-        rule: &'static str,
-    },
-    /// The folder to resume from holds a packing in another kind of container than the scene's.
-    #[error(
-        "cannot resume from {summary}: its container is {found}, but the scene ({scene}) has \
-         {expected}"
-    )]
-    ContainerMismatch {
-        /// The folder's `summary.json`.
-        summary: PathBuf,
-        /// The container kind of the folder.
-        found: ContainerKind,
-        /// The container kind of the scene.
-        expected: ContainerKind,
-        /// The scene's title.
-        scene: String,
-    },
-    /// The output folder cannot be created or written to.
-    #[error("the output folder {path} is not writable: {source}")]
-    OutputFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the file system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// A fixed container that the run could not fill without overlap: the least overlapping
-    /// configuration comes with the error, to be kept apart from packings.
-    #[error(
-        "packing fraction {:.4} not reached in {:.1} s: the least overlapping configuration \
-         ({} local minimisations) has {} overlapping pairs{} and {} items outside the container \
-         (model overlap {:.3e})",
-        .0.summary.density,
-        .0.summary.wall_seconds,
-        .0.summary.local_minimisations,
-        .0.summary.certificate.overlapping_pairs,
-        .0.summary.certificate.min_mu2.map_or(String::new(), |m| format!(" (smallest μ² {})", shown_mu2(m, 6))),
-        .0.summary.certificate.containment_violations,
-        .0.infeasibility
-    )]
-    NotReached(Box<Unfinished>),
-    /// A fixed container given both by the scene and by a packing to resume from, of
-    /// different sizes.
-    #[error(
-        "cannot resume: the packing's container ({found:?}) is not the scene's fixed container \
-         ({expected:?})"
-    )]
-    FixedSizeMismatch {
-        /// The size of the packing's container.
-        found: Vec<f64>,
-        /// The size the scene gives.
-        expected: Vec<f64>,
-    },
-    /// A time limit that is not a positive number of seconds a clock can count to.
-    #[error(
-        "the time limit must be a number of seconds from 1e-9 (a nanosecond) to {max:.3e} \
-         (about 585 billion years), not {seconds:e}",
-        max = Duration::MAX.as_secs_f64()
-    )]
-    TimeLimit {
-        /// The seconds given.
-        seconds: f64,
-    },
-}
 
 /// The least overlapping configuration of a fixed-container run that found no packing: written
 /// to `unfinished/` of the output folder, never as a packing.
@@ -136,19 +43,19 @@ pub const UNFINISHED_DIR: &str = "unfinished";
 /// Converts a time limit in seconds ([`crate::scene::time_limit`]).
 ///
 /// # Errors
-/// [`PackError::TimeLimit`] for zero, negative, NaN, infinite, too large values, or values
+/// [`Error::TimeLimit`] for zero, negative, NaN, infinite, too large values, or values
 /// below a nanosecond.
-pub fn time_limit_of(seconds: f64) -> Result<Duration, PackError> {
-    crate::scene::time_limit(seconds).ok_or(PackError::TimeLimit { seconds })
+pub fn time_limit_of(seconds: f64) -> Result<Duration, Error> {
+    crate::scene::time_limit(seconds).ok_or(Error::TimeLimit { seconds })
 }
 
 /// Makes sure the output folder can be written before a run spends its time: creates it,
 /// then creates and removes a probe file in it.
 ///
 /// # Errors
-/// [`PackError::OutputFolder`] naming the folder.
-pub fn probe_output_folder(path: &Path) -> Result<(), PackError> {
-    let error = |source| PackError::OutputFolder {
+/// [`Error::OutputFolder`] naming the folder.
+pub fn probe_output_folder(path: &Path) -> Result<(), Error> {
+    let error = |source| Error::OutputFolder {
         path: path.to_path_buf(),
         source,
     };
@@ -185,13 +92,13 @@ pub fn probe_output_folder(path: &Path) -> Result<(), PackError> {
 /// that its container is of the scene's kind; [`run`] checks the items and the certificate.
 ///
 /// # Errors
-/// Errors of reading the files ([`PackError::Packing`]), and
-/// [`PackError::ContainerMismatch`].
-pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, PackError> {
+/// Errors of reading the files ([`Error::Io`], [`Error::Malformed`], …), and
+/// [`Error::ContainerMismatch`].
+pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, Error> {
     let (packing, _) = crate::packing::read_packing_dir(folder)?;
     let found = packing.container().kind();
     if found != scene.container {
-        return Err(PackError::ContainerMismatch {
+        return Err(Error::ContainerMismatch {
             summary: folder.join(crate::packing::SUMMARY_FILE),
             found,
             expected: scene.container,
@@ -272,19 +179,19 @@ pub struct RunOutcome {
 /// packing; a random scene ([`Scene::random_goal`]) is compressed from a random start.
 ///
 /// # Errors
-/// [`PackError`] when the model refuses the items or the resume packing does not match;
-/// [`PackError::NotReached`], with the least overlapping configuration, when a fixed container
-/// was not filled; [`PackError::FixedSizeMismatch`] when the packing to resume from is not in
+/// [`Error`] when the model refuses the items or the resume packing does not match;
+/// [`Error::NotReached`], with the least overlapping configuration, when a fixed container
+/// was not filled; [`Error::FixedSizeMismatch`] when the packing to resume from is not in
 /// the scene's fixed container.
 pub fn run(
     scene: &Scene,
     options: &RunOptions,
     observer: &mut dyn Observer,
-) -> Result<RunOutcome, PackError> {
+) -> Result<RunOutcome, Error> {
     match (scene.ellipse_axes(), scene.ellipsoid_axes()) {
         (Some(axes), _) => run_n::<2>(scene, axes, options, observer),
         (_, Some(axes)) => run_n::<3>(scene, axes, options, observer),
-        _ => Err(PackError::Mismatch("the scene has no items".into())),
+        _ => Err(Error::Mismatch("the scene has no items".into())),
     }
 }
 
@@ -293,7 +200,7 @@ fn run_n<const N: usize>(
     semi_axes: Vec<[f64; N]>,
     options: &RunOptions,
     observer: &mut dyn Observer,
-) -> Result<RunOutcome, PackError> {
+) -> Result<RunOutcome, Error> {
     let shape = scene.container.shape();
     let goal = match (scene.random_goal(), scene.fixed_container()) {
         (Some(RandomGoal::Fraction(c)), _) => Goal::Random {
@@ -365,22 +272,22 @@ fn local_settings(scene: &Scene) -> LocalSettings {
 
 /// The packer's refusals of a packing to resume from, said as the scene's (the packer knows
 /// a problem, the user wrote a scene).
-fn as_scene_says(e: ellipsoid_packer::Error) -> PackError {
+fn as_scene_says(e: ellipsoid_packer::Error) -> Error {
     use ellipsoid_packer::Error as E;
     match e {
-        E::ResumeItems { found, expected } => PackError::Mismatch(format!(
+        E::ResumeItems { found, expected } => Error::Mismatch(format!(
             "the packing has {found} items, the scene {expected}"
         )),
         E::ResumeSemiAxes {
             item,
             found,
             expected,
-        } => PackError::Mismatch(format!(
+        } => Error::Mismatch(format!(
             "item {item} has semi-axes {found:?} in the packing, {expected:?} in the scene"
         )),
-        E::ResumeFixedSize { found, expected } => PackError::FixedSizeMismatch { found, expected },
+        E::ResumeFixedSize { found, expected } => Error::FixedSizeMismatch { found, expected },
         E::Model(e) => named(e),
-        other => PackError::Packer(other),
+        other => Error::Packer(other),
     }
 }
 
@@ -391,7 +298,7 @@ fn written<const N: usize>(
     wall_time: Duration,
     local_minimisations: usize,
     certificate: &implicit_packing::Certificate,
-) -> Result<(Packing, Summary), PackError> {
+) -> Result<(Packing, Summary), Error> {
     let packing = packing_of(configuration)?;
     let summary = Summary::new(
         &packing,
@@ -408,7 +315,7 @@ fn packed_outcome<const N: usize>(
     packed: Packed<N>,
     options: &RunOptions,
     seed: u64,
-) -> Result<RunOutcome, PackError> {
+) -> Result<RunOutcome, Error> {
     let (packing, mut summary) = written(
         &packed.configuration,
         packed.wall_time,
@@ -444,7 +351,7 @@ fn packed_outcome<const N: usize>(
 
 /// The error of a fixed-container run that found no packing, with its least overlapping
 /// configuration as the files hold it.
-fn not_reached<const N: usize>(u: Unfilled<N>) -> Result<PackError, PackError> {
+fn not_reached<const N: usize>(u: Unfilled<N>) -> Result<Error, Error> {
     let (packing, mut summary) = written(
         &u.configuration,
         u.wall_time,
@@ -453,7 +360,7 @@ fn not_reached<const N: usize>(u: Unfilled<N>) -> Result<PackError, PackError> {
     )?;
     summary.not_reached = true;
     summary.fixed_container = true;
-    Ok(PackError::NotReached(Box::new(Unfinished {
+    Ok(Error::NotReached(Box::new(Unfinished {
         packing,
         summary,
         infeasibility: u.infeasibility,
@@ -467,8 +374,8 @@ fn not_reached<const N: usize>(u: Unfilled<N>) -> Result<PackError, PackError> {
 /// smallest μ² over those pairs.
 ///
 /// # Errors
-/// [`PackError`] when the items do not form valid bodies (a zero semi-axis, NaN).
-pub fn verify(packing: &Packing) -> Result<CertificateCounts, PackError> {
+/// [`Error`] when the items do not form valid bodies (a zero semi-axis, NaN).
+pub fn verify(packing: &Packing) -> Result<CertificateCounts, Error> {
     verify_detailed(packing).map(|v| v.certificate)
 }
 
@@ -500,7 +407,7 @@ pub struct Verification {
 ///
 /// # Errors
 /// As [`verify`].
-pub fn verify_detailed(packing: &Packing) -> Result<Verification, PackError> {
+pub fn verify_detailed(packing: &Packing) -> Result<Verification, Error> {
     let model = match packing.items() {
         Items::Ellipses(_) => certified::<2>(packing)?,
         Items::Ellipsoids(_) => certified::<3>(packing)?,
@@ -519,16 +426,14 @@ pub fn verify_detailed(packing: &Packing) -> Result<Verification, PackError> {
 }
 
 /// The certificate of a packing's items as stated.
-fn certified<const N: usize>(
-    packing: &Packing,
-) -> Result<implicit_packing::Certificate, PackError> {
+fn certified<const N: usize>(packing: &Packing) -> Result<implicit_packing::Certificate, Error> {
     let c = configuration_of::<N>(packing)?;
     certify_items(&c.items, &c.container).map_err(named)
 }
 
 /// A model error about an item's values named as the packing states them: item i's centre
 /// coordinate, or its fractional coordinate along a cell edge. Other errors pass unchanged.
-fn named(e: implicit_packing::Error) -> PackError {
+fn named(e: implicit_packing::Error) -> Error {
     use implicit_packing::Error as E;
     let axis = ["x", "y", "z"];
     let edge = ["a", "b", "c"];
@@ -537,7 +442,7 @@ fn named(e: implicit_packing::Error) -> PackError {
             item: Some(item),
             axis: k,
             value,
-        } => PackError::OutOfRange {
+        } => Error::OutOfRange {
             what: format!("item {item}'s centre coordinate {}", axis[k.min(2)]),
             value: format!("{value:e}"),
             rule: "coordinates must be finite and within ±1e30 (rescale the packing, or check \
@@ -547,7 +452,7 @@ fn named(e: implicit_packing::Error) -> PackError {
             item,
             edge: k,
             value,
-        } => PackError::OutOfRange {
+        } => Error::OutOfRange {
             what: format!(
                 "item {item}'s fractional coordinate along the cell edge {}",
                 edge[k.min(2)]
@@ -556,17 +461,17 @@ fn named(e: implicit_packing::Error) -> PackError {
             rule: "items of a periodic cell must lie within 2^30 cells of it (wrap them into \
                    the cell)",
         },
-        other => PackError::Model(other),
+        other => Error::Model(other),
     }
 }
 
 /// The bodies and the container of a packing, as the certificate sees them.
 ///
 /// # Errors
-/// [`PackError`] when the items do not form valid bodies (a zero semi-axis, NaN).
+/// [`Error`] when the items do not form valid bodies (a zero semi-axis, NaN).
 pub fn bodies_of<const N: usize>(
     packing: &Packing,
-) -> Result<(Vec<Body<N>>, SizedContainer<N>), PackError> {
+) -> Result<(Vec<Body<N>>, SizedContainer<N>), Error> {
     let c = configuration_of::<N>(packing)?;
     Ok((stated_bodies(&c.items).map_err(named)?, c.container))
 }
@@ -581,20 +486,20 @@ fn certificate_of(model: &implicit_packing::Certificate) -> CertificateCounts {
 }
 
 /// The container of the files as the packer's, centred at the origin, checked by the model.
-fn sized<const N: usize>(container: &Container) -> Result<SizedContainer<N>, PackError> {
+fn sized<const N: usize>(container: &Container) -> Result<SizedContainer<N>, Error> {
     let shape = container.kind().shape();
     Ok(SizedContainer::from_dimensions(shape, &container.size())?)
 }
 
 /// The items of a packing relative to its container's centre, and its container, as the packer
 /// and the certificate take them.
-fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N>, PackError> {
+fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N>, Error> {
     let container = packing.container();
     let centre = container.center();
     let mut items: Vec<Item<N>> = packing
         .items()
         .in_dimension()
-        .ok_or_else(|| PackError::Mismatch("the packing has the other dimension".into()))?;
+        .ok_or_else(|| Error::Mismatch("the packing has the other dimension".into()))?;
     for item in &mut items {
         for (x, c) in item.centre.iter_mut().zip(centre) {
             *x -= c;
@@ -605,10 +510,10 @@ fn configuration_of<const N: usize>(packing: &Packing) -> Result<Configuration<N
 }
 
 /// The packing the files hold of a configuration of the packer.
-fn packing_of<const N: usize>(configuration: &Configuration<N>) -> Result<Packing, PackError> {
+fn packing_of<const N: usize>(configuration: &Configuration<N>) -> Result<Packing, Error> {
     let items = Items::of(&configuration.items);
     let container = Container::placed([0.0; N], &configuration.container);
-    Ok(Packing::new(container, items)?)
+    Packing::new(container, items)
 }
 
 #[cfg(test)]

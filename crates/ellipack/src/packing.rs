@@ -16,12 +16,13 @@
 //! * [`SUMMARY_FILE`]: JSON, see [`Summary`];
 //! * `packing.xyz`: extended XYZ for ASE and OVITO ([`crate::xyz`]).
 
+use crate::Error;
 use implicit_packing::ContainerShape;
 pub use implicit_packing::Item;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The file name of the items table.
 pub const CSV_FILE: &str = "packing.csv";
@@ -32,89 +33,6 @@ pub const SUMMARY_FILE: &str = "summary.json";
 pub const CSV_COLUMNS_2D: [&str; 6] = ["id", "x", "y", "a", "b", "theta"];
 /// The columns of [`CSV_FILE`] for ellipsoids.
 pub const CSV_COLUMNS_3D: [&str; 11] = ["id", "x", "y", "z", "a", "b", "c", "qw", "qx", "qy", "qz"];
-
-/// Why a packing file could not be read or written. Messages name the file and, for what is
-/// wrong inside it, the line and column (both 1-based).
-#[derive(Debug, thiserror::Error)]
-pub enum PackingError {
-    /// The file could not be read.
-    #[error("{path}: {source}")]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
-    },
-    /// The file could not be written.
-    #[error(transparent)]
-    Write(#[from] crate::Error),
-    /// The structure of the file is broken (CSV quoting, a row with the wrong number of
-    /// fields, invalid JSON, an XYZ header that is not ours).
-    #[error("{source_name}: line {line}: {message}")]
-    Malformed {
-        /// The file.
-        source_name: String,
-        /// 1-based line.
-        line: u64,
-        /// What is wrong.
-        message: String,
-    },
-    /// One value is unreadable or impossible (not a number, a negative semi-axis, a zero
-    /// quaternion).
-    #[error("{source_name}: line {line}, column {column} (`{name}`): {message}")]
-    BadValue {
-        /// The file.
-        source_name: String,
-        /// 1-based line.
-        line: u64,
-        /// 1-based column: the field's position in a CSV or XYZ row, the character in JSON.
-        column: u64,
-        /// The column or key.
-        name: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// Two rows of the items table carry the same `id`, so a message about that id could
-    /// not say which item it means.
-    #[error("{source_name}: line {line}: id {id} is already the id of line {first_line}")]
-    DuplicateId {
-        /// The file.
-        source_name: String,
-        /// The repeated id.
-        id: u64,
-        /// 1-based line of its first row.
-        first_line: u64,
-        /// 1-based line of the repetition.
-        line: u64,
-    },
-    /// The CSV header lacks a column.
-    #[error("{source_name}: line 1: missing column `{column}` (the header must be {expected})")]
-    MissingColumn {
-        /// The file.
-        source_name: String,
-        /// The missing column.
-        column: &'static str,
-        /// The expected header.
-        expected: String,
-    },
-    /// The files contradict each other or the data model (a 2D table with a 3D container, a
-    /// different item count).
-    #[error("{source_name}: {message}")]
-    Inconsistent {
-        /// The file that disagrees.
-        source_name: String,
-        /// What disagrees.
-        message: String,
-    },
-    /// A summary value is NaN or infinite: JSON has no way to store it, so nothing is written.
-    #[error("summary: `{field}` is {value}, which JSON cannot store")]
-    NonFinite {
-        /// The field.
-        field: &'static str,
-        /// Its value.
-        value: f64,
-    },
-}
 
 /// The shape of a container in a dimension, as `summary.json` and scene files name it. Read
 /// from its name; `periodic` reads as the plane's cell, which a scene of ellipsoids makes the
@@ -349,8 +267,8 @@ impl Container {
     }
 
     /// The periodic cell at `origin` (2 or 3 coordinates) with `lengths` and LAMMPS's `tilts`
-    /// (`[xy]`, or `[xy, xz, yz]`; missing tilts are zero), unchecked as
-    /// [`Container::unchecked`].
+    /// (`[xy]`, or `[xy, xz, yz]`; missing tilts are zero), without the checks of
+    /// [`Container::from_parts`].
     pub fn periodic(origin: &[f64], lengths: &[f64], tilts: &[f64]) -> Self {
         let kind = if origin.len() == 2 {
             ContainerKind::Parallelogram
@@ -377,14 +295,14 @@ impl Container {
     /// sides: the container variables of the solver, in that order).
     ///
     /// # Errors
-    /// [`PackingError::Inconsistent`] when the lengths do not fit the kind, or the size is not
+    /// [`Error::Inconsistent`] when the lengths do not fit the kind, or the size is not
     /// positive and finite, or the centre not finite.
     pub fn from_parts(
         kind: ContainerKind,
         center: &[f64],
         size: &[f64],
-    ) -> Result<Container, PackingError> {
-        let wrong = |what: &str, expected: usize, found: usize| PackingError::Inconsistent {
+    ) -> Result<Container, Error> {
+        let wrong = |what: &str, expected: usize, found: usize| Error::Inconsistent {
             source_name: "container".to_string(),
             message: format!("a {kind} needs {expected} {what} values, not {found}"),
         };
@@ -404,7 +322,7 @@ impl Container {
         let container = Container::unchecked(kind, center, size);
         match container.defect() {
             None => Ok(container),
-            Some((_, message)) => Err(PackingError::Inconsistent {
+            Some((_, message)) => Err(Error::Inconsistent {
                 source_name: "container".to_string(),
                 message,
             }),
@@ -855,9 +773,9 @@ impl Packing {
     /// finite centres and angles, non-zero quaternions.
     ///
     /// # Errors
-    /// [`PackingError::Inconsistent`] naming the first offending item (0-based id).
-    pub fn new(container: Container, items: Items) -> Result<Self, PackingError> {
-        let inconsistent = |message: String| PackingError::Inconsistent {
+    /// [`Error::Inconsistent`] naming the first offending item (0-based id).
+    pub fn new(container: Container, items: Items) -> Result<Self, Error> {
+        let inconsistent = |message: String| Error::Inconsistent {
             source_name: "packing".to_string(),
             message,
         };
@@ -1115,14 +1033,14 @@ pub fn csv_string(items: &Items) -> String {
 /// Writes [`csv_string`] to `path` atomically.
 ///
 /// # Errors
-/// [`PackingError::Write`] naming the file.
-pub fn write_csv(path: &Path, items: &Items) -> Result<(), PackingError> {
+/// [`Error::Write`] naming the file.
+pub fn write_csv(path: &Path, items: &Items) -> Result<(), Error> {
     write_text(path, &csv_string(items))
 }
 
 /// Writes `text` to `path` atomically.
-pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), PackingError> {
-    Ok(crate::output::write_atomically(path, text.as_bytes())?)
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), Error> {
+    crate::output::write_atomically(path, text.as_bytes())
 }
 
 /// Reads [`CSV_FILE`] text. The header decides the dimension: with any of `z, c, qw, qx, qy,
@@ -1130,12 +1048,12 @@ pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), PackingError> {
 /// other columns are ignored. `source_name` names the file in messages.
 ///
 /// # Errors
-/// [`PackingError::Malformed`] for broken CSV, an empty file, a column named twice or no item
-/// line, [`PackingError::MissingColumn`], and [`PackingError::BadValue`] (line, column, name)
+/// [`Error::Malformed`] for broken CSV, an empty file, a column named twice or no item
+/// line, [`Error::MissingColumn`], and [`Error::BadValue`] (line, column, name)
 /// for a cell that is not a finite number, a semi-axis that is not positive, a zero quaternion
-/// or an `id` that is not an integer; [`PackingError::DuplicateId`] naming both lines when two
+/// or an `id` that is not an integer; [`Error::DuplicateId`] naming both lines when two
 /// rows share an `id`.
-pub fn read_csv(text: &str, source_name: &str) -> Result<Items, PackingError> {
+pub fn read_csv(text: &str, source_name: &str) -> Result<Items, Error> {
     read_table(text, source_name).map(|table| table.items)
 }
 
@@ -1155,11 +1073,11 @@ pub struct Table {
 ///
 /// # Errors
 /// Those of [`read_csv`].
-pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> {
+pub fn read_table(text: &str, source_name: &str) -> Result<Table, Error> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
-    let malformed = |e: csv::Error| PackingError::Malformed {
+    let malformed = |e: csv::Error| Error::Malformed {
         source_name: source_name.to_string(),
         line: e.position().map_or(1, csv::Position::line),
         message: e.to_string(),
@@ -1174,7 +1092,7 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
         &CSV_COLUMNS_2D
     };
     if header.len() <= 1 && header.iter().all(str::is_empty) {
-        return Err(PackingError::Malformed {
+        return Err(Error::Malformed {
             source_name: source_name.to_string(),
             line: 1,
             message: format!(
@@ -1186,14 +1104,14 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
     let mut index = Vec::with_capacity(expected.len());
     for &column in expected {
         let i = crate::table::column_position(&header, column)
-            .map_err(|e| PackingError::Malformed {
+            .map_err(|e| Error::Malformed {
                 source_name: source_name.to_string(),
                 line: 1,
                 message: e.to_string(),
             })?
-            .ok_or_else(|| PackingError::MissingColumn {
+            .ok_or_else(|| Error::MissingColumn {
                 source_name: source_name.to_string(),
-                column,
+                column: column.to_string(),
                 expected: expected.join(","),
             })?;
         index.push(i);
@@ -1206,7 +1124,7 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
     for record in reader.records() {
         let record = record.map_err(malformed)?;
         let line = record.position().map_or(0, csv::Position::line);
-        let bad = |k: usize, message: String| PackingError::BadValue {
+        let bad = |k: usize, message: String| Error::BadValue {
             source_name: source_name.to_string(),
             line,
             column: index[k] as u64 + 1,
@@ -1220,7 +1138,7 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
             return Err(bad(0, format!("`{id_text}` is not a non-negative integer")));
         };
         if let Some(&first_line) = first_line_of.get(&id) {
-            return Err(PackingError::DuplicateId {
+            return Err(Error::DuplicateId {
                 source_name: source_name.to_string(),
                 id,
                 first_line,
@@ -1259,7 +1177,7 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
         }
     }
     if ellipses.is_empty() && ellipsoids.is_empty() {
-        return Err(PackingError::Malformed {
+        return Err(Error::Malformed {
             source_name: source_name.to_string(),
             line: 2,
             message: format!(
@@ -1279,9 +1197,9 @@ pub fn read_table(text: &str, source_name: &str) -> Result<Table, PackingError> 
 /// The text of [`SUMMARY_FILE`] (pretty-printed JSON).
 ///
 /// # Errors
-/// [`PackingError::NonFinite`] when a number is NaN or infinite (JSON would store `null`, which
+/// [`Error::NonFinite`] when a number is NaN or infinite (JSON would store `null`, which
 /// the reader could not read back).
-pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
+pub fn summary_json(summary: &Summary) -> Result<String, Error> {
     let mut fields: Vec<(&'static str, f64)> = vec![
         ("density", summary.density),
         ("objective", summary.objective),
@@ -1308,7 +1226,7 @@ pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
     };
     fields.extend(summary.container.size().into_iter().map(|s| (size_name, s)));
     if let Some((field, value)) = fields.into_iter().find(|(_, v)| !v.is_finite()) {
-        return Err(PackingError::NonFinite { field, value });
+        return Err(Error::NonFinite { field, value });
     }
     // Serialising plain structs of numbers and strings into a String cannot fail.
     let mut text = serde_json::to_string_pretty(summary).unwrap_or_default();
@@ -1319,17 +1237,17 @@ pub fn summary_json(summary: &Summary) -> Result<String, PackingError> {
 /// Writes [`summary_json`] to `path` atomically.
 ///
 /// # Errors
-/// [`PackingError::NonFinite`] or [`PackingError::Write`].
-pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), PackingError> {
+/// [`Error::NonFinite`] or [`Error::Write`].
+pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), Error> {
     write_text(path, &summary_json(summary)?)
 }
 
 /// Reads [`SUMMARY_FILE`] text.
 ///
 /// # Errors
-/// [`PackingError::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
-/// wrong type; [`PackingError::Inconsistent`] for a container size that is not positive.
-pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, PackingError> {
+/// [`Error::Malformed`] (line, column) for invalid JSON, a missing key or a value of the
+/// wrong type; [`Error::Inconsistent`] for a container size that is not positive.
+pub fn read_summary(text: &str, source_name: &str) -> Result<Summary, Error> {
     summary_of(text, source_name, |s: &Summary| &s.container)
 }
 
@@ -1338,14 +1256,14 @@ fn summary_of<T: serde::de::DeserializeOwned>(
     text: &str,
     source_name: &str,
     container_of: impl Fn(&T) -> &Container,
-) -> Result<T, PackingError> {
-    let summary: T = serde_json::from_str(text).map_err(|e| PackingError::Malformed {
+) -> Result<T, Error> {
+    let summary: T = serde_json::from_str(text).map_err(|e| Error::Malformed {
         source_name: source_name.to_string(),
         line: e.line() as u64,
         message: format!("column {}: {e}", e.column()),
     })?;
     if let Some((field, message)) = container_of(&summary).defect() {
-        return Err(PackingError::Inconsistent {
+        return Err(Error::Inconsistent {
             source_name: source_name.to_string(),
             message: format!("container.{field}: {message}"),
         });
@@ -1356,14 +1274,14 @@ fn summary_of<T: serde::de::DeserializeOwned>(
 /// Reads `packing.csv` and `summary.json` and checks that they agree (dimension, item count).
 ///
 /// # Errors
-/// [`PackingError::Read`] naming the file, and every error of [`read_csv`] and
-/// [`read_summary`]; [`PackingError::Inconsistent`] when they disagree.
+/// [`Error::Io`] naming the file, and every error of [`read_csv`] and
+/// [`read_summary`]; [`Error::Inconsistent`] when they disagree.
 pub fn read_packing_files(
     csv_path: &Path,
     summary_path: &Path,
-) -> Result<(Packing, Summary), PackingError> {
+) -> Result<(Packing, Summary), Error> {
     let read = |path: &Path| {
-        std::fs::read_to_string(path).map_err(|source| PackingError::Read {
+        std::fs::read_to_string(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
         })
@@ -1373,7 +1291,7 @@ pub fn read_packing_files(
     let items = read_csv(&read(csv_path)?, &csv_name)?;
     let summary = read_summary(&read(summary_path)?, &summary_name)?;
     if summary.container.dimension() != items.dimension() {
-        return Err(PackingError::Inconsistent {
+        return Err(Error::Inconsistent {
             source_name: csv_name,
             message: format!(
                 "{}D items (by the header) but {summary_name} has a {} container",
@@ -1383,7 +1301,7 @@ pub fn read_packing_files(
         });
     }
     if summary.items != items.len() {
-        return Err(PackingError::Inconsistent {
+        return Err(Error::Inconsistent {
             source_name: csv_name,
             message: format!(
                 "{} items, but {summary_name} says `items`: {}",
@@ -1393,7 +1311,7 @@ pub fn read_packing_files(
         });
     }
     let packing = Packing::new(summary.container.clone(), items).map_err(|e| match e {
-        PackingError::Inconsistent { message, .. } => PackingError::Inconsistent {
+        Error::Inconsistent { message, .. } => Error::Inconsistent {
             source_name: csv_name.clone(),
             message,
         },
@@ -1406,7 +1324,7 @@ pub fn read_packing_files(
 ///
 /// # Errors
 /// As [`read_packing_files`].
-pub fn read_packing_dir(dir: &Path) -> Result<(Packing, Summary), PackingError> {
+pub fn read_packing_dir(dir: &Path) -> Result<(Packing, Summary), Error> {
     read_packing_files(&dir.join(CSV_FILE), &dir.join(SUMMARY_FILE))
 }
 
@@ -1429,7 +1347,7 @@ pub struct StatedSummary {
 ///
 /// # Errors
 /// As [`read_summary`].
-pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, PackingError> {
+pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummary, Error> {
     summary_of(text, source_name, |s: &StatedSummary| &s.container)
 }
 
@@ -1438,21 +1356,21 @@ pub fn read_stated_summary(text: &str, source_name: &str) -> Result<StatedSummar
 /// container came from in messages.
 ///
 /// # Errors
-/// [`PackingError::Read`] naming the file, those of [`read_table`], and
-/// [`PackingError::Inconsistent`] when the table and the container disagree.
+/// [`Error::Io`] naming the file, those of [`read_table`], and
+/// [`Error::Inconsistent`] when the table and the container disagree.
 pub fn read_table_into(
     csv_path: &Path,
     container: Container,
     items: Option<usize>,
     container_source: &str,
-) -> Result<(Packing, Table), PackingError> {
+) -> Result<(Packing, Table), Error> {
     let csv_name = csv_path.display().to_string();
-    let text = std::fs::read_to_string(csv_path).map_err(|source| PackingError::Read {
+    let text = std::fs::read_to_string(csv_path).map_err(|source| Error::Io {
         path: csv_path.to_path_buf(),
         source,
     })?;
     let table = read_table(&text, &csv_name)?;
-    let inconsistent = |message: String| PackingError::Inconsistent {
+    let inconsistent = |message: String| Error::Inconsistent {
         source_name: csv_name.clone(),
         message,
     };
@@ -1470,7 +1388,7 @@ pub fn read_table_into(
         )));
     }
     let packing = Packing::new(container, table.items.clone()).map_err(|e| match e {
-        PackingError::Inconsistent { message, .. } => inconsistent(message),
+        Error::Inconsistent { message, .. } => inconsistent(message),
         other => other,
     })?;
     Ok((packing, table))

@@ -107,7 +107,7 @@ pub struct PairTable {
 /// Reads pairs from CSV text. `source_name` names the input in messages.
 ///
 /// # Errors
-/// [`Error::MalformedCsv`] (with the line) for broken CSV structure, [`Error::PairLayout`]
+/// [`Error::Malformed`] (with the line) for broken CSV structure, [`Error::PairLayout`]
 /// when the header is neither layout, [`Error::DuplicateColumn`] when a column appears twice,
 /// [`Error::Empty`] without rows. A cell that is not a number is not an error of the file: that
 /// row carries the message.

@@ -13,6 +13,7 @@
 //! polygons of 12 to 48 vertices depending on their size on screen, which keeps 10 000 items
 //! fast. An empty packing draws its container alone.
 
+use crate::Error;
 use crate::packing::{Container, Items, Packing};
 use implicit_packing::ContainerShape;
 use plotters::coord::Shift;
@@ -46,37 +47,6 @@ impl Default for RenderOptions {
     }
 }
 
-/// Why a picture could not be made.
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    /// plotters failed while drawing.
-    #[error("{path}: drawing failed: {message}")]
-    Draw {
-        /// The picture.
-        path: PathBuf,
-        /// What plotters said.
-        message: String,
-    },
-    /// The embedded font was rejected (a broken build, not user data).
-    #[error("the embedded font could not be loaded")]
-    Font,
-    /// The caller asked to stop before the pictures were drawn (the run's time limit or a
-    /// signal).
-    #[error("the pictures were not drawn: the run was stopped or its time limit reached")]
-    Stopped,
-    /// A temporary file for the PNG encoder could not be used.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
-    },
-    /// The picture could not be written.
-    #[error(transparent)]
-    Write(#[from] crate::Error),
-}
-
 /// The size in pixels of the pictures of `packing`: `options.width` wide (at least 200), as
 /// tall as the container's shape needs at equal scales (at most 1.5 × the width).
 pub fn picture_size(packing: &Packing, options: &RenderOptions) -> (u32, u32) {
@@ -86,17 +56,17 @@ pub fn picture_size(packing: &Packing, options: &RenderOptions) -> (u32, u32) {
 /// The SVG picture as text.
 ///
 /// # Errors
-/// [`RenderError::Draw`] or [`RenderError::Font`].
-pub fn svg_string(packing: &Packing, options: &RenderOptions) -> Result<String, RenderError> {
+/// [`Error::Draw`] or [`Error::Font`].
+pub fn svg_string(packing: &Packing, options: &RenderOptions) -> Result<String, Error> {
     svg_until(packing, options, &|| false)
 }
 
-/// [`svg_string`], given up with [`RenderError::Stopped`] as soon as `stop` says so.
+/// [`svg_string`], given up with [`Error::Stopped`] as soon as `stop` says so.
 fn svg_until(
     packing: &Packing,
     options: &RenderOptions,
     stop: &dyn Fn() -> bool,
-) -> Result<String, RenderError> {
+) -> Result<String, Error> {
     register_font()?;
     let layout = Layout::new(packing, options);
     let mut text = String::new();
@@ -111,18 +81,18 @@ fn svg_until(
 /// The PNG picture as bytes.
 ///
 /// # Errors
-/// [`RenderError::Draw`], [`RenderError::Font`], or [`RenderError::Io`] for the encoder's
+/// [`Error::Draw`], [`Error::Font`], or [`Error::Io`] for the encoder's
 /// temporary file.
-pub fn png_bytes(packing: &Packing, options: &RenderOptions) -> Result<Vec<u8>, RenderError> {
+pub fn png_bytes(packing: &Packing, options: &RenderOptions) -> Result<Vec<u8>, Error> {
     png_until(packing, options, &|| false)
 }
 
-/// [`png_bytes`], given up with [`RenderError::Stopped`] as soon as `stop` says so.
+/// [`png_bytes`], given up with [`Error::Stopped`] as soon as `stop` says so.
 fn png_until(
     packing: &Packing,
     options: &RenderOptions,
     stop: &dyn Fn() -> bool,
-) -> Result<Vec<u8>, RenderError> {
+) -> Result<Vec<u8>, Error> {
     register_font()?;
     let layout = Layout::new(packing, options);
     // plotters encodes PNG only into a file; a private temporary file keeps the real target
@@ -138,7 +108,7 @@ fn png_until(
             area.present()
                 .map_err(|e| draw_error(PNG_FILE, e.to_string()))?;
         }
-        std::fs::read(&tmp).map_err(|source| RenderError::Io {
+        std::fs::read(&tmp).map_err(|source| Error::Io {
             path: tmp.clone(),
             source,
         })
@@ -151,56 +121,44 @@ fn png_until(
 /// Writes [`svg_string`] to `path` atomically.
 ///
 /// # Errors
-/// As [`svg_string`], or [`RenderError::Write`].
-pub fn write_svg(
-    path: &Path,
-    packing: &Packing,
-    options: &RenderOptions,
-) -> Result<(), RenderError> {
+/// As [`svg_string`], or [`Error::Write`].
+pub fn write_svg(path: &Path, packing: &Packing, options: &RenderOptions) -> Result<(), Error> {
     write_picture(path, svg_string(packing, options).map(String::into_bytes))
 }
 
 /// Writes [`png_bytes`] to `path` atomically.
 ///
 /// # Errors
-/// As [`png_bytes`], or [`RenderError::Write`].
-pub fn write_png(
-    path: &Path,
-    packing: &Packing,
-    options: &RenderOptions,
-) -> Result<(), RenderError> {
+/// As [`png_bytes`], or [`Error::Write`].
+pub fn write_png(path: &Path, packing: &Packing, options: &RenderOptions) -> Result<(), Error> {
     write_picture(path, png_bytes(packing, options))
 }
 
 /// Writes a drawn picture to `path` atomically; a drawing error is told against `path`.
-fn write_picture(path: &Path, drawn: Result<Vec<u8>, RenderError>) -> Result<(), RenderError> {
+fn write_picture(path: &Path, drawn: Result<Vec<u8>, Error>) -> Result<(), Error> {
     let bytes = drawn.map_err(|e| rename(e, path))?;
-    Ok(crate::output::write_atomically(path, &bytes)?)
+    crate::output::write_atomically(path, &bytes)
 }
 
 /// Writes [`SVG_FILE`] and [`PNG_FILE`] into `dir` (which must exist).
 ///
 /// # Errors
 /// The first error of [`write_svg`] and [`write_png`].
-pub fn write_pictures(
-    dir: &Path,
-    packing: &Packing,
-    options: &RenderOptions,
-) -> Result<(), RenderError> {
+pub fn write_pictures(dir: &Path, packing: &Packing, options: &RenderOptions) -> Result<(), Error> {
     write_pictures_until(dir, packing, options, &|| false)
 }
 
 /// [`write_pictures`], given up as soon as `stop` says so (a run's time limit or a signal):
-/// [`RenderError::Stopped`], and no picture is written then.
+/// [`Error::Stopped`], and no picture is written then.
 ///
 /// # Errors
-/// As [`write_pictures`], or [`RenderError::Stopped`].
+/// As [`write_pictures`], or [`Error::Stopped`].
 pub fn write_pictures_until(
     dir: &Path,
     packing: &Packing,
     options: &RenderOptions,
     stop: &dyn Fn() -> bool,
-) -> Result<(), RenderError> {
+) -> Result<(), Error> {
     // Both drawn before either is written: a stop leaves neither.
     let svg = svg_until(packing, options, stop)?;
     let png = png_until(packing, options, stop)?;
@@ -217,24 +175,24 @@ enum Drawing {
 }
 
 impl Drawing {
-    fn into_error(self, file: &str) -> RenderError {
+    fn into_error(self, file: &str) -> Error {
         match self {
             Drawing::Failed(message) => draw_error(file, message),
-            Drawing::Stopped => RenderError::Stopped,
+            Drawing::Stopped => Error::Stopped,
         }
     }
 }
 
-fn draw_error(file: &str, message: String) -> RenderError {
-    RenderError::Draw {
+fn draw_error(file: &str, message: String) -> Error {
+    Error::Draw {
         path: PathBuf::from(file),
         message,
     }
 }
 
-fn rename(e: RenderError, path: &Path) -> RenderError {
+fn rename(e: Error, path: &Path) -> Error {
     match e {
-        RenderError::Draw { message, .. } => RenderError::Draw {
+        Error::Draw { message, .. } => Error::Draw {
             path: path.to_path_buf(),
             message,
         },
@@ -242,12 +200,12 @@ fn rename(e: RenderError, path: &Path) -> RenderError {
     }
 }
 
-pub(crate) fn register_font() -> Result<(), RenderError> {
+pub(crate) fn register_font() -> Result<(), Error> {
     static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
     });
-    if ok { Ok(()) } else { Err(RenderError::Font) }
+    if ok { Ok(()) } else { Err(Error::Font) }
 }
 
 /// One projection: which world axes go right (`u`) and up (`v`), which axis points at the

@@ -2,9 +2,10 @@
 //! the distribution of the first body axis — in 3D of |cos| of its angle to the director (flat
 //! for isotropic axes), in 2D of its angle θ ∈ [0°, 180°) (flat for isotropic axes).
 
+use crate::Error;
 use crate::folder::{ORIENTATIONS_PICTURE, RDF_PICTURE};
 use crate::packing::{Items, Packing};
-use crate::render::{FONT, RenderError, register_font};
+use crate::render::{FONT, register_font};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
@@ -16,12 +17,8 @@ const ORIENTATION_BINS: usize = 36;
 /// Writes [`RDF_PICTURE`] and [`ORIENTATIONS_PICTURE`] into `dir`, each atomically.
 ///
 /// # Errors
-/// [`RenderError`] naming the picture that could not be drawn or written.
-pub fn write_structure_pictures(
-    dir: &Path,
-    packing: &Packing,
-    s: &Structure,
-) -> Result<(), RenderError> {
+/// [`Error`] naming the picture that could not be drawn or written.
+pub fn write_structure_pictures(dir: &Path, packing: &Packing, s: &Structure) -> Result<(), Error> {
     register_font()?;
     let rdf = rdf_svg(s).map_err(|message| draw_error(RDF_PICTURE, message))?;
     crate::output::write_atomically(&dir.join(RDF_PICTURE), rdf.as_bytes())?;
@@ -31,8 +28,8 @@ pub fn write_structure_pictures(
     Ok(())
 }
 
-fn draw_error(file: &str, message: String) -> RenderError {
-    RenderError::Draw {
+fn draw_error(file: &str, message: String) -> Error {
+    Error::Draw {
         path: file.into(),
         message,
     }

@@ -66,10 +66,10 @@ pub fn csv_reader<R: std::io::Read>(input: R) -> csv::Reader<R> {
         .from_reader(input)
 }
 
-/// The header of a table (its first record), with broken CSV reported as [`Error::MalformedCsv`].
+/// The header of a table (its first record), with broken CSV reported as [`Error::Malformed`].
 ///
 /// # Errors
-/// [`Error::MalformedCsv`] when the first line is not valid CSV or not UTF-8, or the file is
+/// [`Error::Malformed`] when the first line is not valid CSV or not UTF-8, or the file is
 /// empty.
 pub fn read_header<R: std::io::Read>(
     reader: &mut csv::Reader<R>,
@@ -80,7 +80,7 @@ pub fn read_header<R: std::io::Read>(
         .cloned()
         .map_err(|e| malformed(source_name, &e))?;
     if header.len() <= 1 && header.iter().all(str::is_empty) {
-        return Err(Error::MalformedCsv {
+        return Err(Error::Malformed {
             source_name: source_name.to_string(),
             line: 1,
             message: "the file is empty: it must start with a header line naming its columns"
@@ -91,7 +91,7 @@ pub fn read_header<R: std::io::Read>(
 }
 
 fn malformed(source_name: &str, e: &csv::Error) -> Error {
-    Error::MalformedCsv {
+    Error::Malformed {
         source_name: source_name.to_string(),
         line: e.position().map_or(1, csv::Position::line),
         message: e.to_string(),
@@ -151,7 +151,7 @@ impl<R: std::io::Read> NumericReader<R> {
     /// The next row, `None` at the end of the file.
     ///
     /// # Errors
-    /// [`Error::MalformedCsv`] (with the line) for broken CSV structure. A cell that is not a
+    /// [`Error::Malformed`] (with the line) for broken CSV structure. A cell that is not a
     /// number is not an error of the file: its row carries the message.
     pub fn next_row(&mut self) -> Result<Option<NumericRow>, Error> {
         let Some(record) = self.records.next() else {
@@ -214,7 +214,7 @@ impl<R: std::io::Read> NumericReader<R> {
 /// Reads the named numeric columns of every row. `source_name` names the input in messages.
 ///
 /// # Errors
-/// [`Error::MalformedCsv`] (with the line) for broken CSV structure,
+/// [`Error::Malformed`] (with the line) for broken CSV structure,
 /// [`Error::MissingColumn`] when a requested column is absent, [`Error::DuplicateColumn`] when
 /// one appears twice, [`Error::Empty`] without rows. A cell that is not a number is not an
 /// error of the file: its row carries the message.

@@ -1,9 +1,8 @@
 //! The extended XYZ file of a packing, as ASE and OVITO read it, and its reader.
 
+use crate::Error;
 use crate::atoms::{Cell, GROUP_ELEMENTS, bodies, shape_groups};
-use crate::packing::{
-    Container, ContainerKind, Item, Items, Packing, PackingError, num, write_text,
-};
+use crate::packing::{Container, ContainerKind, Item, Items, Packing, num, write_text};
 use std::path::Path;
 
 /// The file name of the extended XYZ file.
@@ -85,8 +84,8 @@ pub fn xyz_string_in(packing: &Packing, cell: &Cell) -> String {
 /// Writes [`xyz_string`] to `path` atomically.
 ///
 /// # Errors
-/// [`PackingError::Write`] naming the file.
-pub fn write_xyz(path: &Path, packing: &Packing) -> Result<(), PackingError> {
+/// [`Error::Write`] naming the file.
+pub fn write_xyz(path: &Path, packing: &Packing) -> Result<(), Error> {
     write_text(path, &xyz_string(packing))
 }
 
@@ -122,10 +121,10 @@ fn xyz_pairs(line: &str) -> Result<Vec<(String, String)>, String> {
 /// Ellipses get θ = 2 atan2(q_z, q_w), the same orientation as written, within (−2π, 2π].
 ///
 /// # Errors
-/// [`PackingError::Malformed`] for a header that is not ours or a wrong number of rows,
-/// [`PackingError::BadValue`] (line, column) for a field that is not a number or impossible.
-pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> {
-    let malformed = |line: u64, message: String| PackingError::Malformed {
+/// [`Error::Malformed`] for a header that is not ours or a wrong number of rows,
+/// [`Error::BadValue`] (line, column) for a field that is not a number or impossible.
+pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, Error> {
+    let malformed = |line: u64, message: String| Error::Malformed {
         source_name: source_name.to_string(),
         line,
         message,
@@ -153,7 +152,7 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
             format!("Properties={properties}: expected {XYZ_PROPERTIES}"),
         ));
     }
-    let numbers = |key: &str| -> Result<Vec<f64>, PackingError> {
+    let numbers = |key: &str| -> Result<Vec<f64>, Error> {
         get(key)?
             .split_whitespace()
             .map(|t| {
@@ -186,7 +185,7 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
     let size = numbers(size_key)?;
     let container = Container::from_parts(kind, &center, &size).map_err(|e| {
         let message = match e {
-            PackingError::Inconsistent { message, .. } => message,
+            Error::Inconsistent { message, .. } => message,
             other => other.to_string(),
         };
         malformed(2, format!("container_center, {size_key}: {message}"))
@@ -195,7 +194,7 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
         "species", "x", "y", "z", "group", "a", "b", "c", "qx", "qy", "qz", "qw",
     ];
     // The error of a bad value in field `k` (0-based, as in NAMES) of `line`.
-    let bad_value = |line, k: usize, message| PackingError::BadValue {
+    let bad_value = |line, k: usize, message| Error::BadValue {
         source_name: source_name.to_string(),
         line,
         column: k as u64 + 1,
@@ -263,7 +262,7 @@ pub fn read_xyz(text: &str, source_name: &str) -> Result<Packing, PackingError> 
         Items::Ellipsoids(ellipsoids)
     };
     Packing::new(container, items).map_err(|e| match e {
-        PackingError::Inconsistent { message, .. } => PackingError::Inconsistent {
+        Error::Inconsistent { message, .. } => Error::Inconsistent {
             source_name: source_name.to_string(),
             message,
         },

@@ -5,10 +5,11 @@
 
 mod common;
 
+use ellipack::Error;
 use ellipack::export::{
-    self, Body, Cell, ExportError, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
+    self, Body, Cell, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
 };
-use ellipack::packing::{self, Container, ContainerKind, Item, Items, Packing, PackingError};
+use ellipack::packing::{self, Container, ContainerKind, Item, Items, Packing};
 use std::collections::HashMap;
 
 /// Every kind of container with items of its dimension; the 2D items of several sizes (so
@@ -220,10 +221,7 @@ fn a_sheared_cell_writes_its_tilt_factors() {
 #[track_caller]
 fn assert_lammps_error(text: &str, says: &[&str]) {
     let e = export::read_lammps_data(text, "p.data").unwrap_err();
-    assert!(
-        matches!(e, ExportError::Packing(PackingError::Malformed { .. })),
-        "{e:?}"
-    );
+    assert!(matches!(e, Error::Malformed { .. }), "{e:?}");
     let e = e.to_string();
     for s in says {
         assert!(e.contains(s), "{e} should say {s:?}");
@@ -571,7 +569,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     let dir = common::temp_dir("export-bad");
     let missing = dir.join("missing");
     let e = export::convert(&missing, &Format::ALL, false).unwrap_err();
-    assert!(matches!(e, ExportError::NotAFolder { .. }), "{e:?}");
+    assert!(matches!(e, Error::NotAFolder { .. }), "{e:?}");
     assert!(
         e.to_string().contains("missing: not a packing folder"),
         "{e}"
@@ -588,7 +586,7 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     let empty = dir.join("empty");
     std::fs::create_dir(&empty).unwrap();
     let e = export::convert(&empty, &Format::ALL, false).unwrap_err();
-    assert!(matches!(e, ExportError::Packing(_)), "{e:?}");
+    assert!(matches!(e, Error::Io { .. }), "{e:?}");
     assert!(e.to_string().contains("packing.csv"), "{e}");
     // A broken row is named by its line, and nothing is written.
     let p = &every_kind()[0];
@@ -614,7 +612,7 @@ fn format_names_are_checked() {
         assert_eq!(Format::from_name(f.name()).unwrap(), f);
     }
     let e = Format::from_name("vtk").unwrap_err();
-    assert!(matches!(e, ExportError::UnknownFormat { .. }));
+    assert!(matches!(e, Error::UnknownFormat { .. }));
     assert_eq!(
         e.to_string(),
         "`vtk` is not a file format; the formats are lammps, gsd, xyz, obj"

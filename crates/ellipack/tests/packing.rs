@@ -3,9 +3,8 @@
 
 mod common;
 
-use ellipack::packing::{
-    self, CertificateCounts, Container, Item, Items, Packing, PackingError, Summary,
-};
+use ellipack::Error;
+use ellipack::packing::{self, CertificateCounts, Container, Item, Items, Packing, Summary};
 use std::f64::consts::PI;
 
 fn summary_of(p: &Packing) -> Summary {
@@ -312,7 +311,7 @@ fn non_finite_summaries_are_refused_rather_than_written_as_null() {
     let mut s = summary_of(p);
     s.objective = f64::NAN;
     match packing::summary_json(&s) {
-        Err(PackingError::NonFinite { field, .. }) => assert_eq!(field, "objective"),
+        Err(Error::NonFinite { field, .. }) => assert_eq!(field, "objective"),
         other => panic!("{other:?}"),
     }
 }

@@ -3,6 +3,7 @@
 
 mod common;
 
+use ellipack::Error;
 use ellipack::packing::{Container, Items, Packing};
 use ellipack::render::{self, RenderOptions};
 
@@ -112,20 +113,14 @@ fn drawing_stops_when_asked_and_writes_nothing() {
     let packing = common::ellipsoids(6, false, 1);
     let options = RenderOptions::default();
     let never = render::write_pictures_until(&dir, &packing, &options, &|| true);
-    assert!(
-        matches!(never, Err(render::RenderError::Stopped)),
-        "{never:?}"
-    );
+    assert!(matches!(never, Err(Error::Stopped)), "{never:?}");
     assert!(common::names(&dir).is_empty(), "{:?}", common::names(&dir));
     let checks = std::cell::Cell::new(0);
     let later = render::write_pictures_until(&dir, &packing, &options, &|| {
         checks.set(checks.get() + 1);
         checks.get() > 2
     });
-    assert!(
-        matches!(later, Err(render::RenderError::Stopped)),
-        "{later:?}"
-    );
+    assert!(matches!(later, Err(Error::Stopped)), "{later:?}");
     assert_eq!(checks.get(), 3);
     assert!(common::names(&dir).is_empty());
     render::write_pictures_until(&dir, &packing, &options, &|| false).unwrap();

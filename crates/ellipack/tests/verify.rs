@@ -202,7 +202,8 @@ fn duplicate_ids_are_an_error_naming_the_id_and_both_lines() {
 
 #[test]
 fn the_table_keeps_ids_and_lines_and_read_csv_refuses_duplicates() {
-    use ellipack::packing::{PackingError, read_csv, read_table};
+    use ellipack::Error;
+    use ellipack::packing::{read_csv, read_table};
     let table = read_table(DISCS, "p.csv").unwrap();
     assert_eq!(table.ids, [10, 7, 3]);
     assert_eq!(table.lines, [2, 3, 4]);
@@ -210,7 +211,7 @@ fn the_table_keeps_ids_and_lines_and_read_csv_refuses_duplicates() {
     assert!(
         matches!(
             err,
-            PackingError::DuplicateId {
+            Error::DuplicateId {
                 id: 5,
                 first_line: 2,
                 line: 3,
