@@ -202,7 +202,7 @@ impl PyPacking {
     /// The whole of summary.json as a dict.
     #[getter]
     fn summary(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        let text = ellipack::packing::summary_json(&self.summary).map_err(value_error)?;
+        let text = ellipack::summary_json::summary_json(&self.summary).map_err(value_error)?;
         Self::json(py, &text)
     }
 
@@ -419,7 +419,7 @@ fn progress_dict<'py>(py: Python<'py>, p: &MultiStartProgress) -> PyResult<Bound
 #[pyfunction]
 pub fn read_packing(py: Python<'_>, folder: PathBuf) -> PyResult<PyPacking> {
     let (packing, summary) = py
-        .detach(|| ellipack::packing::read_packing_dir(&folder))
+        .detach(|| ellipack::folder::read_packing_dir(&folder))
         .map_err(|e| match &e {
             // A file that cannot be read is an OSError, as Python's own `open` raises.
             ellipack::Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {

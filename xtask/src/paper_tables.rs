@@ -118,7 +118,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             let row = earlier_rows(&root.join("validation/paper_tables.csv"))
                 .into_iter()
                 .find(|r| r.instance.name == instance.name);
-            let packing = ellipack::packing::read_packing_dir(&dir)
+            let packing = ellipack::folder::read_packing_dir(&dir)
                 .ok()
                 .map(|(p, _)| p);
             row.zip(packing)
@@ -433,7 +433,7 @@ fn denser_committed(root: &Path, dir: &Path, instance: &Instance, density: f64) 
         .into_iter()
         .find(|r| r.instance.name == instance.name)
         .filter(|r| r.density >= density)?;
-    let (packing, _) = ellipack::packing::read_packing_dir(dir).ok()?;
+    let (packing, _) = ellipack::folder::read_packing_dir(dir).ok()?;
     ellipack::pack::verify(&packing)
         .ok()
         .filter(|c| c.is_certified())

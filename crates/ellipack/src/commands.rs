@@ -2,15 +2,15 @@
 
 use ellipack::export::{Cell, Format, write_formats};
 use ellipack::folder::{HISTORY_FILE, Published, Staging, write_files};
+use ellipack::items_csv::{CSV_FILE, read_table_into};
 use ellipack::pack::{
     MultiStartProgress, Observer, RunOptions, UNFINISHED_DIR, Unfinished, probe_output_folder,
     resume_start, run, time_limit_of, verify_detailed as check,
 };
-use ellipack::packing::{
-    CSV_FILE, Container, ContainerKind, SUMMARY_FILE, read_stated_summary, read_table_into,
-};
+use ellipack::packing::{Container, ContainerKind};
 use ellipack::render::{RenderOptions, write_pictures_until};
 use ellipack::scene::{Overrides, Scene};
+use ellipack::summary_json::{SUMMARY_FILE, read_stated_summary};
 use implicit_packing::certificate::shown_mu2;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::error::Error;

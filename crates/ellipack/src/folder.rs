@@ -24,8 +24,12 @@
 //! output folder still sees the old, removed folder until it changes into it again.
 
 use crate::Error;
-use crate::export::{GSD_FILE, LAMMPS_FILE, MESH_FILE};
-use crate::packing::{CSV_FILE, Packing, SUMMARY_FILE, Summary, write_csv, write_summary};
+use crate::gsd::GSD_FILE;
+use crate::items_csv::{CSV_FILE, read_csv, write_csv};
+use crate::lammps::LAMMPS_FILE;
+use crate::obj::MESH_FILE;
+use crate::packing::{Packing, Summary};
+use crate::summary_json::{SUMMARY_FILE, read_summary, write_summary};
 use crate::xyz::{XYZ_FILE, write_xyz};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -469,6 +473,63 @@ pub fn write_files(
         write_xyz(&dir.join(XYZ_FILE), packing)?;
     }
     Ok(())
+}
+
+/// Reads `packing.csv` and `summary.json` and checks that they agree (dimension, item count).
+///
+/// # Errors
+/// [`Error::Io`] naming the file, and every error of [`read_csv`] and
+/// [`read_summary`]; [`Error::Inconsistent`] when they disagree.
+pub fn read_packing_files(
+    csv_path: &Path,
+    summary_path: &Path,
+) -> Result<(Packing, Summary), Error> {
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let csv_name = csv_path.display().to_string();
+    let summary_name = summary_path.display().to_string();
+    let items = read_csv(&read(csv_path)?, &csv_name)?;
+    let summary = read_summary(&read(summary_path)?, &summary_name)?;
+    if summary.container.dimension() != items.dimension() {
+        return Err(Error::Inconsistent {
+            source_name: csv_name,
+            message: format!(
+                "{}D items (by the header) but {summary_name} has a {} container",
+                items.dimension(),
+                summary.container.kind()
+            ),
+        });
+    }
+    if summary.items != items.len() {
+        return Err(Error::Inconsistent {
+            source_name: csv_name,
+            message: format!(
+                "{} items, but {summary_name} says `items`: {}",
+                items.len(),
+                summary.items
+            ),
+        });
+    }
+    let packing = Packing::new(summary.container.clone(), items).map_err(|e| match e {
+        Error::Inconsistent { message, .. } => Error::Inconsistent {
+            source_name: csv_name.clone(),
+            message,
+        },
+        other => other,
+    })?;
+    Ok((packing, summary))
+}
+
+/// Reads [`CSV_FILE`] and [`SUMMARY_FILE`] from a directory (see [`read_packing_files`]).
+///
+/// # Errors
+/// As [`read_packing_files`].
+pub fn read_packing_dir(dir: &Path) -> Result<(Packing, Summary), Error> {
+    read_packing_files(&dir.join(CSV_FILE), &dir.join(SUMMARY_FILE))
 }
 
 #[cfg(test)]

@@ -7,11 +7,11 @@
 //! too, so a merge never replaces a better certified packing with a worse one.
 
 use crate::Error;
+use crate::folder::read_packing_dir;
 use crate::folder::{Published, RUN_FILES, Staging};
+use crate::items_csv::CSV_FILE;
 use crate::pack::verify;
-use crate::packing::{
-    CSV_FILE, Container, ContainerKind, Items, Packing, Summary, read_packing_dir,
-};
+use crate::packing::{Container, ContainerKind, Items, Packing, Summary};
 use std::path::{Path, PathBuf};
 
 /// One packing read for a merge, with its verification.

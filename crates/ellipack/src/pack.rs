@@ -95,11 +95,11 @@ pub fn probe_output_folder(path: &Path) -> Result<(), Error> {
 /// Errors of reading the files ([`Error::Io`], [`Error::Malformed`], …), and
 /// [`Error::ContainerMismatch`].
 pub fn resume_start(scene: &Scene, folder: &Path) -> Result<Packing, Error> {
-    let (packing, _) = crate::packing::read_packing_dir(folder)?;
+    let (packing, _) = crate::folder::read_packing_dir(folder)?;
     let found = packing.container().kind();
     if found != scene.container {
         return Err(Error::ContainerMismatch {
-            summary: folder.join(crate::packing::SUMMARY_FILE),
+            summary: folder.join(crate::summary_json::SUMMARY_FILE),
             found,
             expected: scene.container,
             scene: scene.title(),

@@ -2,7 +2,8 @@
 
 use crate::Error;
 use crate::atoms::{Cell, GROUP_ELEMENTS, bodies, shape_groups};
-use crate::packing::{Container, ContainerKind, Item, Items, Packing, num, write_text};
+use crate::items_csv::{num, write_text};
+use crate::packing::{Container, ContainerKind, Item, Items, Packing};
 use std::path::Path;
 
 /// The file name of the extended XYZ file.

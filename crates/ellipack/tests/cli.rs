@@ -170,9 +170,9 @@ fn pack_writes_a_certified_packing_that_verify_accepts() {
         "{text}"
     );
     // The LAMMPS data file states the packing of packing.csv.
-    let (packing, _) = ellipack::packing::read_packing_dir(&out).unwrap();
+    let (packing, _) = ellipack::folder::read_packing_dir(&out).unwrap();
     let data = std::fs::read_to_string(out.join("packing.data")).unwrap();
-    let data = ellipack::export::read_lammps_data(&data, "packing.data").unwrap();
+    let data = ellipack::lammps::read_lammps_data(&data, "packing.data").unwrap();
     let bodies = ellipack::export::bodies(packing.items());
     assert_eq!(data.atoms.len(), 6);
     for ((atom, ellipsoid), body) in data.atoms.iter().zip(&data.ellipsoids).zip(&bodies) {

@@ -104,7 +104,7 @@ fn convert_reduces_the_cell_and_wraps_the_items() {
         xy.abs() <= 5.0 && ((xy - 25.0) / 10.0).fract() == 0.0,
         "{data}"
     );
-    let back = ellipack::export::read_lammps_data(&data, "packing.data").unwrap();
+    let back = ellipack::lammps::read_lammps_data(&data, "packing.data").unwrap();
     assert_eq!(back.tilt[0], xy);
     let [x_lo, y_lo] = [back.bounds[0][0], back.bounds[1][0]];
     let [lx, ly] = [back.bounds[0][1] - x_lo, back.bounds[1][1] - y_lo];

@@ -6,9 +6,10 @@
 mod common;
 
 use ellipack::Error;
-use ellipack::export::{
-    self, Body, Cell, Format, GSD_FILE, LAMMPS_FILE, MESH_FILE, bodies, shape_groups,
-};
+use ellipack::export::{self, Body, Cell, Format, bodies, shape_groups};
+use ellipack::gsd::GSD_FILE;
+use ellipack::lammps::LAMMPS_FILE;
+use ellipack::obj::MESH_FILE;
 use ellipack::packing::{self, Container, ContainerKind, Item, Items, Packing};
 use std::collections::HashMap;
 
@@ -132,8 +133,8 @@ fn the_lammps_data_file_reads_back_exactly() {
     for p in every_kind() {
         let kind = p.container().kind();
         let cell = Cell::enclosing(&p);
-        let text = export::lammps_data(&p, &cell);
-        let data = export::read_lammps_data(&text, LAMMPS_FILE).unwrap();
+        let text = ellipack::lammps::lammps_data(&p, &cell);
+        let data = ellipack::lammps::read_lammps_data(&text, LAMMPS_FILE).unwrap();
         let b = bodies(p.items());
         let groups = shape_groups(&b);
         assert_eq!(data.atom_types, groups.semi_axes.len(), "{kind}");
@@ -148,7 +149,7 @@ fn the_lammps_data_file_reads_back_exactly() {
             let (id, kind_of, flag, density, x) = data.atoms[i];
             assert_eq!(id, i as u64 + 1);
             assert_eq!(kind_of, groups.of_item[i] + 1);
-            assert_eq!((flag, density), (1, export::LAMMPS_DENSITY));
+            assert_eq!((flag, density), (1, ellipack::lammps::LAMMPS_DENSITY));
             assert_eq!(x, body.center, "{kind}: item {i}");
             let (id, shape, q) = data.ellipsoids[i];
             assert_eq!(id, i as u64 + 1);
@@ -185,13 +186,13 @@ fn a_sheared_cell_writes_its_tilt_factors() {
     let p = &every_kind()[5];
     let mut cell = Cell::enclosing(p);
     cell.tilt = [0.5, -0.25, 0.125];
-    let text = export::lammps_data(p, &cell);
+    let text = ellipack::lammps::lammps_data(p, &cell);
     assert!(
         text.contains(
             "5.0000000000000000e-1 -2.5000000000000000e-1 1.2500000000000000e-1 xy xz yz\n"
         )
     );
-    let data = export::read_lammps_data(&text, LAMMPS_FILE).unwrap();
+    let data = ellipack::lammps::read_lammps_data(&text, LAMMPS_FILE).unwrap();
     assert_eq!(data.tilt, [0.5, -0.25, 0.125]);
 
     // The same cell, periodic, in the XYZ and GSD files.
@@ -213,14 +214,14 @@ fn a_sheared_cell_writes_its_tilt_factors() {
         [lx, 0.0, 0.0, 0.5, ly, 0.0, -0.25, 0.125, lz],
         "rows a, b, c"
     );
-    let (_, _, chunks) = read_gsd(&export::gsd_bytes(p, &cell));
+    let (_, _, chunks) = read_gsd(&ellipack::gsd::gsd_bytes(p, &cell));
     let hoomd_box = [lx, ly, lz, 0.5 / ly, -0.25 / lz, 0.125 / lz].map(|v| v as f32);
     assert_eq!(f32s(&chunks["configuration/box"]), hoomd_box);
 }
 
 #[track_caller]
 fn assert_lammps_error(text: &str, says: &[&str]) {
-    let e = export::read_lammps_data(text, "p.data").unwrap_err();
+    let e = ellipack::lammps::read_lammps_data(text, "p.data").unwrap_err();
     assert!(matches!(e, Error::Malformed { .. }), "{e:?}");
     let e = e.to_string();
     for s in says {
@@ -231,7 +232,7 @@ fn assert_lammps_error(text: &str, says: &[&str]) {
 #[test]
 fn a_broken_lammps_data_file_is_an_error_naming_the_line() {
     let p = &every_kind()[3];
-    let good = export::lammps_data(p, &Cell::enclosing(p));
+    let good = ellipack::lammps::lammps_data(p, &Cell::enclosing(p));
     let lines: Vec<&str> = good.lines().collect();
     let line_of = |prefix: &str| lines.iter().position(|l| l.starts_with(prefix)).unwrap();
     let edit = |line: usize, new: &str| {
@@ -363,7 +364,7 @@ fn the_gsd_file_holds_the_hoomd_chunks() {
     for p in every_kind() {
         let kind = p.container().kind();
         let cell = Cell::enclosing(&p);
-        let (application, schema, chunks) = read_gsd(&export::gsd_bytes(&p, &cell));
+        let (application, schema, chunks) = read_gsd(&ellipack::gsd::gsd_bytes(&p, &cell));
         assert_eq!(
             (application.as_str(), schema.as_str()),
             ("ellipack", "hoomd")
@@ -457,7 +458,7 @@ fn the_container_mesh_is_an_outward_surface_on_the_container() {
         let c = p.container();
         let kind = c.kind();
         let cell = Cell::enclosing(&p);
-        let (vertices, faces) = read_obj(&export::mesh_obj(c, &cell));
+        let (vertices, faces) = read_obj(&ellipack::obj::mesh_obj(c, &cell));
         let mut center = [0.0; 3];
         center[..c.dimension()].copy_from_slice(c.center());
         let half = c.half_extents();
@@ -526,7 +527,7 @@ fn the_container_mesh_is_an_outward_surface_on_the_container() {
             let outline = if kind == packing::ContainerKind::Rectangle {
                 4
             } else {
-                export::MESH_SEGMENTS
+                ellipack::obj::MESH_SEGMENTS
             };
             assert_eq!(faces.len(), outline);
             assert_eq!(unmatched, 2 * outline, "{kind}: open at both ends");
@@ -542,7 +543,11 @@ fn convert_writes_the_chosen_files_of_a_packing_folder() {
     export::convert(&dir, &[Format::Gsd], false).unwrap();
     assert_eq!(
         common::names(&dir),
-        [packing::CSV_FILE, GSD_FILE, packing::SUMMARY_FILE]
+        [
+            ellipack::items_csv::CSV_FILE,
+            GSD_FILE,
+            ellipack::summary_json::SUMMARY_FILE
+        ]
     );
     let back = export::convert(&dir, &Format::ALL, false).unwrap();
     assert_eq!(&back, p);
@@ -550,17 +555,17 @@ fn convert_writes_the_chosen_files_of_a_packing_folder() {
         common::names(&dir),
         [
             MESH_FILE,
-            packing::CSV_FILE,
+            ellipack::items_csv::CSV_FILE,
             LAMMPS_FILE,
             GSD_FILE,
             ellipack::xyz::XYZ_FILE,
-            packing::SUMMARY_FILE
+            ellipack::summary_json::SUMMARY_FILE
         ]
     );
     let text = std::fs::read_to_string(dir.join(LAMMPS_FILE)).unwrap();
-    assert_eq!(text, export::lammps_data(p, &Cell::enclosing(p)));
+    assert_eq!(text, ellipack::lammps::lammps_data(p, &Cell::enclosing(p)));
     let bytes = std::fs::read(dir.join(GSD_FILE)).unwrap();
-    assert_eq!(bytes, export::gsd_bytes(p, &Cell::enclosing(p)));
+    assert_eq!(bytes, ellipack::gsd::gsd_bytes(p, &Cell::enclosing(p)));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -591,16 +596,19 @@ fn convert_refuses_what_is_not_a_packing_folder() {
     // A broken row is named by its line, and nothing is written.
     let p = &every_kind()[0];
     ellipack::folder::write_files(&empty, p, &common::certified_summary(p), false).unwrap();
-    let csv = std::fs::read_to_string(empty.join(packing::CSV_FILE)).unwrap();
+    let csv = std::fs::read_to_string(empty.join(ellipack::items_csv::CSV_FILE)).unwrap();
     let broken = csv.replacen("\n0,", "\n0,nan-ish,", 1);
-    std::fs::write(empty.join(packing::CSV_FILE), broken).unwrap();
+    std::fs::write(empty.join(ellipack::items_csv::CSV_FILE), broken).unwrap();
     let e = export::convert(&empty, &Format::ALL, false)
         .unwrap_err()
         .to_string();
     assert!(e.contains("line 2"), "{e}");
     assert_eq!(
         common::names(&empty),
-        [packing::CSV_FILE, packing::SUMMARY_FILE]
+        [
+            ellipack::items_csv::CSV_FILE,
+            ellipack::summary_json::SUMMARY_FILE
+        ]
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

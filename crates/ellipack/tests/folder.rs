@@ -3,8 +3,9 @@
 //! and the leftovers of killed runs are cleaned up.
 
 use ellipack::folder::Staging;
+use ellipack::folder::read_packing_dir;
 use ellipack::folder::write_files;
-use ellipack::packing::{CertificateCounts, Summary, read_packing_dir};
+use ellipack::packing::{CertificateCounts, Summary};
 use std::path::{Path, PathBuf};
 
 mod common;
@@ -140,7 +141,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
         },
     );
     let write_set = |into: &Path| -> Result<(), String> {
-        ellipack::packing::write_csv(&into.join("packing.csv"), packing.items())
+        ellipack::items_csv::write_csv(&into.join("packing.csv"), packing.items())
             .map_err(|e| e.to_string())?;
         Err("injected failure after the first file".into())
     };

@@ -264,11 +264,11 @@ fn the_base_scenes_are_read() {
 }
 
 fn check_packing_csv(bytes: &[u8]) {
-    read_says_something(bytes, "packing.csv", packing::read_csv);
+    read_says_something(bytes, "packing.csv", ellipack::items_csv::read_csv);
 }
 
 fn check_summary(bytes: &[u8]) {
-    read_says_something(bytes, "summary.json", packing::read_summary);
+    read_says_something(bytes, "summary.json", ellipack::summary_json::read_summary);
 }
 
 fn check_xyz(bytes: &[u8]) {
@@ -276,11 +276,11 @@ fn check_xyz(bytes: &[u8]) {
 }
 
 fn check_lammps(bytes: &[u8]) {
-    read_says_something(bytes, "packing.data", export::read_lammps_data);
+    read_says_something(bytes, "packing.data", ellipack::lammps::read_lammps_data);
 }
 
 fn lammps_text(p: &packing::Packing) -> String {
-    export::lammps_data(p, &export::Cell::enclosing(p))
+    ellipack::lammps::lammps_data(p, &export::Cell::enclosing(p))
 }
 
 /// A fixed periodic cell given by its lengths, with a second key that conflicts when a
@@ -350,7 +350,7 @@ fn the_2d_base_file_is_a_2d_file() {
     assert!(read_pairs(PAIRS_2D, "b").is_ok());
     assert!(measure::measure(MEASURE_2D, "b").is_ok());
     assert!(measure::measure(MEASURE_3D, "b").is_ok());
-    assert!(packing::read_summary(SUMMARY, "b").is_ok());
+    assert!(ellipack::summary_json::read_summary(SUMMARY, "b").is_ok());
 }
 
 /// One proptest a line: `name(base) => check` runs `check` on inputs made from the valid text
@@ -379,9 +379,9 @@ fuzz_tests! {
     scene_periodic_variable(PERIODIC_VARIABLE_SCENE) => check_scene;
     scene_fixed_containers(FIXED_SCENE) => check_scene;
     scene_random(RANDOM_SCENE) => check_scene;
-    packing_csv_2d(leak(packing::csv_string(common::ellipses(2, true, 1).items())))
+    packing_csv_2d(leak(ellipack::items_csv::csv_string(common::ellipses(2, true, 1).items())))
         => check_packing_csv;
-    packing_csv_3d(leak(packing::csv_string(common::ellipsoids(2, true, 2).items())))
+    packing_csv_3d(leak(ellipack::items_csv::csv_string(common::ellipsoids(2, true, 2).items())))
         => check_packing_csv;
     summary_json(SUMMARY) => check_summary;
     packing_xyz_2d(leak(ellipack::xyz::xyz_string(&common::ellipses(2, true, 3)))) => check_xyz;

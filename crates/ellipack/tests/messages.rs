@@ -10,7 +10,7 @@ fn scene_error(text: &str) -> String {
 
 /// The message of reading `text` as `packing.csv`, which must fail.
 fn packing_error(text: &str) -> String {
-    ellipack::packing::read_csv(text, "packing.csv")
+    ellipack::items_csv::read_csv(text, "packing.csv")
         .unwrap_err()
         .to_string()
 }

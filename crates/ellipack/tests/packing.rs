@@ -42,7 +42,7 @@ fn csv_and_json_round_trips_are_exact() {
         let dir = common::temp_dir(&format!("roundtrip-{}", p.container().kind()));
         let summary = summary_of(&p);
         ellipack::folder::write_files(&dir, &p, &summary, true).unwrap();
-        let (p2, s2) = packing::read_packing_dir(&dir).unwrap();
+        let (p2, s2) = ellipack::folder::read_packing_dir(&dir).unwrap();
         assert_eq!(p2, p, "{}", p.container().kind());
         assert_eq!(s2, summary);
         assert_eq!(common::names(&dir).len(), 3, "only the three files");
@@ -52,7 +52,7 @@ fn csv_and_json_round_trips_are_exact() {
 #[test]
 fn the_csv_has_the_documented_columns() {
     let p2 = common::ellipses(2, false, 1);
-    let text = packing::csv_string(p2.items());
+    let text = ellipack::items_csv::csv_string(p2.items());
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("id,x,y,a,b,theta"));
     let first: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -62,7 +62,7 @@ fn the_csv_has_the_documented_columns() {
     assert_eq!(mantissa.replace(['.', '-'], "").len(), 17, "{}", first[3]);
     assert_eq!(text.lines().count(), 5);
     let p3 = common::ellipsoids(2, false, 1);
-    let text = packing::csv_string(p3.items());
+    let text = ellipack::items_csv::csv_string(p3.items());
     assert_eq!(text.lines().next(), Some("id,x,y,z,a,b,c,qw,qx,qy,qz"));
     assert_eq!(text.lines().count(), 9);
 }
@@ -71,7 +71,8 @@ fn the_csv_has_the_documented_columns() {
 fn the_summary_has_the_documented_keys() {
     let p = &every_kind()[3];
     let json: serde_json::Value =
-        serde_json::from_str(&packing::summary_json(&summary_of(p)).unwrap()).unwrap();
+        serde_json::from_str(&ellipack::summary_json::summary_json(&summary_of(p)).unwrap())
+            .unwrap();
     let container = &json["container"];
     assert_eq!(container["kind"], "ball");
     assert_eq!(container["radius"], 9.75);
@@ -92,8 +93,10 @@ fn the_summary_has_the_documented_keys() {
     let d = json["density"].as_f64().unwrap();
     assert!((d - p.density()).abs() == 0.0);
     let rectangle = &every_kind()[2];
-    let json: serde_json::Value =
-        serde_json::from_str(&packing::summary_json(&summary_of(rectangle)).unwrap()).unwrap();
+    let json: serde_json::Value = serde_json::from_str(
+        &ellipack::summary_json::summary_json(&summary_of(rectangle)).unwrap(),
+    )
+    .unwrap();
     assert_eq!(
         json["container"]["half_sides"],
         serde_json::json!([30.0, 31.0])
@@ -215,7 +218,7 @@ fn xyz_orientation_is_in_ovito_order() {
 
 #[track_caller]
 fn assert_csv_error(text: &str, says: &[&str]) {
-    let e = packing::read_csv(text, "packing.csv")
+    let e = ellipack::items_csv::read_csv(text, "packing.csv")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("packing.csv: "), "{e}");
@@ -227,7 +230,7 @@ fn assert_csv_error(text: &str, says: &[&str]) {
 #[test]
 fn malformed_csv_names_file_line_and_column() {
     let good = "id,x,y,a,b,theta\n0,1,2,2,1,0.5\n";
-    assert!(packing::read_csv(good, "p.csv").is_ok());
+    assert!(ellipack::items_csv::read_csv(good, "p.csv").is_ok());
     assert_csv_error(
         "id,x,y,a,b,theta\n0,1,2,2,1,0.5\n1,1,abc,2,1,0\n",
         &["line 3, column 3 (`y`)", "`abc` is not a finite number"],
@@ -259,7 +262,7 @@ fn malformed_csv_names_file_line_and_column() {
     );
     // Columns in another order, and extra columns, are fine.
     let shuffled = "theta,b,a,y,x,id,note\n0.5,1,2,2,1,0,hello\n";
-    match packing::read_csv(shuffled, "p.csv").unwrap() {
+    match ellipack::items_csv::read_csv(shuffled, "p.csv").unwrap() {
         Items::Ellipses(v) => assert_eq!(v, vec![Item::ellipse([1.0, 2.0], [2.0, 1.0], 0.5)]),
         Items::Ellipsoids(_) => panic!("2D expected"),
     }
@@ -268,10 +271,13 @@ fn malformed_csv_names_file_line_and_column() {
 #[test]
 fn malformed_summary_names_file_line_and_column() {
     let p = &every_kind()[0];
-    let good = packing::summary_json(&summary_of(p)).unwrap();
-    let e = packing::read_summary(&good.replace("\"density\"", "\"densty\""), "summary.json")
-        .unwrap_err()
-        .to_string();
+    let good = ellipack::summary_json::summary_json(&summary_of(p)).unwrap();
+    let e = ellipack::summary_json::read_summary(
+        &good.replace("\"density\"", "\"densty\""),
+        "summary.json",
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.starts_with("summary.json: line "), "{e}");
     assert!(e.contains("missing field `density`"), "{e}");
     let line = good
@@ -280,7 +286,7 @@ fn malformed_summary_names_file_line_and_column() {
         .unwrap()
         + 1;
     let bad = good.replace("\"objective\": ", "\"objective\": \"big\" ,\"x\":");
-    let e = packing::read_summary(&bad, "summary.json")
+    let e = ellipack::summary_json::read_summary(&bad, "summary.json")
         .unwrap_err()
         .to_string();
     assert!(
@@ -288,18 +294,19 @@ fn malformed_summary_names_file_line_and_column() {
         "{e}"
     );
     assert!(e.contains("invalid type"), "{e}");
-    let e = packing::read_summary(&good.replace("\"circle\"", "\"hexagon\""), "s.json")
-        .unwrap_err()
-        .to_string();
+    let e =
+        ellipack::summary_json::read_summary(&good.replace("\"circle\"", "\"hexagon\""), "s.json")
+            .unwrap_err()
+            .to_string();
     assert!(e.contains("hexagon"), "{e}");
-    let e = packing::read_summary(
+    let e = ellipack::summary_json::read_summary(
         &good.replace("\"radius\": 40.0", "\"radius\": -40.0"),
         "s.json",
     )
     .unwrap_err()
     .to_string();
     assert!(e.contains("radius"), "{e}");
-    let e = packing::read_summary("{", "s.json")
+    let e = ellipack::summary_json::read_summary("{", "s.json")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("s.json: line 1: column "), "{e}");
@@ -310,7 +317,7 @@ fn non_finite_summaries_are_refused_rather_than_written_as_null() {
     let p = &every_kind()[0];
     let mut s = summary_of(p);
     s.objective = f64::NAN;
-    match packing::summary_json(&s) {
+    match ellipack::summary_json::summary_json(&s) {
         Err(Error::NonFinite { field, .. }) => assert_eq!(field, "objective"),
         other => panic!("{other:?}"),
     }
@@ -321,17 +328,23 @@ fn files_that_disagree_are_an_error() {
     let dir = common::temp_dir("disagree");
     let p2 = &every_kind()[0];
     let p3 = &every_kind()[3];
-    packing::write_csv(&dir.join("packing.csv"), p2.items()).unwrap();
-    packing::write_summary(&dir.join("summary.json"), &summary_of(p3)).unwrap();
-    let e = packing::read_packing_dir(&dir).unwrap_err().to_string();
+    ellipack::items_csv::write_csv(&dir.join("packing.csv"), p2.items()).unwrap();
+    ellipack::summary_json::write_summary(&dir.join("summary.json"), &summary_of(p3)).unwrap();
+    let e = ellipack::folder::read_packing_dir(&dir)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("ball"), "{e}");
     let mut s = summary_of(p2);
     s.items += 1;
-    packing::write_summary(&dir.join("summary.json"), &s).unwrap();
-    let e = packing::read_packing_dir(&dir).unwrap_err().to_string();
+    ellipack::summary_json::write_summary(&dir.join("summary.json"), &s).unwrap();
+    let e = ellipack::folder::read_packing_dir(&dir)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("16 items") && e.contains("17"), "{e}");
     std::fs::remove_file(dir.join("summary.json")).unwrap();
-    let e = packing::read_packing_dir(&dir).unwrap_err().to_string();
+    let e = ellipack::folder::read_packing_dir(&dir)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("summary.json"), "{e}");
 }
 
@@ -373,11 +386,11 @@ fn mangled_files_never_panic() {
     let p2 = &every_kind()[1];
     let p3 = &every_kind()[5];
     let texts = [
-        packing::csv_string(p2.items()),
-        packing::csv_string(p3.items()),
+        ellipack::items_csv::csv_string(p2.items()),
+        ellipack::items_csv::csv_string(p3.items()),
         ellipack::xyz::xyz_string(p2),
         ellipack::xyz::xyz_string(p3),
-        packing::summary_json(&summary_of(p3)).unwrap(),
+        ellipack::summary_json::summary_json(&summary_of(p3)).unwrap(),
     ];
     for _ in 0..400 {
         for (which, original) in texts.iter().enumerate() {
@@ -393,9 +406,9 @@ fn mangled_files_never_panic() {
             }
             let text: String = text.into_iter().collect();
             let _ = match which {
-                0 | 1 => packing::read_csv(&text, "p.csv").map(|_| ()),
+                0 | 1 => ellipack::items_csv::read_csv(&text, "p.csv").map(|_| ()),
                 2 | 3 => ellipack::xyz::read_xyz(&text, "p.xyz").map(|_| ()),
-                _ => packing::read_summary(&text, "s.json").map(|_| ()),
+                _ => ellipack::summary_json::read_summary(&text, "s.json").map(|_| ()),
             };
         }
     }

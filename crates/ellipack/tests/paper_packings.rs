@@ -3,9 +3,9 @@
 //! its row of `validation/paper_tables.csv` reports: the table cannot claim a packing the
 //! repository does not hold.
 
+use ellipack::folder::read_packing_dir;
 use ellipack::instances::by_name;
 use ellipack::pack::verify;
-use ellipack::packing::read_packing_dir;
 use std::path::{Path, PathBuf};
 
 fn validation() -> PathBuf {

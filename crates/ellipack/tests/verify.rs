@@ -203,7 +203,7 @@ fn duplicate_ids_are_an_error_naming_the_id_and_both_lines() {
 #[test]
 fn the_table_keeps_ids_and_lines_and_read_csv_refuses_duplicates() {
     use ellipack::Error;
-    use ellipack::packing::{read_csv, read_table};
+    use ellipack::items_csv::{read_csv, read_table};
     let table = read_table(DISCS, "p.csv").unwrap();
     assert_eq!(table.ids, [10, 7, 3]);
     assert_eq!(table.lines, [2, 3, 4]);
@@ -224,7 +224,8 @@ fn the_table_keeps_ids_and_lines_and_read_csv_refuses_duplicates() {
 
 #[test]
 fn a_minimal_summary_is_a_container_at_the_origin() {
-    use ellipack::packing::{Container, read_stated_summary, read_summary};
+    use ellipack::packing::Container;
+    use ellipack::summary_json::{read_stated_summary, read_summary};
     let s =
         read_stated_summary(r#"{"container": {"kind": "ball", "radius": 5}}"#, "s.json").unwrap();
     assert_eq!(s.container, Container::ball([0.0; 3], 5.0));
