@@ -532,11 +532,11 @@ def _overlap_measure(r: np.ndarray, dim: int) -> OverlapMeasure:
 # ---- the packer -------------------------------------------------------------------------------
 
 
-def _scene_source(scene) -> Tuple[Optional[str], Optional[str]]:
+def _scene_source(scene) -> Tuple[Union[str, dict, None], Optional[str]]:
     if scene is None:
         return None, None
     if isinstance(scene, dict):
-        return _ellipack._scene_toml(scene), None
+        return scene, None
     if isinstance(scene, str) and ("\n" in scene or "=" in scene):
         return scene, None
     if isinstance(scene, (str, os.PathLike)):
@@ -652,7 +652,7 @@ def pack(
                 threads=threads,
                 progress=progress,
             )
-    text, path = _scene_source(scene)
+    given, path = _scene_source(scene)
     if time_limit is not None:
         time_limit = float(time_limit)
     if seed is not None:
@@ -661,7 +661,7 @@ def pack(
         threads = _count("threads", threads, _MAX_THREADS)
     callback, close = _progress(progress)
     try:
-        return _ellipack._pack(text, path, time_limit, seed, threads, callback)
+        return _ellipack._pack(given, path, time_limit, seed, threads, callback)
     finally:
         close()
 

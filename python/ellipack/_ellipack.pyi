@@ -76,9 +76,8 @@ def _bench_rust_batch(
     q2: npt.NDArray[np.float64],
     all_threads: bool,
 ) -> float: ...
-def _scene_toml(obj: Dict[str, Any]) -> str: ...
 def _pack(
-    text: Optional[str],
+    scene: Union[str, Dict[str, Any], None],
     path: Optional[str],
     time_limit: Optional[float],
     seed: Optional[int],

@@ -16,7 +16,6 @@ fn _ellipack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rows::_rows, m)?)?;
     m.add_function(wrap_pyfunction!(scalar::_one, m)?)?;
     m.add_function(wrap_pyfunction!(rows::_bench_rust_batch, m)?)?;
-    m.add_function(wrap_pyfunction!(packer::_scene_toml, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_pack, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_packing_from_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(packer::_container_dimension, m)?)?;

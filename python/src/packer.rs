@@ -1,5 +1,5 @@
-//! The packer from Python: scenes (TOML text, a file, or a dict turned into TOML), the run with
-//! the GIL released while the calling thread relays progress and polls Python's signals, the
+//! The packer from Python: scenes (TOML text, a file, or a dict read as the table of values a
+//! scene file parses to), the run with the GIL released while the calling thread relays progress and polls Python's signals, the
 //! packing object, reading a packing folder and verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
@@ -36,13 +36,12 @@ pyo3::create_exception!(
      `ellipack pack` writes to OUT/unfinished/)."
 );
 
-/// `_scene_toml(obj)`: the TOML text of a scene given as a dict (nested dicts, lists, tuples,
-/// str, bool, int, float; NumPy arrays and scalars through their `tolist()`), so that a dict is
-/// read by the same parser, with the same messages, as a scene file.
-#[pyfunction]
-pub fn _scene_toml(obj: &Bound<'_, PyAny>) -> PyResult<String> {
+/// The scene of a dict (nested dicts, lists, tuples, str, bool, int, float; NumPy arrays and
+/// scalars through their `tolist()`) as the table of values a scene file parses to, checked as
+/// a scene file is ([`Scene::from_table`]).
+fn scene_of_dict(obj: &Bound<'_, PyAny>) -> PyResult<Scene> {
     match toml_value(obj, "scene")? {
-        toml::Value::Table(t) => Ok(toml::to_string(&t).map_err(value_error)?),
+        toml::Value::Table(t) => Scene::from_table(&t, "<scene>").map_err(value_error),
         _ => Err(PyTypeError::new_err("a scene is a dict (its TOML tables)")),
     }
 }
@@ -280,8 +279,9 @@ impl Observer for Relay<'_> {
     }
 }
 
-/// `_pack(text, path, time_limit, seed, threads, progress)`: packs the scene of `text` (TOML)
-/// or of the file `path` (the built-in scene when both are None) and returns the packing.
+/// `_pack(scene, path, time_limit, seed, threads, progress)`: packs `scene` (TOML text or a
+/// dict) or the scene of the file `path` (the built-in scene when both are None) and returns
+/// the packing.
 ///
 /// The run happens on a worker thread with the GIL released. The calling thread wakes every
 /// 100 ms to run Python's signal handlers and calls `progress(dict)` after every local
@@ -289,18 +289,21 @@ impl Observer for Relay<'_> {
 /// returns its best certified packing with `interrupted` set; any other exception from a
 /// signal handler or from `progress` stops the run and is raised once it has stopped.
 #[pyfunction]
-#[pyo3(signature = (text, path, time_limit, seed, threads, progress))]
+#[pyo3(signature = (scene, path, time_limit, seed, threads, progress))]
 pub fn _pack(
     py: Python<'_>,
-    text: Option<String>,
+    scene: Option<Bound<'_, PyAny>>,
     path: Option<PathBuf>,
     time_limit: Option<f64>,
     seed: Option<u64>,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyPacking> {
-    let scene = match (text, path) {
-        (Some(text), _) => Scene::from_toml_str(&text, "<scene>").map_err(value_error)?,
+    let scene = match (scene, path) {
+        (Some(text), _) if text.is_instance_of::<PyString>() => {
+            Scene::from_toml_str(&text.extract::<String>()?, "<scene>").map_err(value_error)?
+        }
+        (Some(dict), _) => scene_of_dict(&dict)?,
         (None, Some(path)) => Scene::from_file(&path).map_err(value_error)?,
         (None, None) => Scene::default_scene(),
     };

@@ -168,9 +168,31 @@ def test_periodic_cells_reach_the_densest_lattice_packing():
     assert ellipack.verify(packing)["certified"]
 
 
+SCENE_2D_TOML = """
+dimension = 2
+seed = 5
+
+[container]
+kind = "circle"
+
+[[shapes]]
+count = 5
+semi_axes = [2.0, 1.0]
+
+[[shapes]]
+count = 2
+semi_axes = [1.0, 1.0]
+
+[solver]
+time_limit = 600.0
+threads = 1
+local_minimisations = 6
+"""
+
+
 def test_dict_toml_text_and_file_are_the_same_scene(tmp_path, packed_2d):
     packing, _ = packed_2d
-    text = ellipack._ellipack._scene_toml(SCENE_2D)
+    text = SCENE_2D_TOML
     from_text = ellipack.pack(text, progress=False)
     path = tmp_path / "scene.toml"
     path.write_text(text)
@@ -205,8 +227,16 @@ def test_write_and_read_back(tmp_path, packed_2d):
 
 def test_scene_errors_name_the_line_and_key():
     bad = dict(SCENE_2D, container={"kind": "ball"})
-    with pytest.raises(ValueError, match=r"line \d+, column \d+: `container.kind`: a ball is a 3D"):
+    # A dict has no lines: its messages name the key.
+    with pytest.raises(ValueError, match=r"<scene>: `container.kind`: a ball is a 3D"):
         ellipack.pack(bad, progress=False)
+    with pytest.raises(ValueError, match=r"<scene>: line 2, column 1: `dimnsion`"):
+        ellipack.pack("\ndimnsion = 2\n", progress=False)
+    with pytest.raises(ValueError, match=r"`solver.tim_limit`: unknown field"):
+        ellipack.pack(dict(SCENE_2D, solver={"tim_limit": 1.0}), progress=False)
+    with pytest.raises(ValueError, match=r"`shapes\[1\].semi_axes\[0\]`: invalid type"):
+        shapes = [SCENE_2D["shapes"][0], {"count": 1, "semi_axes": ["a"]}]
+        ellipack.pack(dict(SCENE_2D, shapes=shapes), progress=False)
     bad = dict(SCENE_2D, shapes=[{"count": 0, "semi_axes": [1.0, 1.0]}])
     with pytest.raises(ValueError, match=r"`shapes\[0\].count`"):
         ellipack.pack(bad, progress=False)

@@ -29,6 +29,7 @@ pub mod pairs;
 #[cfg(feature = "pictures")]
 pub mod render;
 pub mod scene;
+mod scene_table;
 #[cfg(feature = "pictures")]
 pub mod structure_plots;
 pub mod summary_json;

@@ -736,9 +736,38 @@ impl Scene {
     fn parse(text: &str, source_name: &str, from_file: bool) -> Result<Scene, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(text, source_name, &e))?;
         Validator {
-            text,
+            text: Some(text),
             source_name,
             from_file,
+        }
+        .scene(raw)
+    }
+
+    /// A scene given as a table of values, as a scene file's TOML would parse (Python gives its
+    /// dict so): the same checks as [`Scene::from_toml_str`], with messages that name the key
+    /// (line and column 0: a table has no lines).
+    ///
+    /// # Errors
+    /// As [`Scene::from_toml_str`].
+    pub fn from_table(table: &toml::Table, source_name: &str) -> Result<Scene, SceneError> {
+        use serde::Deserialize as _;
+        let root = toml::Value::Table(table.clone());
+        let raw =
+            RawScene::deserialize(crate::scene_table::At::root(&root)).map_err(|e| SceneError {
+                source_name: source_name.to_string(),
+                line: 0,
+                column: 0,
+                key: if e.key.is_empty() {
+                    "<scene>".to_string()
+                } else {
+                    e.key
+                },
+                message: crate::toml_keys::plain_types(&e.message),
+            })?;
+        Validator {
+            text: None,
+            source_name,
+            from_file: false,
         }
         .scene(raw)
     }
@@ -1207,7 +1236,8 @@ fn toml_float(x: f64) -> String {
 }
 
 struct Validator<'a> {
-    text: &'a str,
+    /// The scene's TOML text, `None` for a table (whose messages have no line).
+    text: Option<&'a str>,
     source_name: &'a str,
     /// Whether `source_name` is the scene's path (item files are relative to its folder).
     from_file: bool,
@@ -1215,7 +1245,7 @@ struct Validator<'a> {
 
 impl Validator<'_> {
     fn error(&self, span: std::ops::Range<usize>, key: &str, message: String) -> SceneError {
-        let (line, column) = line_column(self.text, span.start);
+        let (line, column) = self.text.map_or((0, 0), |t| line_column(t, span.start));
         SceneError {
             source_name: self.source_name.to_string(),
             line,
@@ -1428,13 +1458,16 @@ impl Validator<'_> {
             by_position.sort_by_key(|(_, span)| span.start);
             let (first, first_span) = &by_position[0];
             let (second, second_span) = &by_position[1];
-            let (line, _) = line_column(self.text, first_span.start);
+            let first = match self.text {
+                Some(text) => format!("{first} (line {})", line_column(text, first_span.start).0),
+                None => first.to_string(),
+            };
             return Err(self.error(
                 second_span.clone(),
                 &format!("container.{second}"),
                 format!(
                     "a container has one size: give one of radius, semi_axes, half_sides, lengths or \
-                     packing_fraction, not both {first} (line {line}) and {second}"
+                     packing_fraction, not both {first} and {second}"
                 ),
             ));
         }

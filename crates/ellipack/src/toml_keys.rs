@@ -4,12 +4,13 @@
 
 /// Why a scene could not be read: the file, the position and the key of the first problem.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{source_name}: line {line}, column {column}: `{key}`: {message}")]
+#[error("{source_name}: {}`{key}`: {message}", place(*.line, *.column))]
 pub struct SceneError {
     /// The file, or `<built-in scene>`.
     pub source_name: String,
     /// 1-based line of the offending value or key (of the enclosing table for a missing
-    /// key; line 1 when the key is missing at the top level).
+    /// key; line 1 when the key is missing at the top level); 0 for a scene given as a table
+    /// ([`crate::scene::Scene::from_table`]), which has no lines.
     pub line: usize,
     /// 1-based column (in characters).
     pub column: usize,
@@ -17,6 +18,15 @@ pub struct SceneError {
     pub key: String,
     /// What is wrong.
     pub message: String,
+}
+
+/// `line L, column C: `, or nothing for a scene without lines (line 0).
+fn place(line: usize, column: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}, column {column}: ")
+    }
 }
 
 /// 1-based line and column (in characters) of a byte offset.
@@ -79,7 +89,7 @@ pub(crate) fn toml_error(text: &str, source_name: &str, e: &toml::de::Error) -> 
 /// Serde's type names are Rust's: say "an integer" and "a number" to a person.
 /// Our private `Raw…` structs are tables to a person, and an integer beyond 64 bits is out of
 /// range rather than of an "invalid type".
-fn plain_types(message: &str) -> String {
+pub(crate) fn plain_types(message: &str) -> String {
     let mut message = message
         .replace("expected i64", "expected an integer")
         .replace("expected u64", "expected a non-negative integer")

@@ -541,3 +541,58 @@ fn scenes_beyond_the_models_range_are_refused_naming_the_key() {
         "rescale the lengths",
     );
 }
+
+/// The table a scene's text parses to is the same scene: Python gives its dicts so.
+#[test]
+fn a_table_is_the_scene_its_text_is() {
+    let mut texts = vec![GOOD_3D.to_string(), DEFAULT_SCENE.to_string()];
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../validation/random");
+    for entry in std::fs::read_dir(folder).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            texts.push(std::fs::read_to_string(path).unwrap());
+        }
+    }
+    assert!(texts.len() > 5);
+    for text in &texts {
+        let table: toml::Table = toml::from_str(text).unwrap();
+        let from_table = Scene::from_table(&table, "<scene>").unwrap();
+        assert_eq!(from_table, parse(text).unwrap(), "{text}");
+    }
+}
+
+/// A table's messages name the key (it has no lines): the checks of the raw form and those of
+/// the values both.
+#[test]
+fn a_table_s_errors_name_the_key_without_a_line() {
+    let table = |text: &str| -> toml::Table { toml::from_str(text).unwrap() };
+    let cases = [
+        (minimal_2d("[solver]\ntim_limit = 1.0\n"), "solver.tim_limit", "unknown field"),
+        (minimal_2d("[solver]\ntime_limit = \"soon\"\n"), "solver.time_limit", "invalid type"),
+        (
+            "dimension = 2\n[container]\nkind = \"ball\"\n[[shapes]]\ncount = 4\nsemi_axes = [2.0, 1.0]\n"
+                .to_string(),
+            "container.kind",
+            "3D",
+        ),
+        (minimal_2d("").replace("count = 4", "count = 0"), "shapes[0].count", "at least 1"),
+        (
+            minimal_2d("").replace("[2.0, 1.0]", "[2.0, \"x\"]"),
+            "shapes[0].semi_axes[1]",
+            "expected a number",
+        ),
+    ];
+    for (text, key, says) in cases {
+        let e = Scene::from_table(&table(&text), "<scene>").unwrap_err();
+        assert_eq!((e.line, e.column), (0, 0), "{e}");
+        assert_eq!(e.key, key, "{e}");
+        assert!(e.message.contains(says), "{e}");
+        assert!(
+            e.to_string().starts_with(&format!("<scene>: `{key}`: ")),
+            "{e}"
+        );
+        // The text of the same scene says where.
+        let from_text = parse(&text).unwrap_err();
+        assert!(from_text.line > 0, "{from_text}");
+    }
+}
