@@ -1,6 +1,7 @@
 //! The packer from Python: scenes (TOML text, a file, or a dict read as the table of values a
-//! scene file parses to), the run with the GIL released while the calling thread relays progress and polls Python's signals, the
-//! packing object, reading a packing folder and verifying a packing.
+//! scene file parses to), the run with the GIL released while the calling thread relays
+//! progress and polls Python's signals, the packing object, reading a packing folder and
+//! verifying a packing.
 
 use ellipack::folder::{HISTORY_FILE, Published, Staging};
 use ellipack::pack::{MultiStartProgress, Observer, RunOptions, run, time_limit_of};
