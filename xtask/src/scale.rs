@@ -1,12 +1,13 @@
 //! `cargo xtask scale`: the cost of one local minimisation against the number of items m.
 //!
-//! Each run is the pipeline of `ellipsoid_packer::local::local_minimisation` as a multi-start
-//! runs it: ellipsoids (1, 0.75, 0.5) in a ball from the face-centred cubic start; with the
-//! augmented Lagrangian a first solve at the paper's feasibility tolerance 1e-4, the polish at
-//! 1e-10, the certificate and the repair; with compression its certified placements
-//! (`ellipsoid_packer::compression`). A run still going when its wall-clock budget ends is
-//! stopped, and the point it reached is certified and repaired like any other; its row says
-//! `budget`.
+//! Each run is what `ellipack pack` runs for a scene with `local_minimisations = 1`: the
+//! packer's entry point (`ellipsoid_packer::Packer::run`) with the scene's default settings,
+//! seed 1 — ellipsoids (1, 0.75, 0.5) in a ball from the packer's first start (the tightest cut
+//! of the face-centred cubic lattice, every item turned by up to 0.01 rad); with the augmented
+//! Lagrangian a first solve at the paper's feasibility tolerance 1e-4, the polish at 1e-10, the
+//! certificate and the repair; with compression its certified placements. A run still going
+//! when its wall-clock budget ends is stopped, and its best certified point is kept like any
+//! other; its row says `budget`.
 //!
 //! Rows are kept by (m, method, threads) in `validation/scale.csv`, so that sizes and
 //! solvers can be measured in separate invocations (a large m takes its whole budget; the
@@ -14,22 +15,22 @@
 //! figure `docs/figures/scale.{svg,png}` and the table between the markers of
 //! `docs/packing.md` are drawn from every row.
 //!
-//! Threads: the local minimisation runs inside a pool of `RAYON_NUM_THREADS` threads (every
-//! core by default) when xtask is built with its `rayon` feature
-//! (`cargo run --release -p xtask --features rayon -- scale`), as a multi-start runs a start
-//! alone; on the calling thread otherwise.
+//! Threads: the run uses `RAYON_NUM_THREADS` threads (every core by default) when xtask is
+//! built with its `rayon` feature (`cargo run --release -p xtask --features rayon -- scale`),
+//! one otherwise.
 
 use crate::error::Error;
 use crate::output::{Outputs, Stability};
 use crate::periodic_peer::{from_columns, read_rows};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
-use auglag::{InnerSolver, Progress};
-use ellipsoid_packer::local::{LocalMethod, LocalSettings, local_minimisation};
-use ellipsoid_packer::starts::{LatticeStart, lattice_start_of};
+use auglag::InnerSolver;
+use ellipsoid_packer::local::{LocalMethod, LocalSettings};
+use ellipsoid_packer::multistart::{SolverEvent, SolverProgress};
+use ellipsoid_packer::{Goal, MultiStartSettings, Observer, Outcome, Packer, Problem, Settings};
 use implicit_packing::containment::ContainerShape;
-use implicit_packing::model::Model;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// What the study runs.
@@ -85,6 +86,9 @@ fn study(message: String) -> Error {
 
 /// The semi-axes of every item: the paper's ellipsoids of Tables 6.3 and 6.4.
 const AXES: [f64; 3] = [1.0, 0.75, 0.5];
+
+/// The run's seed, as a scene's `seed = 1`.
+const SEED: u64 = 1;
 
 /// The settings of one local minimisation by its name in the study: an inner solver of the
 /// augmented Lagrangian, or compression (alone or followed by the augmented Lagrangian), whose
@@ -177,22 +181,23 @@ impl Tally {
     }
 }
 
-/// One local minimisation of `m` ellipsoids with `solver`, stopped after `budget`.
-fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
-    let settings = local_settings(solver)?;
-    let mut problem = Model::<3>::new(vec![AXES; m], ContainerShape::Ball)
-        .map_err(|e| study(format!("m = {m}: {e}")))?;
-    let x0 = lattice_start_of(&problem, &LatticeStart::centred());
-    let start = Instant::now();
-    let mut tally = Tally::default();
-    let mut stopped = false;
-    let mut observe = |p: &Progress<'_>| {
-        let elapsed = start.elapsed();
-        tally.see(
-            (p.outer_iteration, p.total_inner_iterations, p.evaluations),
-            elapsed,
-        );
-        if let auglag::Event::Outer {
+/// What the study hears of the run: the solver's counts, and whether the budget has run out.
+struct Watch {
+    start: Instant,
+    budget: Duration,
+    tally: Mutex<Tally>,
+}
+
+impl Observer for Watch {
+    fn iteration(&self, p: &SolverProgress<'_>) {
+        let elapsed = self.start.elapsed();
+        if let Ok(mut tally) = self.tally.lock() {
+            tally.see(
+                (p.outer_iteration, p.total_inner_iterations, p.evaluations),
+                elapsed,
+            );
+        }
+        if let SolverEvent::Outer {
             objective,
             infeasibility,
             ..
@@ -206,26 +211,52 @@ fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
                 p.total_inner_iterations,
             );
         }
-        stopped |= elapsed >= budget;
-        stopped
+    }
+
+    fn should_stop(&self) -> bool {
+        self.start.elapsed() >= self.budget
+    }
+}
+
+/// One local minimisation of `m` ellipsoids with `solver`, stopped after `budget`: the run of a
+/// scene with `local_minimisations = 1` ([`Packer::run`], as `ellipack pack` runs it).
+fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
+    let failed = |e: &dyn std::fmt::Display| study(format!("m = {m}, {solver}: {e}"));
+    let problem = Problem {
+        semi_axes: vec![AXES; m],
+        shape: ContainerShape::Ball,
+        goal: Goal::Densest,
+        resume: None,
     };
-    // Inside a pool of the threads, as the packer runs a start: with one thread the model's
-    // evaluations run inline, without handing work to another thread.
-    #[cfg(feature = "rayon")]
-    let result = implicit_packing::model::on_threads(threads(), || {
-        local_minimisation(&mut problem, &x0, &settings, &mut observe)
-    })
-    .map_err(|e| study(format!("m = {m}, {solver}: {e}")))?;
-    #[cfg(not(feature = "rayon"))]
-    let result = local_minimisation(&mut problem, &x0, &settings, &mut observe);
-    let result = result.map_err(|e| study(format!("m = {m}, {solver}: {e}")))?;
-    let seconds = start.elapsed().as_secs_f64();
+    let multistart = MultiStartSettings::recommended(3, SEED)
+        .with_local(local_settings(solver)?)
+        .with_max_local_minimisations(1)
+        .with_threads(threads())
+        .with_time_limit(None);
+    let settings = Settings {
+        multistart,
+        orientations: Vec::new(),
+    };
+    let mut watch = Watch {
+        start: Instant::now(),
+        budget,
+        tally: Mutex::new(Tally::default()),
+    };
+    let outcome = Packer::new(problem, settings)
+        .and_then(|packer| packer.run(&mut watch))
+        .map_err(|e| failed(&e))?;
+    let Outcome::Packed(packed) = outcome else {
+        return Err(study(format!("m = {m}, {solver}: no packing")));
+    };
+    let seconds = watch.start.elapsed().as_secs_f64();
+    let mut tally = watch.tally.into_inner().map_err(|e| failed(&e))?;
     tally.close();
-    let stop = if stopped {
+    let stop = if packed.interrupted {
         "budget".to_string()
     } else {
-        stop_reason(result.report.stop_reason)
+        stop_reason(packed.solver.stop_reason)
     };
+    let density = packed.configuration.density();
     Ok(Row {
         m,
         solver: solver.to_string(),
@@ -234,13 +265,13 @@ fn measure(m: usize, solver: &str, budget: Duration) -> Result<Row, Error> {
         outer: tally.outer,
         inner: tally.inner,
         evaluations: tally.evaluations,
-        hessian_products: result.report.hessian_products,
+        hessian_products: packed.solver.hessian_products,
         first_solve_seconds: tally.polish_from.map_or(seconds, |d| d.as_secs_f64()),
         seconds,
         budget_minutes: budget.as_secs_f64() / 60.0,
-        density: result.density,
-        density_before_repair: result.density_before_repair,
-        certified: result.certificate.is_feasible(),
+        density,
+        density_before_repair: packed.repair.map_or(density, |r| r.density_before),
+        certified: packed.certificate.is_feasible(),
         peak_rss_mib: peak_rss_mib(),
         machine: crate::provenance::machine_with_threads(threads()),
         commit: crate::provenance::commit(),

@@ -66,7 +66,8 @@ pub use error::{Error, StartDefects};
 pub use fixed::fill;
 pub use local::{LocalResult, LocalSettings, local_minimisation};
 pub use multistart::{
-    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, multistart,
+    MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, SolverEvent,
+    SolverProgress, SolverReport, multistart,
 };
 pub use random::{RandomPacking, RandomSettings, Target, random_packing};
 pub use run::{Configuration, Goal, Outcome, Packed, Packer, Problem, Repair, Settings, Unfilled};

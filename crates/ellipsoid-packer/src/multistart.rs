@@ -276,6 +276,9 @@ pub use auglag::Progress as SolverProgress;
 /// objective and infeasibility) or an inner one.
 pub use auglag::Event as SolverEvent;
 
+/// The solver's report of a local minimisation: its iterations, evaluations and why it stopped.
+pub use auglag::Report as SolverReport;
+
 impl<F> Callbacks<F, fn(&SolverProgress<'_>), fn() -> bool>
 where
     F: FnMut(&MultiStartProgress) + Sync,

@@ -20,6 +20,7 @@ use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, item_measure};
 use crate::multistart::{
     MultiStartProgress, MultiStartResult, MultiStartSettings, Observer, SolverProgress,
+    SolverReport,
 };
 use crate::random::{Orientation, RandomPacking, RandomSettings, Target, random_packing_seen};
 use crate::starts::{LatticeStart, fill_start, lattice_start};
@@ -125,6 +126,9 @@ pub struct Packed<const N: usize> {
     /// One row per finished local minimisation (per kept compression step of a random
     /// packing, the packing last), with times from the start of the run.
     pub history: Vec<MultiStartProgress>,
+    /// The solver's report of the local minimisation that gave the packing (iterations,
+    /// evaluations, why it stopped).
+    pub solver: SolverReport,
 }
 
 /// A container of given size that the run could not fill: its least overlapping
@@ -380,6 +384,7 @@ impl<const N: usize> Packer<N> {
             wall_time: result.wall_time + before,
             interrupted: result.interrupted,
             history,
+            solver: best.report.clone(),
         }))
     }
 
