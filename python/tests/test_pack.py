@@ -171,22 +171,9 @@ def test_periodic_cells_reach_the_densest_lattice_packing():
 SCENE_2D_TOML = """
 dimension = 2
 seed = 5
-
-[container]
-kind = "circle"
-
-[[shapes]]
-count = 5
-semi_axes = [2.0, 1.0]
-
-[[shapes]]
-count = 2
-semi_axes = [1.0, 1.0]
-
-[solver]
-time_limit = 600.0
-threads = 1
-local_minimisations = 6
+container = { kind = "circle" }
+shapes = [{ count = 5, semi_axes = [2.0, 1.0] }, { count = 2, semi_axes = [1.0, 1.0] }]
+solver = { time_limit = 600.0, threads = 1, local_minimisations = 6 }
 """
 
 

@@ -519,6 +519,7 @@ fn packing_of<const N: usize>(configuration: &Configuration<N>) -> Result<Packin
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::packing::Centred;
 
     #[test]
     fn the_history_has_its_header_and_a_row_per_local_minimisation() {
@@ -572,7 +573,11 @@ mod tests {
     fn verify_rejects_an_overlapping_pair_and_an_item_outside() {
         let unit_disc_at = |x| Item::ellipse([x, 0.0], [1.0, 1.0], 0.0);
         let items = Items::Ellipses(vec![unit_disc_at(0.0), unit_disc_at(1.5)]);
-        let packing = Packing::new(Container::circle([0.0, 0.0], 2.4), items).unwrap();
+        let packing = Packing::new(
+            Container::plane([0.0, 0.0], Centred::Ball { radius: 2.4 }),
+            items,
+        )
+        .unwrap();
         let c = verify(&packing).unwrap();
         assert_eq!(c.overlapping_pairs, 1);
         assert_eq!(
@@ -607,16 +612,26 @@ mod tests {
         };
         let cases: [(Container, f64); 3] = [
             (
-                Container::ellipse([1.0, 1.0], [4.0, 2.0]),
+                Container::plane(
+                    [1.0, 1.0],
+                    Centred::Ellipsoid {
+                        semi_axes: [4.0, 2.0],
+                    },
+                ),
                 gauge_max(&|x, y| (x / 4.0).hypot(y / 2.0)),
             ),
             (
-                Container::rectangle([1.0, 1.0], [4.0, 2.0]),
+                Container::plane(
+                    [1.0, 1.0],
+                    Centred::Box {
+                        half_sides: [4.0, 2.0],
+                    },
+                ),
                 // max(2 / 4, 4 / 2): the top of the item, 4 above the centre.
                 2.0,
             ),
             (
-                Container::circle([1.0, 1.0], 2.0),
+                Container::plane([1.0, 1.0], Centred::Ball { radius: 2.0 }),
                 gauge_max(&|x, y| x.hypot(y) / 2.0),
             ),
         ];

@@ -185,19 +185,20 @@ pub enum Container {
         /// Its centre; a periodic cell's corner.
         center: [f64; 2],
         /// Its shape and size.
-        shape: Sized<2>,
+        shape: Centred<2>,
     },
     /// A container in space.
     Space {
         /// Its centre; a periodic cell's corner.
         center: [f64; 3],
         /// Its shape and size.
-        shape: Sized<3>,
+        shape: Centred<3>,
     },
 }
 
-/// The packing model's container: a shape with its size, centred at the origin.
-pub type Sized<const N: usize> = implicit_packing::Container<N>;
+/// The packing model's container, centred at the origin: a ball, an axis-aligned ellipsoid or
+/// box with its size, or a periodic cell.
+pub type Centred<const N: usize> = implicit_packing::Container<N>;
 
 /// `$body` with `$center` and `$shape` bound in either dimension.
 macro_rules! in_either_dimension {
@@ -216,39 +217,13 @@ macro_rules! in_either_dimension {
 }
 
 impl Container {
-    /// The disc |x − center| ≤ radius.
-    pub fn circle(center: [f64; 2], radius: f64) -> Self {
-        let shape = Sized::Ball { radius };
+    /// The container `shape` (centred at the origin) moved to `center` in the plane.
+    pub fn plane(center: [f64; 2], shape: Centred<2>) -> Self {
         Container::Plane { center, shape }
     }
 
-    /// The ellipse Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
-    pub fn ellipse(center: [f64; 2], semi_axes: [f64; 2]) -> Self {
-        let shape = Sized::Ellipsoid { semi_axes };
-        Container::Plane { center, shape }
-    }
-
-    /// The rectangle |xₖ − centerₖ| ≤ half_sidesₖ.
-    pub fn rectangle(center: [f64; 2], half_sides: [f64; 2]) -> Self {
-        let shape = Sized::Box { half_sides };
-        Container::Plane { center, shape }
-    }
-
-    /// The ball |x − center| ≤ radius.
-    pub fn ball(center: [f64; 3], radius: f64) -> Self {
-        let shape = Sized::Ball { radius };
-        Container::Space { center, shape }
-    }
-
-    /// The ellipsoid Σₖ ((xₖ − centerₖ) / semi_axesₖ)² ≤ 1.
-    pub fn ellipsoid(center: [f64; 3], semi_axes: [f64; 3]) -> Self {
-        let shape = Sized::Ellipsoid { semi_axes };
-        Container::Space { center, shape }
-    }
-
-    /// The cuboid |xₖ − centerₖ| ≤ half_sidesₖ.
-    pub fn cuboid(center: [f64; 3], half_sides: [f64; 3]) -> Self {
-        let shape = Sized::Box { half_sides };
+    /// The container `shape` (centred at the origin) moved to `center` in space.
+    pub fn space(center: [f64; 3], shape: Centred<3>) -> Self {
         Container::Space { center, shape }
     }
 
@@ -266,14 +241,14 @@ impl Container {
     }
 
     /// The model's `shape` at `center`, in dimension `N` (2 or 3).
-    pub fn placed<const N: usize>(center: [f64; N], shape: &Sized<N>) -> Self {
+    pub fn placed<const N: usize>(center: [f64; N], shape: &Centred<N>) -> Self {
         let kind = ContainerKind::of(shape.kind(), N);
         Container::unchecked(kind, &center, &shape.dimensions())
     }
 
     /// The model's container of dimension `N`, centred at the origin; `None` for the other
     /// dimension.
-    pub fn shape<const N: usize>(&self) -> Option<Sized<N>> {
+    pub fn shape<const N: usize>(&self) -> Option<Centred<N>> {
         (self.dimension() == N).then(|| sized_of(self.kind().shape(), &self.size()))
     }
 
@@ -343,7 +318,7 @@ impl Container {
     /// vectors), `None` for the other containers.
     pub fn cell_matrix(&self) -> Option<Vec<Vec<f64>>> {
         in_either_dimension!(self, |_c, shape| match shape {
-            Sized::Periodic { cell } => Some(cell.iter().map(|row| row.to_vec()).collect()),
+            Centred::Periodic { cell } => Some(cell.iter().map(|row| row.to_vec()).collect()),
             _ => None,
         })
     }
@@ -447,17 +422,17 @@ impl Container {
 
 /// The model's container of a shape and a size as [`Container::size`] states it; a missing
 /// value is NaN, a missing tilt zero.
-fn sized_of<const N: usize>(shape: ContainerShape, size: &[f64]) -> Sized<N> {
+fn sized_of<const N: usize>(shape: ContainerShape, size: &[f64]) -> Centred<N> {
     let d = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
     match shape {
-        ContainerShape::Ball => Sized::Ball { radius: d(0) },
-        ContainerShape::Ellipsoid => Sized::Ellipsoid {
+        ContainerShape::Ball => Centred::Ball { radius: d(0) },
+        ContainerShape::Ellipsoid => Centred::Ellipsoid {
             semi_axes: std::array::from_fn(d),
         },
-        ContainerShape::Box => Sized::Box {
+        ContainerShape::Box => Centred::Box {
             half_sides: std::array::from_fn(d),
         },
-        ContainerShape::Periodic => Sized::Periodic {
+        ContainerShape::Periodic => Centred::Periodic {
             cell: cell_of(size),
         },
     }
@@ -477,45 +452,52 @@ fn cell_of<const N: usize>(size: &[f64]) -> [[f64; N]; N] {
 
 /// [`Container`] as JSON states it (see there).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+#[serde(tag = "kind", rename_all = "lowercase")]
 enum ContainerForm {
-    Circle {
-        #[serde(default)]
-        center: [f64; 2],
-        radius: f64,
-    },
-    Ellipse {
-        #[serde(default)]
-        center: [f64; 2],
-        semi_axes: [f64; 2],
-    },
-    Rectangle {
-        #[serde(default)]
-        center: [f64; 2],
-        half_sides: [f64; 2],
-    },
-    Ball {
-        #[serde(default)]
-        center: [f64; 3],
-        radius: f64,
-    },
-    Ellipsoid {
-        #[serde(default)]
-        center: [f64; 3],
-        semi_axes: [f64; 3],
-    },
-    Cuboid {
-        #[serde(default)]
-        center: [f64; 3],
-        half_sides: [f64; 3],
-    },
-    Periodic {
-        // A missing origin is the origin.
-        #[serde(default)]
-        origin: Vec<f64>,
-        lengths: Vec<f64>,
-        tilts: Vec<f64>,
-    },
+    Circle(Round<[f64; 2]>),
+    Ellipse(Axes<[f64; 2]>),
+    Rectangle(Sides<[f64; 2]>),
+    Ball(Round<[f64; 3]>),
+    Ellipsoid(Axes<[f64; 3]>),
+    Cuboid(Sides<[f64; 3]>),
+    Periodic(Cell),
+}
+
+/// A disc or ball in JSON; a missing centre is the origin.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Round<C: Default> {
+    #[serde(default)]
+    center: C,
+    radius: f64,
+}
+
+/// An ellipse or ellipsoid in JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Axes<C: Default> {
+    #[serde(default)]
+    center: C,
+    semi_axes: C,
+}
+
+/// A rectangle or cuboid in JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Sides<C: Default> {
+    #[serde(default)]
+    center: C,
+    half_sides: C,
+}
+
+/// A periodic cell in JSON; a missing origin is the origin.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Cell {
+    #[serde(default)]
+    origin: Vec<f64>,
+    lengths: Vec<f64>,
+    tilts: Vec<f64>,
 }
 
 impl From<Container> for ContainerForm {
@@ -524,46 +506,39 @@ impl From<Container> for ContainerForm {
         let size = c.size();
         let n = c.dimension();
         let first = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
-        let two = || [first(0), first(1)];
-        let three = || [first(0), first(1), first(2)];
+        let radius = first(0);
         match (&c, c.kind().shape()) {
-            (_, ContainerShape::Periodic) => F::Periodic {
+            (_, ContainerShape::Periodic) => F::Periodic(Cell {
                 origin: c.center().to_vec(),
                 lengths: size[..n].to_vec(),
                 tilts: size[n..].to_vec(),
-            },
-            (Container::Plane { center, .. }, shape) => {
-                let center = *center;
+            }),
+            (&Container::Plane { center, .. }, shape) => {
+                let two = [first(0), first(1)];
                 match shape {
-                    ContainerShape::Ball => F::Circle {
+                    ContainerShape::Ball => F::Circle(Round { center, radius }),
+                    ContainerShape::Ellipsoid => F::Ellipse(Axes {
                         center,
-                        radius: first(0),
-                    },
-                    ContainerShape::Ellipsoid => F::Ellipse {
+                        semi_axes: two,
+                    }),
+                    _ => F::Rectangle(Sides {
                         center,
-                        semi_axes: two(),
-                    },
-                    _ => F::Rectangle {
-                        center,
-                        half_sides: two(),
-                    },
+                        half_sides: two,
+                    }),
                 }
             }
-            (Container::Space { center, .. }, shape) => {
-                let center = *center;
+            (&Container::Space { center, .. }, shape) => {
+                let three = [first(0), first(1), first(2)];
                 match shape {
-                    ContainerShape::Ball => F::Ball {
+                    ContainerShape::Ball => F::Ball(Round { center, radius }),
+                    ContainerShape::Ellipsoid => F::Ellipsoid(Axes {
                         center,
-                        radius: first(0),
-                    },
-                    ContainerShape::Ellipsoid => F::Ellipsoid {
+                        semi_axes: three,
+                    }),
+                    _ => F::Cuboid(Sides {
                         center,
-                        semi_axes: three(),
-                    },
-                    _ => F::Cuboid {
-                        center,
-                        half_sides: three(),
-                    },
+                        half_sides: three,
+                    }),
                 }
             }
         }
@@ -576,17 +551,37 @@ impl TryFrom<ContainerForm> for Container {
     fn try_from(form: ContainerForm) -> Result<Self, String> {
         use ContainerForm as F;
         Ok(match form {
-            F::Circle { center, radius } => Container::circle(center, radius),
-            F::Ellipse { center, semi_axes } => Container::ellipse(center, semi_axes),
-            F::Rectangle { center, half_sides } => Container::rectangle(center, half_sides),
-            F::Ball { center, radius } => Container::ball(center, radius),
-            F::Ellipsoid { center, semi_axes } => Container::ellipsoid(center, semi_axes),
-            F::Cuboid { center, half_sides } => Container::cuboid(center, half_sides),
-            F::Periodic {
+            F::Circle(r) => Container::plane(r.center, Centred::Ball { radius: r.radius }),
+            F::Ellipse(e) => Container::plane(
+                e.center,
+                Centred::Ellipsoid {
+                    semi_axes: e.semi_axes,
+                },
+            ),
+            F::Rectangle(b) => Container::plane(
+                b.center,
+                Centred::Box {
+                    half_sides: b.half_sides,
+                },
+            ),
+            F::Ball(r) => Container::space(r.center, Centred::Ball { radius: r.radius }),
+            F::Ellipsoid(e) => Container::space(
+                e.center,
+                Centred::Ellipsoid {
+                    semi_axes: e.semi_axes,
+                },
+            ),
+            F::Cuboid(b) => Container::space(
+                b.center,
+                Centred::Box {
+                    half_sides: b.half_sides,
+                },
+            ),
+            F::Periodic(Cell {
                 mut origin,
                 lengths,
                 tilts,
-            } => {
+            }) => {
                 let n = lengths.len();
                 if origin.is_empty() {
                     origin = vec![0.0; n];
@@ -724,14 +719,14 @@ impl Packing {
             (
                 Container::Plane {
                     center,
-                    shape: Sized::Periodic { cell },
+                    shape: Centred::Periodic { cell },
                 },
                 Items::Ellipses(items),
             ) => wrap_into_reduced(center, cell, items),
             (
                 Container::Space {
                     center,
-                    shape: Sized::Periodic { cell },
+                    shape: Centred::Periodic { cell },
                 },
                 Items::Ellipsoids(items),
             ) => wrap_into_reduced(center, cell, items),

@@ -866,13 +866,14 @@ fn draw_scale_bar<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::packing::Centred;
 
     #[test]
     fn broken_data_draws_what_it_can_without_panicking() {
         use crate::packing::{Container, Item, Items, Packing};
         // Built by hand, bypassing Packing::new's checks.
         let packing = Packing {
-            container: Container::circle([0.0, 0.0], -1.0),
+            container: Container::plane([0.0, 0.0], Centred::Ball { radius: -1.0 }),
             items: Items::Ellipses(vec![
                 Item::ellipse([f64::NAN, 0.0], [1.0, 1.0], 0.0),
                 Item::ellipse([0.0, 0.0], [0.0, 1.0], 0.0),
@@ -882,7 +883,12 @@ mod tests {
         png_bytes(&packing, &RenderOptions::default()).unwrap();
         svg_string(&packing, &RenderOptions::default()).unwrap();
         let packing = Packing {
-            container: Container::ball([0.0; 3], f64::INFINITY),
+            container: Container::space(
+                [0.0; 3],
+                Centred::Ball {
+                    radius: f64::INFINITY,
+                },
+            ),
             items: Items::Ellipsoids(vec![Item::ellipsoid([0.0; 3], [1e6, 1e-6, 1.0], [0.0; 4])]),
         };
         png_bytes(

@@ -10,6 +10,7 @@ use ellipack::export::{self, Body, Cell, Format, bodies, shape_groups};
 use ellipack::gsd::GSD_FILE;
 use ellipack::lammps::LAMMPS_FILE;
 use ellipack::obj::MESH_FILE;
+use ellipack::packing::Centred;
 use ellipack::packing::{self, Container, ContainerKind, Item, Items, Packing};
 use std::collections::HashMap;
 
@@ -21,18 +22,33 @@ fn every_kind() -> Vec<Packing> {
     let r2 = e2.container().half_extents()[0];
     let r3 = e3.container().half_extents()[0];
     let containers = [
-        Container::circle([0.0, 0.0], r2 * 1.1),
+        Container::plane([0.0, 0.0], Centred::Ball { radius: r2 * 1.1 }),
         e2.container().clone(),
-        Container::rectangle([0.0, 0.0], [r2, r2 * 0.9]),
+        Container::plane(
+            [0.0, 0.0],
+            Centred::Box {
+                half_sides: [r2, r2 * 0.9],
+            },
+        ),
         e3.container().clone(),
-        Container::ellipsoid([0.0; 3], [r3, r3 * 1.1, r3 * 1.2]),
-        Container::cuboid([0.0; 3], [r3, r3, r3]),
+        Container::space(
+            [0.0; 3],
+            Centred::Ellipsoid {
+                semi_axes: [r3, r3 * 1.1, r3 * 1.2],
+            },
+        ),
+        Container::space(
+            [0.0; 3],
+            Centred::Box {
+                half_sides: [r3, r3, r3],
+            },
+        ),
     ];
     let mut out = common::filled(containers, &e2, &e3);
     // Off the origin, with a quaternion that is not of norm 1.
     out.push(
         Packing::new(
-            Container::ball([10.0, -5.0, 2.5], 3.0),
+            Container::space([10.0, -5.0, 2.5], Centred::Ball { radius: 3.0 }),
             Items::Ellipsoids(vec![
                 Item::ellipsoid([11.0, -5.0, 2.5], [1.0, 0.75, 0.5], [2.0, 0.0, 0.0, 2.0]),
                 Item::ellipsoid([8.5, -5.0, 2.5], [0.5, 0.5, 0.5], [1.0, 0.0, 0.0, 0.0]),
@@ -46,7 +62,7 @@ fn every_kind() -> Vec<Packing> {
 #[test]
 fn bodies_are_unit_quaternion_ellipsoids_and_groups_are_distinct_semi_axes() {
     let p = Packing::new(
-        Container::circle([0.0; 2], 10.0),
+        Container::plane([0.0; 2], Centred::Ball { radius: 10.0 }),
         Items::Ellipses(vec![
             Item::ellipse([1.0, 2.0], [2.0, 1.0], std::f64::consts::PI),
             Item::ellipse([-3.0, 2.0], [1.0, 1.0], 0.0),
@@ -115,7 +131,12 @@ fn the_cell_encloses_the_container_and_the_items_centred_on_the_container() {
     }
     // An item sticking out of its container widens the cell.
     let p = Packing::new(
-        Container::cuboid([0.0; 3], [1.0, 1.0, 1.0]),
+        Container::space(
+            [0.0; 3],
+            Centred::Box {
+                half_sides: [1.0, 1.0, 1.0],
+            },
+        ),
         Items::Ellipsoids(vec![Item::ellipsoid(
             [1.0, 0.0, 0.0],
             [0.5, 0.25, 0.25],

@@ -122,7 +122,7 @@ fn a_failure_while_writing_leaves_the_previous_run_whole() {
     let (packing, _) = read_packing_dir(&out).unwrap();
     let (mut container, items) = packing.into_parts();
     if let ellipack::packing::Container::Plane {
-        shape: ellipack::packing::Sized::Ball { radius },
+        shape: ellipack::packing::Centred::Ball { radius },
         ..
     } = &mut container
     {

@@ -4,6 +4,7 @@
 mod common;
 
 use ellipack::Error;
+use ellipack::packing::Centred;
 use ellipack::packing::{self, CertificateCounts, Container, Item, Items, Packing, Summary};
 use std::f64::consts::PI;
 
@@ -26,12 +27,32 @@ fn every_kind() -> Vec<Packing> {
     let e2 = common::ellipses(4, true, 11);
     let e3 = common::ellipsoids(3, true, 12);
     let containers = [
-        Container::circle([0.5, -0.25], 40.0),
-        Container::ellipse([0.0, 0.0], [41.5, 40.0 + 1e-13]),
-        Container::rectangle([1.0 / 3.0, 0.0], [30.0, 31.0]),
-        Container::ball([0.0, 0.0, 0.0], 9.75),
-        Container::ellipsoid([1.0, 2.0, 3.0], [10.0, 11.0, 12.0]),
-        Container::cuboid([0.0, -1e-300, 0.0], [7.0, 7.0, 7.5]),
+        Container::plane([0.5, -0.25], Centred::Ball { radius: 40.0 }),
+        Container::plane(
+            [0.0, 0.0],
+            Centred::Ellipsoid {
+                semi_axes: [41.5, 40.0 + 1e-13],
+            },
+        ),
+        Container::plane(
+            [1.0 / 3.0, 0.0],
+            Centred::Box {
+                half_sides: [30.0, 31.0],
+            },
+        ),
+        Container::space([0.0, 0.0, 0.0], Centred::Ball { radius: 9.75 }),
+        Container::space(
+            [1.0, 2.0, 3.0],
+            Centred::Ellipsoid {
+                semi_axes: [10.0, 11.0, 12.0],
+            },
+        ),
+        Container::space(
+            [0.0, -1e-300, 0.0],
+            Centred::Box {
+                half_sides: [7.0, 7.0, 7.5],
+            },
+        ),
     ];
     common::filled(containers, &e2, &e3)
 }
@@ -107,20 +128,35 @@ fn the_summary_has_the_documented_keys() {
 #[test]
 fn density_is_item_measure_over_container_measure() {
     let items = Items::Ellipses(vec![Item::ellipse([0.0, 0.0], [2.0, 1.0], 0.3); 3]);
-    let circle = Container::circle([0.0, 0.0], 4.0);
+    let circle = Container::plane([0.0, 0.0], Centred::Ball { radius: 4.0 });
     assert!((packing::density(&circle, &items) - 3.0 * 2.0 * PI / (16.0 * PI)).abs() < 1e-15);
-    let rectangle = Container::rectangle([0.0, 0.0], [3.0, 2.0]);
+    let rectangle = Container::plane(
+        [0.0, 0.0],
+        Centred::Box {
+            half_sides: [3.0, 2.0],
+        },
+    );
     assert!((packing::density(&rectangle, &items) - 6.0 * PI / 24.0).abs() < 1e-15);
     let items = Items::Ellipsoids(vec![Item::ellipsoid(
         [0.0; 3],
         [1.0, 0.75, 0.5],
         [1.0, 0.0, 0.0, 0.0],
     )]);
-    let ball = Container::ball([0.0; 3], 2.0);
+    let ball = Container::space([0.0; 3], Centred::Ball { radius: 2.0 });
     assert!((packing::density(&ball, &items) - 0.375 / 8.0).abs() < 1e-15);
-    let ellipsoid = Container::ellipsoid([0.0; 3], [1.0, 2.0, 3.0]);
+    let ellipsoid = Container::space(
+        [0.0; 3],
+        Centred::Ellipsoid {
+            semi_axes: [1.0, 2.0, 3.0],
+        },
+    );
     assert!((packing::density(&ellipsoid, &items) - 0.375 / 6.0).abs() < 1e-15);
-    let cuboid = Container::cuboid([0.0; 3], [1.0, 1.0, 1.0]);
+    let cuboid = Container::space(
+        [0.0; 3],
+        Centred::Box {
+            half_sides: [1.0, 1.0, 1.0],
+        },
+    );
     assert!((packing::density(&cuboid, &items) - 4.0 / 3.0 * PI * 0.375 / 8.0).abs() < 1e-15);
 }
 
@@ -189,7 +225,7 @@ fn xyz_orientation_is_in_ovito_order() {
     // (x, y, z, w), so the last two columns are sin π/4 then cos π/4.
     let (s, c) = (PI / 4.0).sin_cos();
     let p = Packing::new(
-        Container::ball([0.0; 3], 5.0),
+        Container::space([0.0; 3], Centred::Ball { radius: 5.0 }),
         Items::Ellipsoids(vec![Item::ellipsoid(
             [1.0, 2.0, 3.0],
             [1.0, 0.75, 0.5],
@@ -204,7 +240,7 @@ fn xyz_orientation_is_in_ovito_order() {
     );
     // The same rotation as an ellipse angle: θ = π/2.
     let p2 = Packing::new(
-        Container::circle([0.0; 2], 5.0),
+        Container::plane([0.0; 2], Centred::Ball { radius: 5.0 }),
         Items::Ellipses(vec![Item::ellipse([1.0, 2.0], [2.0, 1.0], PI / 2.0)]),
     )
     .unwrap();
@@ -306,10 +342,24 @@ fn malformed_summary_names_file_line_and_column() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("radius"), "{e}");
-    let e = ellipack::summary_json::read_summary("{", "s.json")
-        .unwrap_err()
-        .to_string();
+    let read = |text: &str| {
+        ellipack::summary_json::read_summary(text, "s.json")
+            .unwrap_err()
+            .to_string()
+    };
+    let e = read("{");
     assert!(e.starts_with("s.json: line 1: column "), "{e}");
+    // A key the container does not have, and a cell of the wrong size.
+    let e = read(&good.replace("\"radius\": 40.0", "\"radius\": 40.0, \"colour\": 1"));
+    assert!(e.contains("unknown field `colour`"), "{e}");
+    let cell = r#"{"kind": "periodic", "lengths": [1, 2, 3, 4], "tilts": [0]}"#;
+    let text = format!(
+        r#"{{"container": {cell}, "items": 1, "density": 0.1, "objective": 1,
+        "wall_seconds": 0, "local_minimisations": 0, "certificate": {{"overlapping_pairs": 0,
+        "containment_violations": 0, "min_mu2": null}}}}"#
+    );
+    let e = read(&text);
+    assert!(e.contains("2 or 3 lengths"), "{e}");
 }
 
 #[test]
@@ -328,23 +378,22 @@ fn files_that_disagree_are_an_error() {
     let dir = common::temp_dir("disagree");
     let p2 = &every_kind()[0];
     let p3 = &every_kind()[3];
+    let refused = |dir: &std::path::Path| {
+        ellipack::folder::read_packing_dir(dir)
+            .unwrap_err()
+            .to_string()
+    };
     ellipack::items_csv::write_csv(&dir.join("packing.csv"), p2.items()).unwrap();
     ellipack::summary_json::write_summary(&dir.join("summary.json"), &summary_of(p3)).unwrap();
-    let e = ellipack::folder::read_packing_dir(&dir)
-        .unwrap_err()
-        .to_string();
+    let e = refused(&dir);
     assert!(e.contains("ball"), "{e}");
     let mut s = summary_of(p2);
     s.items += 1;
     ellipack::summary_json::write_summary(&dir.join("summary.json"), &s).unwrap();
-    let e = ellipack::folder::read_packing_dir(&dir)
-        .unwrap_err()
-        .to_string();
+    let e = refused(&dir);
     assert!(e.contains("16 items") && e.contains("17"), "{e}");
     std::fs::remove_file(dir.join("summary.json")).unwrap();
-    let e = ellipack::folder::read_packing_dir(&dir)
-        .unwrap_err()
-        .to_string();
+    let e = refused(&dir);
     assert!(e.contains("summary.json"), "{e}");
 }
 
@@ -371,7 +420,7 @@ fn malformed_xyz_is_an_error_with_the_line() {
 
 #[test]
 fn packings_refuse_impossible_items() {
-    let c = Container::circle([0.0; 2], 1.0);
+    let c = Container::plane([0.0; 2], Centred::Ball { radius: 1.0 });
     let bad = Items::Ellipses(vec![Item::ellipse([0.0, f64::NAN], [1.0, 1.0], 0.0)]);
     assert!(Packing::new(c.clone(), bad).is_err());
     let three_d = Items::Ellipsoids(vec![]);

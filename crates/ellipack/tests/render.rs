@@ -4,6 +4,7 @@
 mod common;
 
 use ellipack::Error;
+use ellipack::packing::Centred;
 use ellipack::packing::{Container, Items, Packing};
 use ellipack::render::{self, RenderOptions};
 
@@ -69,7 +70,12 @@ fn three_dimensional_pictures() {
 #[test]
 fn a_tall_rectangle_stays_within_bounds() {
     let packing = Packing::new(
-        Container::rectangle([0.0, 0.0], [7.0, 70.0]),
+        Container::plane(
+            [0.0, 0.0],
+            Centred::Box {
+                half_sides: [7.0, 70.0],
+            },
+        ),
         common::ellipses(3, false, 5).items().clone(),
     )
     .unwrap();
@@ -78,11 +84,19 @@ fn a_tall_rectangle_stays_within_bounds() {
 
 #[test]
 fn an_empty_packing_draws_its_container() {
-    let packing =
-        Packing::new(Container::circle([1.0, -2.0], 3.0), Items::Ellipses(vec![])).unwrap();
+    let packing = Packing::new(
+        Container::plane([1.0, -2.0], Centred::Ball { radius: 3.0 }),
+        Items::Ellipses(vec![]),
+    )
+    .unwrap();
     check_pictures(&packing, "empty2d", 400);
     let packing = Packing::new(
-        Container::ellipsoid([0.0, 0.0, 0.0], [3.0, 2.0, 1.0]),
+        Container::space(
+            [0.0, 0.0, 0.0],
+            Centred::Ellipsoid {
+                semi_axes: [3.0, 2.0, 1.0],
+            },
+        ),
         Items::Ellipsoids(vec![]),
     )
     .unwrap();

@@ -1,6 +1,7 @@
 //! `ellipack verify` end to end: it names the offending items by their `id`, says by how much
 //! an item sticks out, and checks a hand-made packing with only a container.
 
+use ellipack::packing::Centred;
 use std::path::Path;
 
 mod common;
@@ -228,7 +229,10 @@ fn a_minimal_summary_is_a_container_at_the_origin() {
     use ellipack::summary_json::{read_stated_summary, read_summary};
     let s =
         read_stated_summary(r#"{"container": {"kind": "ball", "radius": 5}}"#, "s.json").unwrap();
-    assert_eq!(s.container, Container::ball([0.0; 3], 5.0));
+    assert_eq!(
+        s.container,
+        Container::space([0.0; 3], Centred::Ball { radius: 5.0 })
+    );
     assert_eq!((s.items, s.certificate), (None, None));
     // A run's summary still needs its statistics.
     assert!(read_summary(r#"{"container": {"kind": "ball", "radius": 5}}"#, "s.json").is_err());

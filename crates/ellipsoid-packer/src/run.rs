@@ -128,7 +128,7 @@ pub struct Packed<const N: usize> {
     pub history: Vec<MultiStartProgress>,
     /// The solver's report of the local minimisation that gave the packing (iterations,
     /// evaluations, why it stopped).
-    pub solver: SolverReport,
+    pub solver: Box<SolverReport>,
 }
 
 /// A container of given size that the run could not fill: its least overlapping
@@ -384,7 +384,7 @@ impl<const N: usize> Packer<N> {
             wall_time: result.wall_time + before,
             interrupted: result.interrupted,
             history,
-            solver: best.report.clone(),
+            solver: Box::new(best.report.clone()),
         }))
     }
 

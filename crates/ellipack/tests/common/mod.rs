@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+use ellipack::packing::Centred;
 use ellipack::packing::{CertificateCounts, Container, Item, Items, Packing, Summary};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -80,7 +81,12 @@ pub fn ellipses(n_side: usize, mixed: bool, seed: u64) -> Packing {
     // Cells reach half·step + 2.1 from the centre along each axis; an ellipse with semi-axes
     // √2 times that holds the bounding square.
     let reach = (half * step + 2.1) * std::f64::consts::SQRT_2;
-    let container = Container::ellipse([0.0, 0.0], [reach * 1.05, reach]);
+    let container = Container::plane(
+        [0.0, 0.0],
+        Centred::Ellipsoid {
+            semi_axes: [reach * 1.05, reach],
+        },
+    );
     Packing::new(container, Items::Ellipses(items)).unwrap()
 }
 
@@ -115,9 +121,19 @@ pub fn ellipsoids(n_side: usize, ball: bool, seed: u64) -> Packing {
     }
     let reach = half * step + 1.03;
     let container = if ball {
-        Container::ball([0.0, 0.0, 0.0], reach * 3f64.sqrt())
+        Container::space(
+            [0.0, 0.0, 0.0],
+            Centred::Ball {
+                radius: reach * 3f64.sqrt(),
+            },
+        )
     } else {
-        Container::cuboid([0.0, 0.0, 0.0], [reach, reach, reach])
+        Container::space(
+            [0.0, 0.0, 0.0],
+            Centred::Box {
+                half_sides: [reach, reach, reach],
+            },
+        )
     };
     Packing::new(container, Items::Ellipsoids(items)).unwrap()
 }
