@@ -7,7 +7,7 @@ use crate::pack::bodies_of;
 use crate::packing::{Items, Packing};
 use serde_json::json;
 use std::path::Path;
-use structure::{BondOrder, Settings, Structure};
+use structure::{Settings, Structure};
 
 pub use crate::folder::{RDF_FILE, STRUCTURE_FILE};
 
@@ -52,28 +52,12 @@ pub fn analyse(packing: &Packing, settings: &Settings) -> Result<Structure, Erro
 /// The text of [`STRUCTURE_FILE`]: every figure of [`Structure`] but g(r), with the settings
 /// that made it.
 pub fn structure_json(s: &Structure) -> String {
-    let bond_order = match &s.bond_order {
-        BondOrder::Steinhardt {
-            cutoff,
-            mean_bonds,
-            q4,
-            q6,
-            q4_local,
-            q6_local,
-        } => json!({
-            "kind": "steinhardt", "cutoff": cutoff, "mean_bonds": mean_bonds,
-            "q4": q4, "q6": q6, "q4_local_mean": q4_local, "q6_local_mean": q6_local,
-        }),
-        BondOrder::Hexatic {
-            cutoff,
-            mean_bonds,
-            psi6,
-            psi6_local,
-        } => json!({
-            "kind": "hexatic", "cutoff": cutoff, "mean_bonds": mean_bonds,
-            "psi6": psi6, "psi6_local_mean": psi6_local,
-        }),
-    };
+    let (kind, figures) = s.bond_order.named_figures();
+    let mut bond_order = serde_json::Map::new();
+    bond_order.insert("kind".to_string(), json!(kind));
+    for (name, value) in figures {
+        bond_order.insert(name.to_string(), json!(value));
+    }
     let nematic: Vec<_> = s
         .nematic
         .iter()

@@ -341,28 +341,15 @@ fn structure_lines(s: &structure::Structure) -> Vec<String> {
         .map(|n| format!("axis {}: S = {:.4}", n.axis + 1, n.order))
         .collect();
     lines.push(format!("nematic order: {}", axes.join(", ")));
-    lines.push(match &s.bond_order {
-        structure::BondOrder::Steinhardt {
-            cutoff,
-            mean_bonds,
-            q4,
-            q6,
-            q4_local,
-            q6_local,
-        } => format!(
-            "Steinhardt (bonds < {cutoff:.4}, {mean_bonds:.2} per item): Q4 = {q4:.4}, Q6 = \
-             {q6:.4}; mean local q4 = {q4_local:.4}, q6 = {q6_local:.4}"
-        ),
-        structure::BondOrder::Hexatic {
-            cutoff,
-            mean_bonds,
-            psi6,
-            psi6_local,
-        } => format!(
-            "hexatic (bonds < {cutoff:.4}, {mean_bonds:.2} per item): |<psi6>| = {psi6:.4}, \
-             mean |psi6| = {psi6_local:.4}"
-        ),
-    });
+    // "hexatic (bonds < 1.7000, 5.93 per item): psi6 = 0.7012, psi6_local_mean = 0.8120"
+    let (kind, figures) = s.bond_order.named_figures();
+    if let [(_, cutoff), (_, mean_bonds), order @ ..] = figures.as_slice() {
+        let order: Vec<String> = order.iter().map(|(n, v)| format!("{n} = {v:.4}")).collect();
+        lines.push(format!(
+            "{kind} (bonds < {cutoff:.4}, {mean_bonds:.2} per item): {}",
+            order.join(", ")
+        ));
+    }
     let c = &s.contacts;
     lines.push(format!(
         "contacts (mu < 1 + {:.1e}): {} pairs, Z = {:.3}; {} rattlers, Z without them = {:.3}",

@@ -196,6 +196,18 @@ pub enum Container {
     },
 }
 
+impl From<([f64; 2], Centred<2>)> for Container {
+    fn from((center, shape): ([f64; 2], Centred<2>)) -> Self {
+        Container::Plane { center, shape }
+    }
+}
+
+impl From<([f64; 3], Centred<3>)> for Container {
+    fn from((center, shape): ([f64; 3], Centred<3>)) -> Self {
+        Container::Space { center, shape }
+    }
+}
+
 /// The packing model's container, centred at the origin: a ball, an axis-aligned ellipsoid or
 /// box with its size, or a periodic cell.
 pub type Centred<const N: usize> = implicit_packing::Container<N>;
@@ -463,32 +475,49 @@ enum ContainerForm {
     Periodic(Cell),
 }
 
-/// A disc or ball in JSON; a missing centre is the origin.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Round<C: Default> {
-    #[serde(default)]
-    center: C,
-    radius: f64,
+/// A struct of the JSON form: a centre (the origin when missing) and one size field, and the
+/// model's container (`variant`) it states.
+macro_rules! json_shape {
+    ($(#[$doc:meta])* $name:ident { $size:ident: $size_type:ty } => $variant:ident) => {
+        $(#[$doc])*
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $name<C: Default> {
+            #[serde(default)]
+            center: C,
+            $size: $size_type,
+        }
+
+        impl<C: Default> $name<C> {
+            fn new(center: C, $size: $size_type) -> Self {
+                $name { center, $size }
+            }
+        }
+
+        impl<const N: usize> $name<[f64; N]>
+        where
+            [f64; N]: Default,
+        {
+            /// The centre and the model's container.
+            fn centred(self) -> ([f64; N], Centred<N>) {
+                (self.center, Centred::$variant { $size: self.$size })
+            }
+        }
+    };
 }
 
-/// An ellipse or ellipsoid in JSON.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Axes<C: Default> {
-    #[serde(default)]
-    center: C,
-    semi_axes: C,
-}
-
-/// A rectangle or cuboid in JSON.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Sides<C: Default> {
-    #[serde(default)]
-    center: C,
-    half_sides: C,
-}
+json_shape!(
+    /// A disc or ball in JSON.
+    Round { radius: f64 } => Ball
+);
+json_shape!(
+    /// An ellipse or ellipsoid in JSON.
+    Axes { semi_axes: C } => Ellipsoid
+);
+json_shape!(
+    /// A rectangle or cuboid in JSON.
+    Sides { half_sides: C } => Box
+);
 
 /// A periodic cell in JSON; a missing origin is the origin.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -503,44 +532,24 @@ struct Cell {
 impl From<Container> for ContainerForm {
     fn from(c: Container) -> Self {
         use ContainerForm as F;
-        let size = c.size();
+        let (center, size) = (c.center(), c.size());
+        let at = |v: &[f64], k: usize| v.get(k).copied().unwrap_or(f64::NAN);
+        let two = |v: &[f64]| [at(v, 0), at(v, 1)];
+        let three = |v: &[f64]| [at(v, 0), at(v, 1), at(v, 2)];
+        let radius = at(&size, 0);
         let n = c.dimension();
-        let first = |k: usize| size.get(k).copied().unwrap_or(f64::NAN);
-        let radius = first(0);
-        match (&c, c.kind().shape()) {
-            (_, ContainerShape::Periodic) => F::Periodic(Cell {
-                origin: c.center().to_vec(),
+        match c.kind() {
+            ContainerKind::Circle => F::Circle(Round::new(two(center), radius)),
+            ContainerKind::Ellipse => F::Ellipse(Axes::new(two(center), two(&size))),
+            ContainerKind::Rectangle => F::Rectangle(Sides::new(two(center), two(&size))),
+            ContainerKind::Ball => F::Ball(Round::new(three(center), radius)),
+            ContainerKind::Ellipsoid => F::Ellipsoid(Axes::new(three(center), three(&size))),
+            ContainerKind::Cuboid => F::Cuboid(Sides::new(three(center), three(&size))),
+            ContainerKind::Parallelogram | ContainerKind::Parallelepiped => F::Periodic(Cell {
+                origin: center.to_vec(),
                 lengths: size[..n].to_vec(),
                 tilts: size[n..].to_vec(),
             }),
-            (&Container::Plane { center, .. }, shape) => {
-                let two = [first(0), first(1)];
-                match shape {
-                    ContainerShape::Ball => F::Circle(Round { center, radius }),
-                    ContainerShape::Ellipsoid => F::Ellipse(Axes {
-                        center,
-                        semi_axes: two,
-                    }),
-                    _ => F::Rectangle(Sides {
-                        center,
-                        half_sides: two,
-                    }),
-                }
-            }
-            (&Container::Space { center, .. }, shape) => {
-                let three = [first(0), first(1), first(2)];
-                match shape {
-                    ContainerShape::Ball => F::Ball(Round { center, radius }),
-                    ContainerShape::Ellipsoid => F::Ellipsoid(Axes {
-                        center,
-                        semi_axes: three,
-                    }),
-                    _ => F::Cuboid(Sides {
-                        center,
-                        half_sides: three,
-                    }),
-                }
-            }
         }
     }
 }
@@ -551,32 +560,12 @@ impl TryFrom<ContainerForm> for Container {
     fn try_from(form: ContainerForm) -> Result<Self, String> {
         use ContainerForm as F;
         Ok(match form {
-            F::Circle(r) => Container::plane(r.center, Centred::Ball { radius: r.radius }),
-            F::Ellipse(e) => Container::plane(
-                e.center,
-                Centred::Ellipsoid {
-                    semi_axes: e.semi_axes,
-                },
-            ),
-            F::Rectangle(b) => Container::plane(
-                b.center,
-                Centred::Box {
-                    half_sides: b.half_sides,
-                },
-            ),
-            F::Ball(r) => Container::space(r.center, Centred::Ball { radius: r.radius }),
-            F::Ellipsoid(e) => Container::space(
-                e.center,
-                Centred::Ellipsoid {
-                    semi_axes: e.semi_axes,
-                },
-            ),
-            F::Cuboid(b) => Container::space(
-                b.center,
-                Centred::Box {
-                    half_sides: b.half_sides,
-                },
-            ),
+            F::Circle(r) => r.centred().into(),
+            F::Ellipse(e) => e.centred().into(),
+            F::Rectangle(b) => b.centred().into(),
+            F::Ball(r) => r.centred().into(),
+            F::Ellipsoid(e) => e.centred().into(),
+            F::Cuboid(b) => b.centred().into(),
             F::Periodic(Cell {
                 mut origin,
                 lengths,

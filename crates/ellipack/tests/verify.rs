@@ -278,10 +278,12 @@ fn small_messages_say_what_is_meant() {
     let dir = packing_folder(
         "verify-small",
         "id,x,y,a,b,theta\n0,0.5,0.5,0.2,0.2,0\n1,2,2,0.2,0.2,0\n",
-        r#"{"container": {"kind": "periodic", "lengths": [4, 4], "tilts": [0]}, "items": 2,
-            "density": 0.0157, "objective": 16, "wall_seconds": 0, "local_minimisations": 0,
-            "certificate": {"overlapping_pairs": 0, "containment_violations": 0,
-            "min_mu2": 12.5}}"#,
+        r#"{
+            "container": {"kind": "periodic", "lengths": [4, 4], "tilts": [0]},
+            "items": 2, "density": 0.0157, "objective": 16,
+            "wall_seconds": 0, "local_minimisations": 0,
+            "certificate": {"overlapping_pairs": 0, "containment_violations": 0, "min_mu2": 12.5}
+        }"#,
     );
     let out = ellipack().arg("verify").arg(&*dir).output().unwrap();
     let said = utf8(out.stdout);

@@ -176,12 +176,20 @@ pub fn random_packing_seen<const N: usize>(
 ) -> Result<RandomPacking, Error> {
     // The whole run inside a pool of the settings' threads: the model's evaluations and the
     // solver's passes over long vectors share it.
+    let heard = Heard { observe, kept };
     #[cfg(feature = "rayon")]
     return implicit_packing::model::on_threads(settings.threads, || {
-        random_packing_here(problem, container, settings, observe, kept)
+        random_packing_here(problem, container, settings, heard)
     })?;
     #[cfg(not(feature = "rayon"))]
-    random_packing_here(problem, container, settings, observe, kept)
+    random_packing_here(problem, container, settings, heard)
+}
+
+/// Who hears of a random packing as it goes: the solver's progress (which may stop it) and the
+/// density of every packing the compression keeps.
+struct Heard<'a> {
+    observe: &'a mut (dyn FnMut(&Progress<'_>) -> bool + Send),
+    kept: &'a mut (dyn FnMut(f64) + Send),
 }
 
 /// [`random_packing_seen`] on the current thread's pool.
@@ -189,9 +197,9 @@ fn random_packing_here<const N: usize>(
     problem: &mut Model<N>,
     container: &[f64],
     settings: &RandomSettings,
-    observe: &mut (dyn FnMut(&Progress<'_>) -> bool + Send),
-    kept: &mut (dyn FnMut(f64) + Send),
+    heard: Heard<'_>,
 ) -> Result<RandomPacking, Error> {
+    let Heard { observe, kept } = heard;
     let began = Instant::now();
     let items = crate::local::item_measure(problem);
     let target_measure = Container::<N>::from_dimensions(problem.container_kind(), container)?

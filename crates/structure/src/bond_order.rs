@@ -48,6 +48,48 @@ pub enum BondOrder {
     },
 }
 
+impl BondOrder {
+    /// Its kind (`steinhardt` or `hexatic`) and its figures by name, as `structure.json` gives
+    /// them: `cutoff`, `mean_bonds`, then `q4`, `q6`, `q4_local_mean`, `q6_local_mean` or
+    /// `psi6`, `psi6_local_mean`.
+    pub fn named_figures(&self) -> (&'static str, Vec<(&'static str, f64)>) {
+        match *self {
+            BondOrder::Steinhardt {
+                cutoff,
+                mean_bonds,
+                q4,
+                q6,
+                q4_local,
+                q6_local,
+            } => (
+                "steinhardt",
+                vec![
+                    ("cutoff", cutoff),
+                    ("mean_bonds", mean_bonds),
+                    ("q4", q4),
+                    ("q6", q6),
+                    ("q4_local_mean", q4_local),
+                    ("q6_local_mean", q6_local),
+                ],
+            ),
+            BondOrder::Hexatic {
+                cutoff,
+                mean_bonds,
+                psi6,
+                psi6_local,
+            } => (
+                "hexatic",
+                vec![
+                    ("cutoff", cutoff),
+                    ("mean_bonds", mean_bonds),
+                    ("psi6", psi6),
+                    ("psi6_local_mean", psi6_local),
+                ],
+            ),
+        }
+    }
+}
+
 /// [`BondOrder`] over the bonds shorter than `cutoff` (at most the bonds' own cutoff).
 pub fn bond_order<const N: usize>(bonds: &Bonds<N>, cutoff: f64) -> BondOrder {
     let short = |d: &[f64; N]| d.iter().map(|v| v * v).sum::<f64>() < cutoff * cutoff;
