@@ -8,6 +8,7 @@ use crate::implicit;
 use crate::output::{self, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::report::Section;
+use crate::sample::Pw85Form as _;
 use crate::sample::{self, Pair3, Rng};
 use crate::scene::{Criterion, LoadedScene, Quantity};
 use std::hint::black_box;
@@ -44,16 +45,17 @@ pub fn approach(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         let unit = Pair3 {
             ci: [0.0; 3],
             li: axes(shape.axes_i.get_ref()),
-            qi: shape.quaternion_i,
+            oi: shape.quaternion_i,
             cj: d,
             lj: axes(shape.axes_j.get_ref()),
-            qj: shape.quaternion_j,
+            oj: shape.quaternion_j,
         };
         // μ is proportional to the distance along a fixed direction: contact at 1/μ(1).
         let contact = 1.0 / mu2_of(&unit)?.sqrt();
         // The distance where f becomes 0, by bisection on the verdict f > 0.
-        let f_at =
-            |t: f64| -> Result<f64, Error> { Ok(implicit::term(&unit.at_distance_factor(t))?.f) };
+        let f_at = |t: f64| -> Result<f64, Error> {
+            Ok(implicit::term(&crate::sample::at_distance_factor(&unit, t))?.f)
+        };
         let (mut lo, mut hi) = (0.5 * contact, 1.5 * contact);
         if with_f {
             for _ in 0..200 {
@@ -81,7 +83,7 @@ pub fn approach(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
         let mut f_series = Vec::new();
         for k in 0..steps {
             let t = contact * (0.6 + 0.8 * k as f64 / (steps - 1).max(1) as f64);
-            let p = unit.at_distance_factor(t);
+            let p = crate::sample::at_distance_factor(&unit, t);
             let mut row = vec![format!("\"{}\"", shape.name), output::full(t)];
             if with_pw85 {
                 let m = mu2_of(&p)? - 1.0;

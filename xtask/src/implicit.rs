@@ -18,16 +18,16 @@ fn refused(context: &str) -> impl FnOnce(implicit_packing::Error) -> Error + '_ 
 /// The two bodies of a pair (i is mapped to the unit ball).
 pub fn bodies(p: &Pair3) -> Result<(Ellipsoid, Ellipsoid), Error> {
     Ok((
-        Body::from_quaternion(p.ci, p.li, p.qi).map_err(refused("ellipsoid i"))?,
-        Body::from_quaternion(p.cj, p.lj, p.qj).map_err(refused("ellipsoid j"))?,
+        Body::from_quaternion(p.ci, p.li, p.oi).map_err(refused("ellipsoid i"))?,
+        Body::from_quaternion(p.cj, p.lj, p.oj).map_err(refused("ellipsoid j"))?,
     ))
 }
 
 /// The two ellipses of a 2D pair.
 pub fn ellipses(p: &Pair2) -> Result<(Ellipse, Ellipse), Error> {
     Ok((
-        Body::ellipse(p.ci, p.li, p.ti).map_err(refused("ellipse i"))?,
-        Body::ellipse(p.cj, p.lj, p.tj).map_err(refused("ellipse j"))?,
+        Body::ellipse(p.ci, p.li, p.oi).map_err(refused("ellipse i"))?,
+        Body::ellipse(p.cj, p.lj, p.oj).map_err(refused("ellipse j"))?,
     ))
 }
 

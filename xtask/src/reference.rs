@@ -58,24 +58,10 @@ pub fn contact_cases() -> Result<Vec<ContactCase>, Error> {
 
 /// `blm_3d.csv`.
 pub fn blm_3d() -> Result<Vec<BlmCase3>, Error> {
-    Ok(cases(reference::blm_3d()?, |row| Pair3 {
-        ci: row.ci,
-        li: row.li,
-        qi: row.qi,
-        cj: row.cj,
-        lj: row.lj,
-        qj: row.qj,
-    }))
+    Ok(cases(reference::blm_3d()?, |row| row.pair))
 }
 
 /// `blm_2d.csv`.
 pub fn blm_2d() -> Result<Vec<BlmCase2>, Error> {
-    Ok(cases(reference::blm_2d()?, |row| Pair2 {
-        ci: row.ci,
-        li: row.li,
-        ti: row.theta_i,
-        cj: row.cj,
-        lj: row.lj,
-        tj: row.theta_j,
-    }))
+    Ok(cases(reference::blm_2d()?, |row| row.pair))
 }

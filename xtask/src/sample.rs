@@ -25,75 +25,56 @@ impl Spread for Rng {
 }
 
 /// One pair of ellipsoids in the packing paper's parametrisation (centre, semi-axes,
-/// quaternion), convertible to the PW85 one (r12, Q1, Q2). `i` is the first ellipsoid (PW85's
-/// 1, the implicit model's unit ball).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pair3 {
-    /// Centre of i.
-    pub ci: [f64; 3],
-    /// Semi-axes of i.
-    pub li: [f64; 3],
-    /// Rotation of i.
-    pub qi: [f64; 4],
-    /// Centre of j.
-    pub cj: [f64; 3],
-    /// Semi-axes of j.
-    pub lj: [f64; 3],
-    /// Rotation of j.
-    pub qj: [f64; 4],
-}
+/// quaternion), convertible to the PW85 one (r12, Q1, Q2) by [`Pw85Form`] (the test kit's).
+pub use testkit::reference::EllipsoidPair as Pair3;
+
+/// One pair of ellipses (centre, semi-axes, angle of the first semi-axis; the test kit's).
+pub use testkit::reference::EllipsePair as Pair2;
 
 /// The PW85 form of a pair (the test kit's).
 pub use testkit::shape::Pair3 as Pw85Pair;
 
-impl Pair3 {
+/// The PW85 form of a pair: r12 and the two quadratic forms.
+pub trait Pw85Form {
     /// r12, Q1, Q2.
-    pub fn pw85(&self) -> Result<Pw85Pair, Error> {
+    type Form;
+    /// The form, or the error of a body PW85 refuses.
+    fn pw85(&self) -> Result<Self::Form, Error>;
+}
+
+impl Pw85Form for Pair3 {
+    type Form = Pw85Pair;
+
+    fn pw85(&self) -> Result<Pw85Pair, Error> {
         Ok(Pw85Pair {
             r12: [0, 1, 2].map(|k| self.cj[k] - self.ci[k]),
-            q1: pw85::shape::from_axes_quaternion(&self.li, &self.qi)
+            q1: pw85::shape::from_axes_quaternion(&self.li, &self.oi)
                 .map_err(error::pw85("the first ellipsoid of a pair"))?,
-            q2: pw85::shape::from_axes_quaternion(&self.lj, &self.qj)
+            q2: pw85::shape::from_axes_quaternion(&self.lj, &self.oj)
                 .map_err(error::pw85("the second ellipsoid of a pair"))?,
         })
     }
-
-    /// The same pair with j moved to `ci + t (cj − ci)`.
-    pub fn at_distance_factor(&self, t: f64) -> Self {
-        let mut p = *self;
-        p.cj = [0, 1, 2].map(|k| self.ci[k] + t * (self.cj[k] - self.ci[k]));
-        p
-    }
 }
 
-/// One pair of ellipses (centre, semi-axes, angle of the first semi-axis).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pair2 {
-    /// Centre of i.
-    pub ci: [f64; 2],
-    /// Semi-axes of i.
-    pub li: [f64; 2],
-    /// Angle of i.
-    pub ti: f64,
-    /// Centre of j.
-    pub cj: [f64; 2],
-    /// Semi-axes of j.
-    pub lj: [f64; 2],
-    /// Angle of j.
-    pub tj: f64,
-}
+impl Pw85Form for Pair2 {
+    type Form = ([f64; 2], Sym2, Sym2);
 
-impl Pair2 {
-    /// r12, Q1, Q2 of the 2D contact function.
-    pub fn pw85(&self) -> Result<([f64; 2], Sym2, Sym2), Error> {
+    fn pw85(&self) -> Result<Self::Form, Error> {
         Ok((
             [self.cj[0] - self.ci[0], self.cj[1] - self.ci[1]],
-            pw85::shape::from_axes_angle_2d(&self.li, self.ti)
+            pw85::shape::from_axes_angle_2d(&self.li, self.oi)
                 .map_err(error::pw85("the first ellipse of a pair"))?,
-            pw85::shape::from_axes_angle_2d(&self.lj, self.tj)
+            pw85::shape::from_axes_angle_2d(&self.lj, self.oj)
                 .map_err(error::pw85("the second ellipse of a pair"))?,
         ))
     }
+}
+
+/// The same pair with j moved to `ci + t (cj − ci)`.
+pub fn at_distance_factor(pair: &Pair3, t: f64) -> Pair3 {
+    let mut p = *pair;
+    p.cj = [0, 1, 2].map(|k| pair.ci[k] + t * (pair.cj[k] - pair.ci[k]));
+    p
 }
 
 /// Random triaxial semi-axes: the largest 1, the others in [1/aspect, 1], log-uniform.
@@ -116,10 +97,10 @@ pub fn stable_pair(rng: &mut Rng) -> Pair3 {
     Pair3 {
         ci: [0.0; 3],
         li,
-        qi,
+        oi: qi,
         cj,
         lj,
-        qj,
+        oj: qj,
     }
 }
 
@@ -136,10 +117,10 @@ pub fn pair_near_contact(rng: &mut Rng, aspect: f64, s_lo: f64, s_hi: f64) -> Re
     let unit = Pair3 {
         ci,
         li,
-        qi,
+        oi: qi,
         cj: [0, 1, 2].map(|k| ci[k] + d[k]),
         lj,
-        qj,
+        oj: qj,
     };
     // μ is proportional to the centre distance along a fixed direction (eq. 11 is quadratic in
     // r12), so one contact function at distance 1 places the pair at any μ.
@@ -149,7 +130,7 @@ pub fn pair_near_contact(rng: &mut Rng, aspect: f64, s_lo: f64, s_hi: f64) -> Re
         .mu2
         .sqrt();
     let s = rng.range(s_lo, s_hi);
-    Ok(unit.at_distance_factor(s / mu))
+    Ok(at_distance_factor(&unit, s / mu))
 }
 
 /// A random pair of ellipses near contact, as [`pair_near_contact`].
@@ -168,10 +149,10 @@ pub fn pair_near_contact_2d(
     let unit = Pair2 {
         ci: [0.0; 2],
         li,
-        ti,
+        oi: ti,
         cj: d,
         lj,
-        tj,
+        oj: tj,
     };
     let (r, q1, q2) = unit.pw85()?;
     let mu = pw85::contact_function(&r, &q1, &q2)

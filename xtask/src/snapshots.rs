@@ -12,6 +12,7 @@
 use crate::Run;
 use crate::error::{self, Error};
 use crate::implicit;
+use crate::sample::Pw85Form as _;
 use crate::sample::{self, Pair3, Rng};
 use crate::scene::{self, LoadedScene, Study};
 use crate::theory;

@@ -17,6 +17,7 @@ use crate::output::{self, Stability};
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use crate::reference::{self, relative_error, scaled_error};
 use crate::report::Section;
+use crate::sample::Pw85Form as _;
 use crate::sample::{self, Rng};
 use crate::scene::{LoadedScene, Method};
 use crate::timing::solve;
@@ -201,7 +202,7 @@ pub fn run(run: &mut Run, s: &LoadedScene) -> Result<Section, Error> {
                 .map_err(error::pw85("a tangency pair"))?
                 .mu2;
             let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-            let pair = unit.at_distance_factor(((1.0 + sign * gap) / mu2).sqrt());
+            let pair = crate::sample::at_distance_factor(&unit, ((1.0 + sign * gap) / mu2).sqrt());
             let Some((p, r)) = self_referenced(&pair, "a tangency pair", &mut excluded_gap)? else {
                 continue;
             };

@@ -11,6 +11,7 @@
 use crate::error::{self, Error};
 use crate::implicit;
 use crate::reference::{self, relative_error, scaled_error};
+use crate::sample::Pw85Form as _;
 use crate::sample::{self, Pair3, Rng, Spread};
 use pw85::poly::{
     a_coefficients, b_coefficients, c_coefficients, eq13_forms, f_direct, pencil, polyval,
@@ -269,8 +270,8 @@ fn invariance_checks(n: usize, seed: u64) -> Result<Vec<Check>, Error> {
         let rotated = Pair3 {
             ci: rotate(&rot, &pair.ci),
             cj: rotate(&rot, &pair.cj),
-            qi: quat_mul(&rot, &pair.qi),
-            qj: quat_mul(&rot, &pair.qj),
+            oi: quat_mul(&rot, &pair.oi),
+            oj: quat_mul(&rot, &pair.oj),
             ..pair
         };
         rotation.add(relative_error(contact(&rotated.pw85()?)?.mu2, base), || {

@@ -8,14 +8,17 @@ use testkit::reference::{self, Blm2Case, Blm3Case, scaled_error};
 
 fn bodies_3d(r: &Blm3Case) -> (Ellipsoid, Ellipsoid) {
     let body = |c, l, q, which| named(Body::from_quaternion(c, l, q), &r.id, r.line, which);
-    (body(r.ci, r.li, r.qi, "i"), body(r.cj, r.lj, r.qj, "j"))
+    (
+        body(r.pair.ci, r.pair.li, r.pair.oi, "i"),
+        body(r.pair.cj, r.pair.lj, r.pair.oj, "j"),
+    )
 }
 
 fn bodies_2d(r: &Blm2Case) -> (Ellipse, Ellipse) {
     let body = |c, l, t, which| named(Body::ellipse(c, l, t), &r.id, r.line, which);
     (
-        body(r.ci, r.li, r.theta_i, "i"),
-        body(r.cj, r.lj, r.theta_j, "j"),
+        body(r.pair.ci, r.pair.li, r.pair.oi, "i"),
+        body(r.pair.cj, r.pair.lj, r.pair.oj, "j"),
     )
 }
 

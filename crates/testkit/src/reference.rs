@@ -114,30 +114,44 @@ pub fn scaled_error(value: f64, reference: f64) -> f64 {
     }
 }
 
-/// One row of `blm_3d.csv`: a pair of ellipsoids (centre, semi-axes, quaternion) and the
-/// implicit-variable measure with body i mapped to the unit ball.
+/// Two bodies in the packing paper's parametrisation: centres, semi-axes (along the columns of
+/// the rotation) and orientations; `i` is the first (PW85's 1, the implicit model's unit ball).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyPair<const N: usize, O> {
+    /// Centre of i.
+    pub ci: [f64; N],
+    /// Semi-axes of i.
+    pub li: [f64; N],
+    /// Orientation of i.
+    pub oi: O,
+    /// Centre of j.
+    pub cj: [f64; N],
+    /// Semi-axes of j.
+    pub lj: [f64; N],
+    /// Orientation of j.
+    pub oj: O,
+}
+
+/// Two ellipsoids, oriented by unit quaternions `(w, x, y, z)`.
+pub type EllipsoidPair = BodyPair<3, [f64; 4]>;
+
+/// Two ellipses, oriented by the angles θ of their first semi-axes.
+pub type EllipsePair = BodyPair<2, f64>;
+
+/// One row of `blm_3d.csv` or `blm_2d.csv`: a pair of bodies and the implicit-variable measure
+/// with body i mapped to the unit ball.
 #[derive(Debug, Clone)]
-pub struct Blm3Case {
+pub struct BlmCase<const N: usize, O> {
     /// 1-based line in the file.
     pub line: usize,
     /// `case_id`.
     pub id: String,
     /// `category`.
     pub category: String,
-    /// `cix, ciy, ciz`.
-    pub ci: [f64; 3],
-    /// `ai, bi, ci_ax`: semi-axes of i.
-    pub li: [f64; 3],
-    /// `qwi, qxi, qyi, qzi`.
-    pub qi: [f64; 4],
-    /// `cjx, cjy, cjz`.
-    pub cj: [f64; 3],
-    /// `aj, bj, cj_ax`.
-    pub lj: [f64; 3],
-    /// `qwj, qxj, qyj, qzj`.
-    pub qj: [f64; 4],
-    /// `X_1, X_2, X_3`, or `None` where X is not unique (blank cells).
-    pub x: Option<[f64; 3]>,
+    /// The pair: `cix…`, `ai…`, `qwi…` or `theta_i`, then the same of j.
+    pub pair: BodyPair<N, O>,
+    /// `X_1 … X_N`, or `None` where X is not unique (blank cells).
+    pub x: Option<[f64; N]>,
     /// `U`.
     pub u: f64,
     /// `d2`.
@@ -150,40 +164,11 @@ pub struct Blm3Case {
     pub mu2: f64,
 }
 
-/// One row of `blm_2d.csv`: a pair of ellipses (centre, semi-axes, angle) and the measure.
-#[derive(Debug, Clone)]
-pub struct Blm2Case {
-    /// 1-based line in the file.
-    pub line: usize,
-    /// `case_id`.
-    pub id: String,
-    /// `category`.
-    pub category: String,
-    /// `cix, ciy`.
-    pub ci: [f64; 2],
-    /// `ai, bi`.
-    pub li: [f64; 2],
-    /// `theta_i`.
-    pub theta_i: f64,
-    /// `cjx, cjy`.
-    pub cj: [f64; 2],
-    /// `aj, bj`.
-    pub lj: [f64; 2],
-    /// `theta_j`.
-    pub theta_j: f64,
-    /// `X_1, X_2`, or `None` where X is not unique.
-    pub x: Option<[f64; 2]>,
-    /// `U`.
-    pub u: f64,
-    /// `d2`.
-    pub d2: f64,
-    /// `eps`.
-    pub eps: f64,
-    /// `f`.
-    pub f: f64,
-    /// `mu2_pw85`.
-    pub mu2: f64,
-}
+/// One row of `blm_3d.csv`.
+pub type Blm3Case = BlmCase<3, [f64; 4]>;
+
+/// One row of `blm_2d.csv`.
+pub type Blm2Case = BlmCase<2, f64>;
 
 fn rows<T>(name: &str, each: impl Fn(&Row<'_>) -> Result<T, Error>) -> Result<Vec<T>, Error> {
     let table = Table::read(path(name))?;
@@ -221,46 +206,50 @@ pub fn contact_cases() -> Result<Vec<ContactCase>, Error> {
 /// The rows of `blm_3d.csv`.
 pub fn blm_3d() -> Result<Vec<Blm3Case>, Error> {
     rows("blm_3d.csv", |r| {
-        Ok(Blm3Case {
-            line: r.line(),
-            id: r.text("case_id")?.to_string(),
-            category: r.text("category")?.to_string(),
+        let pair = EllipsoidPair {
             ci: r.nums(["cix", "ciy", "ciz"])?,
             li: r.nums(["ai", "bi", "ci_ax"])?,
-            qi: r.nums(["qwi", "qxi", "qyi", "qzi"])?,
+            oi: r.nums(["qwi", "qxi", "qyi", "qzi"])?,
             cj: r.nums(["cjx", "cjy", "cjz"])?,
             lj: r.nums(["aj", "bj", "cj_ax"])?,
-            qj: r.nums(["qwj", "qxj", "qyj", "qzj"])?,
-            x: all_or_none(r, ["X_1", "X_2", "X_3"])?,
-            u: r.num("U")?,
-            d2: r.num("d2")?,
-            eps: r.num("eps")?,
-            f: r.num("f")?,
-            mu2: r.num("mu2_pw85")?,
-        })
+            oj: r.nums(["qwj", "qxj", "qyj", "qzj"])?,
+        };
+        blm_case(r, pair, ["X_1", "X_2", "X_3"])
     })
 }
 
 /// The rows of `blm_2d.csv`.
 pub fn blm_2d() -> Result<Vec<Blm2Case>, Error> {
     rows("blm_2d.csv", |r| {
-        Ok(Blm2Case {
-            line: r.line(),
-            id: r.text("case_id")?.to_string(),
-            category: r.text("category")?.to_string(),
+        let pair = EllipsePair {
             ci: r.nums(["cix", "ciy"])?,
             li: r.nums(["ai", "bi"])?,
-            theta_i: r.num("theta_i")?,
+            oi: r.num("theta_i")?,
             cj: r.nums(["cjx", "cjy"])?,
             lj: r.nums(["aj", "bj"])?,
-            theta_j: r.num("theta_j")?,
-            x: all_or_none(r, ["X_1", "X_2"])?,
-            u: r.num("U")?,
-            d2: r.num("d2")?,
-            eps: r.num("eps")?,
-            f: r.num("f")?,
-            mu2: r.num("mu2_pw85")?,
-        })
+            oj: r.num("theta_j")?,
+        };
+        blm_case(r, pair, ["X_1", "X_2"])
+    })
+}
+
+/// A row of a `blm_*.csv` file with its pair read.
+fn blm_case<const N: usize, O>(
+    r: &Row<'_>,
+    pair: BodyPair<N, O>,
+    x: [&str; N],
+) -> Result<BlmCase<N, O>, Error> {
+    Ok(BlmCase {
+        line: r.line(),
+        id: r.text("case_id")?.to_string(),
+        category: r.text("category")?.to_string(),
+        pair,
+        x: all_or_none(r, x)?,
+        u: r.num("U")?,
+        d2: r.num("d2")?,
+        eps: r.num("eps")?,
+        f: r.num("f")?,
+        mu2: r.num("mu2_pw85")?,
     })
 }
 
