@@ -109,10 +109,9 @@ impl<'de> de::Deserializer<'de> for At<'_> {
     fn deserialize_struct<V: Visitor<'de>>(
         self,
         name: &'static str,
-        fields: &'static [&'static str],
+        _fields: &'static [&'static str],
         visitor: V,
     ) -> Result<V::Value, TableError> {
-        let _ = fields;
         if serde_spanned::de::is_spanned(name) {
             return visitor.visit_map(serde_spanned::de::SpannedDeserializer::new(self, 0..0));
         }
