@@ -258,12 +258,6 @@ impl Container {
         Container::unchecked(kind, &center, &shape.dimensions())
     }
 
-    /// The model's container of dimension `N`, centred at the origin; `None` for the other
-    /// dimension.
-    pub fn shape<const N: usize>(&self) -> Option<Centred<N>> {
-        (self.dimension() == N).then(|| sized_of(self.kind().shape(), &self.size()))
-    }
-
     /// The container of a kind from its centre and its size (`[r]`, the semi-axes or the half
     /// sides: the container variables of the solver, in that order).
     ///
@@ -602,13 +596,6 @@ impl Items {
     /// The items of a dimension known only as a parameter: [`Items::Ellipses`] for `N = 2`,
     /// else [`Items::Ellipsoids`].
     pub fn of<const N: usize>(items: &[Item<N>]) -> Items {
-        fn resized<const N: usize, const M: usize>(i: &Item<N>) -> Item<M> {
-            Item {
-                centre: std::array::from_fn(|k| i.centre[k]),
-                semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
-                orientation: i.orientation,
-            }
-        }
         if N == 2 {
             Items::Ellipses(items.iter().map(resized).collect())
         } else {
@@ -618,20 +605,12 @@ impl Items {
 
     /// The items as `Item<N>`, `None` when they have the other dimension.
     pub fn in_dimension<const N: usize>(&self) -> Option<Vec<Item<N>>> {
-        fn resized<const M: usize, const N: usize>(v: &[Item<M>]) -> Option<Vec<Item<N>>> {
-            (M == N).then(|| {
-                v.iter()
-                    .map(|i| Item {
-                        centre: std::array::from_fn(|k| i.centre[k]),
-                        semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
-                        orientation: i.orientation,
-                    })
-                    .collect()
-            })
+        fn all<const M: usize, const N: usize>(v: &[Item<M>]) -> Option<Vec<Item<N>>> {
+            (M == N).then(|| v.iter().map(resized).collect())
         }
         match self {
-            Items::Ellipses(v) => resized(v),
-            Items::Ellipsoids(v) => resized(v),
+            Items::Ellipses(v) => all(v),
+            Items::Ellipsoids(v) => all(v),
         }
     }
 
@@ -673,6 +652,16 @@ impl Items {
             (Items::Ellipsoids(_), false) => "ellipsoids",
             (Items::Ellipsoids(_), true) => "ellipsoid",
         }
+    }
+}
+
+/// The item of dimension `N` as one of dimension `M` (the same item when `M = N`, which is
+/// how the callers use it: the dimension is known only as a parameter).
+fn resized<const N: usize, const M: usize>(i: &Item<N>) -> Item<M> {
+    Item {
+        centre: std::array::from_fn(|k| i.centre[k]),
+        semi_axes: std::array::from_fn(|k| i.semi_axes[k]),
+        orientation: i.orientation,
     }
 }
 
