@@ -511,14 +511,14 @@ fn derivative_check(n: usize, seed: u64) -> Result<Check, Error> {
                 (
                     eval(&implicit::turned(&i, e)?, &j),
                     eval(&implicit::turned(&i, neg)?, &j),
-                    d.grad_d2.torque_i[axis],
-                    d.grad_u.torque_i[axis],
+                    d.grad_d2.angular_i[axis],
+                    d.grad_u.angular_i[axis],
                 ),
                 (
                     eval(&i, &implicit::turned(&j, e)?),
                     eval(&i, &implicit::turned(&j, neg)?),
-                    d.grad_d2.torque_j[axis],
-                    d.grad_u.torque_j[axis],
+                    d.grad_d2.angular_j[axis],
+                    d.grad_u.angular_j[axis],
                 ),
             ];
             for (p, m, gd, gu) in probes {

@@ -80,53 +80,38 @@ pub struct Options {
 }
 
 /// `with_*` methods setting one field each and returning the settings, for chained
-/// construction of `#[non_exhaustive]` settings (this crate's and the packer's).
+/// construction of `#[non_exhaustive]` settings (this crate's and the packer's); each is
+/// documented as setting its field, whose doc comment says what it means.
 #[doc(hidden)]
 #[macro_export]
 macro_rules! with_setters {
-    ($ty:ty: $($(#[$doc:meta])* $name:ident => $field:ident: $t:ty),* $(,)?) => {
-        impl $ty { $($(#[$doc])* #[must_use] pub fn $name(mut self, value: $t) -> Self { self.$field = value; self })* }
+    ($ty:ident: $($name:ident => $field:ident: $t:ty),* $(,)?) => {
+        impl $ty { $(
+            #[doc = concat!("Sets [`", stringify!($ty), "::", stringify!($field), "`].")]
+            #[must_use] pub fn $name(mut self, value: $t) -> Self { self.$field = value; self }
+        )* }
     };
 }
 
 with_setters!(Options:
-    /// Sets [`Options::feasibility_tolerance`].
     with_feasibility_tolerance => feasibility_tolerance: f64,
-    /// Sets [`Options::optimality_tolerance`].
     with_optimality_tolerance => optimality_tolerance: f64,
-    /// Sets [`Options::complementarity_tolerance`].
     with_complementarity_tolerance => complementarity_tolerance: f64,
-    /// Sets [`Options::max_outer_iterations`].
     with_max_outer_iterations => max_outer_iterations: usize,
-    /// Sets [`Options::max_inner_iterations`].
     with_max_inner_iterations => max_inner_iterations: usize,
-    /// Sets [`Options::max_evaluations`].
     with_max_evaluations => max_evaluations: usize,
-    /// Sets [`Options::inner_solver`].
     with_inner_solver => inner_solver: InnerSolver,
-    /// Sets [`Options::lbfgs_memory`].
     with_lbfgs_memory => lbfgs_memory: usize,
-    /// Sets [`Options::spg_memory`].
     with_spg_memory => spg_memory: usize,
-    /// Sets [`Options::cg_iterations`].
     with_cg_iterations => cg_iterations: usize,
-    /// Sets [`Options::cg_preconditioner_memory`].
     with_cg_preconditioner_memory => cg_preconditioner_memory: usize,
-    /// Sets [`Options::spectral_step_bounds`].
     with_spectral_step_bounds => spectral_step_bounds: (f64, f64),
-    /// Sets [`Options::initial_penalty`].
     with_initial_penalty => initial_penalty: Option<f64>,
-    /// Sets [`Options::penalty_increase`].
     with_penalty_increase => penalty_increase: f64,
-    /// Sets [`Options::required_decrease`].
     with_required_decrease => required_decrease: f64,
-    /// Sets [`Options::max_penalty`].
     with_max_penalty => max_penalty: f64,
-    /// Sets [`Options::equality_multiplier_bounds`].
     with_equality_multiplier_bounds => equality_multiplier_bounds: (f64, f64),
-    /// Sets [`Options::max_inequality_multiplier`].
     with_max_inequality_multiplier => max_inequality_multiplier: f64,
-    /// Sets [`Options::scaling`].
     with_scaling => scaling: bool,
 );
 

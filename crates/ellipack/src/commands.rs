@@ -288,11 +288,25 @@ const PICTURE_GRACE: Duration = Duration::from_secs(2);
 const PACK_FORMATS: [Format; 3] = [Format::Lammps, Format::Gsd, Format::Obj];
 
 /// The options of `ellipack analyse`.
+#[derive(clap::Args)]
 pub struct AnalyseArgs {
+    /// The folder with packing.csv and summary.json.
     pub folder: PathBuf,
+    /// Relative gap of a contact: two items touch when mu < (1 + gap)·s, s the repair
+    /// dilation summary.json states (1 if none): the run dilated every pair it left
+    /// touching to mu ≈ s.
+    #[arg(long, default_value_t = structure::DEFAULT_CONTACT_GAP)]
     pub gap: f64,
+    /// Bond cutoff of Q4, Q6 and psi6, a distance of centres (default: 1.4 mean equivalent
+    /// diameters).
+    #[arg(long)]
     pub bond_cutoff: Option<f64>,
+    /// Largest r of g(r) (default: 5 mean equivalent diameters, at most half the smallest
+    /// width of a periodic cell).
+    #[arg(long)]
     pub rdf_range: Option<f64>,
+    /// Bins of g(r).
+    #[arg(long, default_value_t = structure::DEFAULT_RDF_BINS)]
     pub rdf_bins: usize,
 }
 
@@ -383,12 +397,25 @@ pub fn convert(
 }
 
 /// The arguments of `ellipack verify`.
+#[derive(clap::Args)]
 pub struct VerifyArgs {
+    /// A folder with packing.csv and summary.json, or the path of packing.csv.
     pub packing: PathBuf,
+    /// summary.json, when the first argument is packing.csv (default: the one beside it).
+    #[arg(conflicts_with = "container")]
     pub summary: Option<PathBuf>,
+    /// The container instead of a summary: circle, ellipse, rectangle (2D), ball,
+    /// ellipsoid, cuboid (3D), periodic (a cell of the packing's dimension).
+    #[arg(long, requires = "size", value_parser = crate::parse_container_kind)]
     pub container: Option<ContainerKind>,
-    pub size: Option<Vec<f64>>,
-    pub center: Option<Vec<f64>>,
+    /// The container's size: the radius, or the semi-axes or half sides separated by commas
+    /// (`--size 1,2,3`); a periodic cell's lengths, then its tilts if any (xy in 2D; xy,
+    /// xz, yz in 3D).
+    #[arg(long, requires = "container", allow_hyphen_values = true, value_parser = crate::numbers)]
+    pub size: Option<crate::Numbers>,
+    /// The container's centre, coordinates separated by commas (default: the origin).
+    #[arg(long, requires = "container", allow_hyphen_values = true, value_parser = crate::numbers)]
+    pub center: Option<crate::Numbers>,
 }
 
 /// How many offenders of each kind are printed (all are counted).

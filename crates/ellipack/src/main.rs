@@ -79,35 +79,7 @@ enum Command {
     /// hold them (first 20 of each; all are counted). A hand-made packing needs only
     /// packing.csv and the container: a summary.json as short as
     /// `{"container": {"kind": "ball", "radius": 5}}`, or --container and --size.
-    Verify {
-        /// A folder with packing.csv and summary.json, or the path of packing.csv.
-        packing: PathBuf,
-        /// summary.json, when the first argument is packing.csv (default: the one beside it).
-        #[arg(conflicts_with = "container")]
-        summary: Option<PathBuf>,
-        /// The container instead of a summary: circle, ellipse, rectangle (2D), ball,
-        /// ellipsoid, cuboid (3D), periodic (a cell of the packing's dimension).
-        #[arg(long, requires = "size", value_parser = parse_container_kind)]
-        container: Option<ContainerKind>,
-        /// The container's size: the radius, or the semi-axes or half sides separated by commas
-        /// (`--size 1,2,3`); a periodic cell's lengths, then its tilts if any (xy in 2D; xy,
-        /// xz, yz in 3D).
-        #[arg(
-            long,
-            requires = "container",
-            value_delimiter = ',',
-            allow_hyphen_values = true
-        )]
-        size: Option<Vec<f64>>,
-        /// The container's centre, coordinates separated by commas (default: the origin).
-        #[arg(
-            long,
-            requires = "container",
-            value_delimiter = ',',
-            allow_hyphen_values = true
-        )]
-        center: Option<Vec<f64>>,
-    },
+    Verify(commands::VerifyArgs),
     /// Write the files for other programs for a packing folder that `ellipack pack` wrote
     /// (read from its packing.csv and summary.json): packing.data (LAMMPS, atom_style
     /// ellipsoid), packing.gsd (HOOMD schema), packing.xyz (extended XYZ for ASE and OVITO) and
@@ -143,26 +115,7 @@ enum Command {
     ///
     /// Exit status: 0 the files were written; 1 the folder could not be read or the settings
     /// were refused.
-    Analyse {
-        /// The folder with packing.csv and summary.json.
-        folder: PathBuf,
-        /// Relative gap of a contact: two items touch when mu < (1 + gap)·s, s the repair
-        /// dilation summary.json states (1 if none): the run dilated every pair it left
-        /// touching to mu ≈ s.
-        #[arg(long, default_value_t = structure::DEFAULT_CONTACT_GAP)]
-        gap: f64,
-        /// Bond cutoff of Q4, Q6 and psi6, a distance of centres (default: 1.4 mean equivalent
-        /// diameters).
-        #[arg(long)]
-        bond_cutoff: Option<f64>,
-        /// Largest r of g(r) (default: 5 mean equivalent diameters, at most half the smallest
-        /// width of a periodic cell).
-        #[arg(long)]
-        rdf_range: Option<f64>,
-        /// Bins of g(r).
-        #[arg(long, default_value_t = structure::DEFAULT_RDF_BINS)]
-        rdf_bins: usize,
-    },
+    Analyse(commands::AnalyseArgs),
     /// List the paper's instances (Tables 6.1–6.4) with the paper's density.
     Instances,
     /// Evaluate the Perram–Wertheim contact function μ² of many pairs of ellipsoids or
@@ -236,6 +189,20 @@ fn parse_shard(text: &str) -> Result<ellipack::pack::Shard, String> {
     ellipack::pack::Shard::new(k, n).map_err(|e| e.to_string())
 }
 
+/// Numbers separated by commas, as one value (a name other than `Vec` keeps clap from reading
+/// the option as a list of values).
+type Numbers = Vec<f64>;
+
+fn numbers(text: &str) -> Result<Numbers, String> {
+    text.split(',')
+        .map(|part| {
+            part.trim()
+                .parse::<f64>()
+                .map_err(|e| format!("`{part}` in `{text}` is not a number: {e}"))
+        })
+        .collect()
+}
+
 fn parse_format(name: &str) -> Result<Format, String> {
     Format::from_name(name).map_err(|e| e.to_string())
 }
@@ -260,38 +227,14 @@ fn run(cli: Cli) -> Result<ExitCode, Box<dyn std::error::Error>> {
     Ok(match cli.command {
         Command::Pack(args) => commands::pack(args)?,
         Command::Merge { folders, out } => commands::merge(&folders, &out)?,
-        Command::Verify {
-            packing,
-            summary,
-            container,
-            size,
-            center,
-        } => commands::verify(commands::VerifyArgs {
-            packing,
-            summary,
-            container,
-            size,
-            center,
-        })?,
+        Command::Verify(args) => commands::verify(args)?,
         Command::Convert {
             folder,
             formats,
             unfinished,
             pictures,
         } => commands::convert(&folder, &formats, unfinished, pictures)?,
-        Command::Analyse {
-            folder,
-            gap,
-            bond_cutoff,
-            rdf_range,
-            rdf_bins,
-        } => commands::analyse(&commands::AnalyseArgs {
-            folder,
-            gap,
-            bond_cutoff,
-            rdf_range,
-            rdf_bins,
-        })?,
+        Command::Analyse(args) => commands::analyse(&args)?,
         Command::Instances => {
             crate::say!("{}", ellipack::instances::listing().trim_end());
             ExitCode::SUCCESS

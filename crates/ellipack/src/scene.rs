@@ -558,43 +558,48 @@ pub struct Scene {
 struct RawScene {
     name: Option<String>,
     dimension: Spanned<i64>,
-    seed: Option<Spanned<RawSeed>>,
+    seed: Option<Spanned<RawScalar>>,
     container: RawContainer,
     shapes: Option<Spanned<Vec<Spanned<RawShapes>>>>,
     solver: Option<RawSolver>,
     output: Option<RawOutput>,
 }
 
-/// A seed as written: an integer of any size (TOML's are 64-bit signed, the parser passes
-/// larger ones on) or a string of digits, so that every u64 of `--seed` fits in a scene.
-enum RawSeed {
+/// A number or a string as written, for the keys that take either (`seed`, `packing_fraction`):
+/// integers of any size (TOML's are 64-bit signed, the parser passes larger ones on), so that
+/// every u64 of `--seed` fits in a scene, written as a string beyond TOML's range.
+enum RawScalar {
     Integer(i128),
+    Real(f64),
     Text(String),
 }
 
-impl<'de> Deserialize<'de> for RawSeed {
+impl<'de> Deserialize<'de> for RawScalar {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         struct Visitor;
         impl serde::de::Visitor<'_> for Visitor {
-            type Value = RawSeed;
+            type Value = RawScalar;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a whole number from 0 to 18446744073709551615, or it as a string")
+                f.write_str("a number or a string")
             }
-            fn visit_i64<E>(self, v: i64) -> Result<RawSeed, E> {
-                Ok(RawSeed::Integer(v.into()))
+            fn visit_i64<E>(self, v: i64) -> Result<RawScalar, E> {
+                Ok(RawScalar::Integer(v.into()))
             }
-            fn visit_u64<E>(self, v: u64) -> Result<RawSeed, E> {
-                Ok(RawSeed::Integer(v.into()))
+            fn visit_u64<E>(self, v: u64) -> Result<RawScalar, E> {
+                Ok(RawScalar::Integer(v.into()))
             }
-            fn visit_i128<E>(self, v: i128) -> Result<RawSeed, E> {
-                Ok(RawSeed::Integer(v))
+            fn visit_i128<E>(self, v: i128) -> Result<RawScalar, E> {
+                Ok(RawScalar::Integer(v))
             }
-            fn visit_u128<E>(self, v: u128) -> Result<RawSeed, E> {
+            fn visit_u128<E>(self, v: u128) -> Result<RawScalar, E> {
                 // Anything beyond i128 is beyond u64 too: the range check reports it.
-                Ok(RawSeed::Integer(i128::try_from(v).unwrap_or(i128::MAX)))
+                Ok(RawScalar::Integer(i128::try_from(v).unwrap_or(i128::MAX)))
             }
-            fn visit_str<E>(self, v: &str) -> Result<RawSeed, E> {
-                Ok(RawSeed::Text(v.to_string()))
+            fn visit_f64<E>(self, v: f64) -> Result<RawScalar, E> {
+                Ok(RawScalar::Real(v))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<RawScalar, E> {
+                Ok(RawScalar::Text(v.to_string()))
             }
         }
         deserializer.deserialize_any(Visitor)
@@ -610,7 +615,7 @@ struct RawContainer {
     semi_axes: Option<Spanned<Vec<f64>>>,
     half_sides: Option<Spanned<Vec<f64>>>,
     lengths: Option<Spanned<Vec<f64>>>,
-    packing_fraction: Option<Spanned<RawFraction>>,
+    packing_fraction: Option<Spanned<RawScalar>>,
 }
 
 impl RawContainer {
@@ -629,37 +634,6 @@ impl RawContainer {
         .into_iter()
         .filter_map(|(key, span)| Some((key, span?)))
         .collect()
-    }
-}
-
-/// A packing fraction as written: a number, or a word (`"jammed"`).
-enum RawFraction {
-    Number(f64),
-    Word(String),
-}
-
-impl<'de> Deserialize<'de> for RawFraction {
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = RawFraction;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a number in (0, 1) or \"jammed\"")
-            }
-            fn visit_f64<E>(self, v: f64) -> Result<RawFraction, E> {
-                Ok(RawFraction::Number(v))
-            }
-            fn visit_i64<E>(self, v: i64) -> Result<RawFraction, E> {
-                Ok(RawFraction::Number(v as f64))
-            }
-            fn visit_u64<E>(self, v: u64) -> Result<RawFraction, E> {
-                Ok(RawFraction::Number(v as f64))
-            }
-            fn visit_str<E>(self, v: &str) -> Result<RawFraction, E> {
-                Ok(RawFraction::Word(v.to_string()))
-            }
-        }
-        deserializer.deserialize_any(Visitor)
     }
 }
 
@@ -1353,8 +1327,9 @@ impl Validator<'_> {
             None => 0,
             Some(s) => {
                 let (value, written) = match s.get_ref() {
-                    RawSeed::Integer(n) => (u64::try_from(*n).ok(), n.to_string()),
-                    RawSeed::Text(t) => (t.trim().parse::<u64>().ok(), format!("{t:?}")),
+                    RawScalar::Integer(n) => (u64::try_from(*n).ok(), n.to_string()),
+                    RawScalar::Real(f) => (None, f.to_string()),
+                    RawScalar::Text(t) => (t.trim().parse::<u64>().ok(), format!("{t:?}")),
                 };
                 value.ok_or_else(|| {
                     self.error(
@@ -1553,11 +1528,12 @@ impl Validator<'_> {
             "lengths" => ContainerSize::Lengths(given(&raw.lengths)?),
             _ => {
                 let f = match raw.packing_fraction.as_ref().map(Spanned::get_ref) {
-                    Some(RawFraction::Number(f)) => *f,
-                    Some(RawFraction::Word(w)) if w == "jammed" => {
+                    Some(RawScalar::Real(f)) => *f,
+                    Some(RawScalar::Integer(n)) => *n as f64,
+                    Some(RawScalar::Text(w)) if w == "jammed" => {
                         return Ok(Some(ContainerSize::Jammed));
                     }
-                    Some(RawFraction::Word(w)) => {
+                    Some(RawScalar::Text(w)) => {
                         return Err(self.error(
                             span,
                             &full_key,

@@ -45,6 +45,15 @@ impl de::Error for TableError {
     }
 }
 
+/// The names serde passes a deserializer: of a struct or enum, and of its fields or variants.
+type Name = &'static str;
+type Names = &'static [&'static str];
+/// What a deserializer method returns.
+type Out<'de, V> = Result<<V as Visitor<'de>>::Value, TableError>;
+/// What a seed gives: the next element or key of a sequence or map (`Next`), a map's value.
+type Next<'de, T> = Result<Option<<T as DeserializeSeed<'de>>::Value>, TableError>;
+type Seeded<'de, T> = Result<<T as DeserializeSeed<'de>>::Value, TableError>;
+
 /// The value at a dotted key of the table.
 pub(crate) struct At<'a> {
     value: &'a Value,
@@ -81,7 +90,7 @@ impl<'de> IntoDeserializer<'de, TableError> for At<'_> {
 impl<'de> de::Deserializer<'de> for At<'_> {
     type Error = TableError;
 
-    fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TableError> {
+    fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Out<'de, V> {
         let key = self.key.clone();
         let value = match self.value {
             Value::String(s) => visitor.visit_str(s),
@@ -102,28 +111,18 @@ impl<'de> de::Deserializer<'de> for At<'_> {
         value.map_err(|e| e.at(&key))
     }
 
-    fn deserialize_option<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TableError> {
+    fn deserialize_option<V: Visitor<'de>>(self, visitor: V) -> Out<'de, V> {
         visitor.visit_some(self)
     }
 
-    fn deserialize_struct<V: Visitor<'de>>(
-        self,
-        name: &'static str,
-        _fields: &'static [&'static str],
-        visitor: V,
-    ) -> Result<V::Value, TableError> {
+    fn deserialize_struct<V: Visitor<'de>>(self, name: Name, _: Names, visitor: V) -> Out<'de, V> {
         if serde_spanned::de::is_spanned(name) {
             return visitor.visit_map(serde_spanned::de::SpannedDeserializer::new(self, 0..0));
         }
         self.deserialize_any(visitor)
     }
 
-    fn deserialize_enum<V: Visitor<'de>>(
-        self,
-        _name: &'static str,
-        _variants: &'static [&'static str],
-        visitor: V,
-    ) -> Result<V::Value, TableError> {
+    fn deserialize_enum<V: Visitor<'de>>(self, _: Name, _: Names, visitor: V) -> Out<'de, V> {
         match self.value {
             Value::String(s) => visitor
                 .visit_enum(s.as_str().into_deserializer())
@@ -132,11 +131,7 @@ impl<'de> de::Deserializer<'de> for At<'_> {
         }
     }
 
-    fn deserialize_newtype_struct<V: Visitor<'de>>(
-        self,
-        _name: &'static str,
-        visitor: V,
-    ) -> Result<V::Value, TableError> {
+    fn deserialize_newtype_struct<V: Visitor<'de>>(self, _: Name, visitor: V) -> Out<'de, V> {
         visitor.visit_newtype_struct(self)
     }
 
@@ -155,10 +150,7 @@ struct Elements<'a, I> {
 impl<'de, 'a, I: Iterator<Item = (usize, &'a Value)>> SeqAccess<'de> for Elements<'_, I> {
     type Error = TableError;
 
-    fn next_element_seed<T: DeserializeSeed<'de>>(
-        &mut self,
-        seed: T,
-    ) -> Result<Option<T::Value>, TableError> {
+    fn next_element_seed<T: DeserializeSeed<'de>>(&mut self, seed: T) -> Next<'de, T> {
         let Some((i, value)) = self.items.next() else {
             return Ok(None);
         };
@@ -177,10 +169,7 @@ struct Entries<'a, 'b, I> {
 impl<'de, 'a, I: Iterator<Item = (&'a String, &'a Value)>> MapAccess<'de> for Entries<'a, '_, I> {
     type Error = TableError;
 
-    fn next_key_seed<K: DeserializeSeed<'de>>(
-        &mut self,
-        seed: K,
-    ) -> Result<Option<K::Value>, TableError> {
+    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Next<'de, K> {
         let Some((name, value)) = self.entries.next() else {
             return Ok(None);
         };
@@ -190,10 +179,7 @@ impl<'de, 'a, I: Iterator<Item = (&'a String, &'a Value)>> MapAccess<'de> for En
         read.map(Some).map_err(|e: TableError| e.at(&key))
     }
 
-    fn next_value_seed<V: DeserializeSeed<'de>>(
-        &mut self,
-        seed: V,
-    ) -> Result<V::Value, TableError> {
+    fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Seeded<'de, V> {
         let (key, value) = self
             .value
             .take()

@@ -308,12 +308,13 @@ fn malformed_csv_names_file_line_and_column() {
 fn malformed_summary_names_file_line_and_column() {
     let p = &every_kind()[0];
     let good = ellipack::summary_json::summary_json(&summary_of(p)).unwrap();
-    let e = ellipack::summary_json::read_summary(
-        &good.replace("\"density\"", "\"densty\""),
-        "summary.json",
-    )
-    .unwrap_err()
-    .to_string();
+    let read_as = |text: &str, name: &str| {
+        ellipack::summary_json::read_summary(text, name)
+            .unwrap_err()
+            .to_string()
+    };
+    let read = |text: &str| read_as(text, "s.json");
+    let e = read_as(&good.replace("\"density\"", "\"densty\""), "summary.json");
     assert!(e.starts_with("summary.json: line "), "{e}");
     assert!(e.contains("missing field `density`"), "{e}");
     let line = good
@@ -322,31 +323,16 @@ fn malformed_summary_names_file_line_and_column() {
         .unwrap()
         + 1;
     let bad = good.replace("\"objective\": ", "\"objective\": \"big\" ,\"x\":");
-    let e = ellipack::summary_json::read_summary(&bad, "summary.json")
-        .unwrap_err()
-        .to_string();
+    let e = read_as(&bad, "summary.json");
     assert!(
         e.starts_with(&format!("summary.json: line {line}: column ")),
         "{e}"
     );
     assert!(e.contains("invalid type"), "{e}");
-    let e =
-        ellipack::summary_json::read_summary(&good.replace("\"circle\"", "\"hexagon\""), "s.json")
-            .unwrap_err()
-            .to_string();
+    let e = read(&good.replace("\"circle\"", "\"hexagon\""));
     assert!(e.contains("hexagon"), "{e}");
-    let e = ellipack::summary_json::read_summary(
-        &good.replace("\"radius\": 40.0", "\"radius\": -40.0"),
-        "s.json",
-    )
-    .unwrap_err()
-    .to_string();
+    let e = read(&good.replace("\"radius\": 40.0", "\"radius\": -40.0"));
     assert!(e.contains("radius"), "{e}");
-    let read = |text: &str| {
-        ellipack::summary_json::read_summary(text, "s.json")
-            .unwrap_err()
-            .to_string()
-    };
     let e = read("{");
     assert!(e.starts_with("s.json: line 1: column "), "{e}");
     // A key the container does not have, and a cell of the wrong size.

@@ -208,12 +208,8 @@ fn elongated_items_pack_in_a_variable_cell() {
 #[test]
 fn a_cell_far_smaller_than_its_items_is_refused_at_once() {
     let dir = temp_dir("periodic-tiny");
-    let path = scene(
-        &dir,
-        50,
-        "1.0, 1.0",
-        "cell = \"fixed\"\nlengths = [0.07, 0.07]\n",
-    );
+    let tiny_cell = "cell = \"fixed\"\nlengths = [0.07, 0.07]\n";
+    let path = scene(&dir, 50, "1.0, 1.0", tiny_cell);
     let o = pack_into(&path, &dir.join("out"));
     let said = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{said}");

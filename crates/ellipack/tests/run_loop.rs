@@ -342,12 +342,8 @@ fn resume_refuses_a_folder_of_another_container_or_other_items() {
 #[test]
 fn a_scene_with_the_compression_method_packs_and_certifies() {
     let dir = temp_dir("compression-method");
-    let scene = scene(
-        &dir,
-        30,
-        600.0,
-        "local_minimisations = 3\nmethod = \"compression\"\n",
-    );
+    let compression = "local_minimisations = 3\nmethod = \"compression\"\n";
+    let scene = scene(&dir, 30, 600.0, compression);
     let out = dir.join("out");
     let o = pack(&[scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o.stderr));

@@ -71,6 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             false
         },
+        &mut |_| {},
     )?;
     println!(
         "compression to {:.5}: {:.2} s, {} outer / {} inner iterations",

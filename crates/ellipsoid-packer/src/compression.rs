@@ -89,26 +89,6 @@ pub const STALL_FACTOR: f64 = 8.0;
 /// cost 200–400 s at m = 1e5 before it ran out of outer iterations).
 pub const LATE_STALL_FACTOR: f64 = 30.0;
 
-/// One local minimisation of the container by compression from `x0` (see the module
-/// documentation). Each placement solves to the settings' polish tolerance (or, without one,
-/// their feasibility tolerance) with their inner solver. `observe` sees every placement's
-/// progress; returning `true` ends the run with the best packing so far, whose report then
-/// says [`StopReason::Interrupted`].
-///
-/// # Errors
-/// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model
-/// on non-finite variables; [`Error::NotCertifiable`] when `x0` is no packing and no repair
-/// by a factor up to 4 makes it one. A placement that fails in any way is a step not taken,
-/// never an error: the best packing so far stands.
-pub fn compression<const N: usize>(
-    problem: &mut Model<N>,
-    x0: &[f64],
-    settings: &LocalSettings,
-    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
-) -> Result<LocalResult, Error> {
-    compression_to(problem, x0, settings, None, observe)
-}
-
 /// How far past its target a compression with one ([`compression_to`]) aims: no step goes
 /// beyond a container of measure `target·(1 − TARGET_OVERSHOOT)`, and a step that aims past
 /// the target is accepted as soon as its point, dilated to the target's container, is a
@@ -120,7 +100,13 @@ pub fn compression<const N: usize>(
 /// it took 622.
 pub const TARGET_OVERSHOOT: f64 = 0.03;
 
-/// [`compression`] that stops as soon as the container's area or volume is at most `target`
+/// One local minimisation of the container by compression from `x0` (see the module
+/// documentation). Each placement solves to the settings' polish tolerance (or, without one,
+/// their feasibility tolerance) with their inner solver. `observe` sees every placement's
+/// progress; returning `true` ends the run with the best packing so far, whose report then
+/// says [`StopReason::Interrupted`].
+///
+/// The compression stops as soon as the container's area or volume is at most `target`
 /// (`None`: compression to the end, a jammed packing). Each step is cut so that it aims no
 /// further than `target·(1 − TARGET_OVERSHOOT)`, and a step aimed past the target places the
 /// items by minimising the overlap energy (overlap plus containment, unconstrained) until its
@@ -129,24 +115,15 @@ pub const TARGET_OVERSHOOT: f64 = 0.03;
 /// one: μ² grows by s², PW85 theory eq. (7)). Whether the target was reached is
 /// `result.objective <= target`.
 ///
-/// # Errors
-/// As [`compression`].
-pub fn compression_to<const N: usize>(
-    problem: &mut Model<N>,
-    x0: &[f64],
-    settings: &LocalSettings,
-    target: Option<f64>,
-    observe: &mut dyn FnMut(&Progress<'_>) -> bool,
-) -> Result<LocalResult, Error> {
-    compression_seen(problem, x0, settings, target, observe, &mut |_| {})
-}
-
-/// [`compression_to`] that also shows `kept` every packing it keeps, the first one (the
-/// start as a packing) included: the density reached step by step.
+/// `kept` is shown every packing the compression keeps, the first one (the start as a packing)
+/// included: the density reached step by step.
 ///
 /// # Errors
-/// As [`compression`].
-pub fn compression_seen<const N: usize>(
+/// [`Error::Model`] (`LengthMismatch`) when `x0` does not fit the problem; errors of the model
+/// on non-finite variables; [`Error::NotCertifiable`] when `x0` is no packing and no repair
+/// by a factor up to 4 makes it one. A placement that fails in any way is a step not taken,
+/// never an error: the best packing so far stands.
+pub fn compression_to<const N: usize>(
     problem: &mut Model<N>,
     x0: &[f64],
     settings: &LocalSettings,
@@ -638,6 +615,15 @@ mod tests {
         assert_eq!(pairs, vec![(0, 1)]);
     }
 
+    /// A compression to the end with the default settings.
+    fn compressed<const N: usize>(
+        p: &mut Model<N>,
+        x0: &[f64],
+        observe: &mut dyn FnMut(&Progress<'_>) -> bool,
+    ) -> LocalResult {
+        compression_to(p, x0, &LocalSettings::default(), None, observe, &mut |_| {}).unwrap()
+    }
+
     /// 20 ellipsoids cannot be placed in a container smaller than their volume: the placement
     /// stalls, and its point comes back repaired, a packing.
     #[test]
@@ -666,7 +652,7 @@ mod tests {
         let mut p = Model::<2>::new(vec![[2.0, 1.0]; 16], ContainerShape::Box).unwrap();
         let x0 = lattice_start(&p);
         let start = density(&mut p, &x0);
-        let r = compression(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
+        let r = compressed(&mut p, &x0, &mut |_| false);
         assert!(p.certify(&r.x).unwrap().is_feasible());
         assert!(r.certificate.is_feasible());
         assert!(r.density > 1.05 * start, "{} from {start}", r.density);
@@ -683,7 +669,7 @@ mod tests {
         let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 8], ContainerShape::Ball).unwrap();
         let x0 = p.dilated(&lattice_start(&p), 0.7);
         assert!(!p.certify(&x0).unwrap().is_feasible());
-        let r = compression(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
+        let r = compressed(&mut p, &x0, &mut |_| false);
         assert!(p.certify(&r.x).unwrap().is_feasible());
     }
 
@@ -693,11 +679,10 @@ mod tests {
         let x0 = lattice_start(&p);
         let start = density(&mut p, &x0);
         let mut calls = 0;
-        let r = compression(&mut p, &x0, &LocalSettings::default(), &mut |_| {
+        let r = compressed(&mut p, &x0, &mut |_| {
             calls += 1;
             calls > 40
-        })
-        .unwrap();
+        });
         assert!(p.certify(&r.x).unwrap().is_feasible());
         assert_eq!(r.report.stop_reason, StopReason::Interrupted);
         assert!(r.density >= start);

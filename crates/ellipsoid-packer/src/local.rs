@@ -25,7 +25,7 @@
 //!   solutions, Algencan).
 
 use crate::Error;
-use crate::compression::compression;
+use crate::compression::compression_to;
 use crate::problem::Adapter;
 use crate::repair::certified;
 pub use crate::repair::{certified_start, repair};
@@ -59,9 +59,11 @@ pub fn local_minimisation<const N: usize>(
     }
     match settings.method {
         LocalMethod::AugmentedLagrangian => lagrangian(problem, x0, settings, observe),
-        LocalMethod::Compression => compression(problem, x0, settings, observe),
+        LocalMethod::Compression => {
+            compression_to(problem, x0, settings, None, observe, &mut |_| {})
+        }
         LocalMethod::CompressionThenLagrangian => {
-            let compressed = compression(problem, x0, settings, observe)?;
+            let compressed = compression_to(problem, x0, settings, None, observe, &mut |_| {})?;
             if compressed.report.stop_reason == auglag::StopReason::Interrupted {
                 return Ok(compressed);
             }

@@ -175,29 +175,17 @@ impl MultiStartSettings {
 }
 
 auglag::with_setters!(MultiStartSettings:
-    /// Sets [`MultiStartSettings::local`].
     with_local => local: LocalSettings,
-    /// Sets [`MultiStartSettings::perturbation`].
     with_perturbation => perturbation: f64,
-    /// Sets [`MultiStartSettings::seed`].
     with_seed => seed: u64,
-    /// Sets [`MultiStartSettings::lattice_starts`].
     with_lattice_starts => lattice_starts: usize,
-    /// Sets [`MultiStartSettings::from_best`].
     with_from_best => from_best: bool,
-    /// Sets [`MultiStartSettings::perturbation_levels`].
     with_perturbation_levels => perturbation_levels: u32,
-    /// Sets [`MultiStartSettings::fresh_lattice_every`].
     with_fresh_lattice_every => fresh_lattice_every: usize,
-    /// Sets [`MultiStartSettings::restart_after`].
     with_restart_after => restart_after: usize,
-    /// Sets [`MultiStartSettings::threads`].
     with_threads => threads: usize,
-    /// Sets [`MultiStartSettings::max_local_minimisations`].
     with_max_local_minimisations => max_local_minimisations: usize,
-    /// Sets [`MultiStartSettings::time_limit`].
     with_time_limit => time_limit: Option<Duration>,
-    /// Sets [`MultiStartSettings::shard`].
     with_shard => shard: Shard,
 );
 

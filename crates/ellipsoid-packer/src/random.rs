@@ -11,7 +11,7 @@
 //! attempt costs O(1) and the start O(m) at a fraction well below saturation (about 0.38 for
 //! spheres, 0.55 for discs). The start is certified by construction.
 //!
-//! **The compression** ([`compression_to`](crate::compression::compression_to)) shrinks the container (its shape kept) through
+//! **The compression** ([`compression_to`]) shrinks the container (its shape kept) through
 //! placements in fixed containers, each driving the model's overlap measure (the paper's eqs.
 //! (21)–(26)) to zero, and keeps each step whose packing certifies. With a target fraction it
 //! stops at the first packing at least that dense, dilated back to the target container
@@ -37,7 +37,7 @@
 //!   Science 303, 990 (2004).
 
 use crate::Error;
-use crate::compression::compression_seen;
+use crate::compression::compression_to;
 use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, LocalResult, LocalSettings, certified_start, infeasibility};
 use crate::starts::SplitMix64;
@@ -87,7 +87,9 @@ pub struct RandomSettings {
     pub start_fraction: Option<f64>,
     /// The seed: the same seed gives the same start and the same packing.
     pub seed: u64,
-    /// Attempts per item of the random start.
+    /// Attempts per item of the random start: random sequential addition draws a place and an
+    /// orientation until the item overlaps nothing placed, and after this many tries the whole
+    /// start again in a container twice as large ([`ATTEMPTS_PER_ITEM`] by default).
     pub attempts_per_item: usize,
     /// Settings of the compression's placements.
     pub local: LocalSettings,
@@ -102,19 +104,12 @@ pub struct RandomSettings {
 }
 
 auglag::with_setters!(RandomSettings:
-    /// Sets [`RandomSettings::target`].
     with_target => target: Target,
-    /// Sets [`RandomSettings::start_fraction`].
     with_start_fraction => start_fraction: Option<f64>,
-    /// Sets [`RandomSettings::seed`].
     with_seed => seed: u64,
-    /// Sets [`RandomSettings::attempts_per_item`].
     with_attempts_per_item => attempts_per_item: usize,
-    /// Sets [`RandomSettings::local`].
     with_local => local: LocalSettings,
-    /// Sets [`RandomSettings::orientations`].
     with_orientations => orientations: Vec<Orientation>,
-    /// Sets [`RandomSettings::threads`].
     with_threads => threads: usize,
 );
 
@@ -269,7 +264,7 @@ fn random_packing_here<const N: usize>(
             .map(|&i| fixed.get(i).copied().unwrap_or(false))
             .collect();
     }
-    let compressed = compression_seen(
+    let compressed = compression_to(
         &mut sorted,
         &in_order(&x0, &order, stride),
         &local,

@@ -14,7 +14,7 @@
 //! - E. G. Birgin, R. D. Lobato, J. M. Martínez, *A nonlinear programming model with implicit
 //!   variables for packing ellipsoids*, J. Global Optim. 68 (2017), Section 6.
 
-use crate::compression::compression_seen;
+use crate::compression::compression_to;
 use crate::error::{Error, StartDefects};
 use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, item_measure};
@@ -321,7 +321,7 @@ impl<const N: usize> Packer<N> {
                 self.model.set_threads(threads)?;
                 let x0 = self.resumed(&start, fraction.then_some(dims.as_slice()))?;
                 let aim = fraction.then_some(container.measure().0);
-                compression_seen(&mut self.model, &x0, &local, aim, &mut observe, &mut |p| {
+                compression_to(&mut self.model, &x0, &local, aim, &mut observe, &mut |p| {
                     kept(p.density)
                 })
                 .map(|packing| RandomPacking {

@@ -78,27 +78,16 @@ pub enum LocalMethod {
 pub const FIXED_MARGIN: f64 = 1e-3;
 
 auglag::with_setters!(LocalSettings:
-    /// Sets [`LocalSettings::feasibility_tolerance`].
     with_feasibility_tolerance => feasibility_tolerance: f64,
-    /// Sets [`LocalSettings::optimality_tolerance`].
     with_optimality_tolerance => optimality_tolerance: f64,
-    /// Sets [`LocalSettings::max_outer_iterations`].
     with_max_outer_iterations => max_outer_iterations: usize,
-    /// Sets [`LocalSettings::max_inner_iterations`].
     with_max_inner_iterations => max_inner_iterations: usize,
-    /// Sets [`LocalSettings::inner_solver`].
     with_inner_solver => inner_solver: InnerSolver,
-    /// Sets [`LocalSettings::cg_preconditioner_memory`].
     with_cg_preconditioner_memory => cg_preconditioner_memory: usize,
-    /// Sets [`LocalSettings::polish_tolerance`].
     with_polish_tolerance => polish_tolerance: Option<f64>,
-    /// Sets [`LocalSettings::fixed_container`].
     with_fixed_container => fixed_container: bool,
-    /// Sets [`LocalSettings::method`].
     with_method => method: LocalMethod,
-    /// Sets [`LocalSettings::largest_compression_step`].
     with_largest_compression_step => largest_compression_step: f64,
-    /// Sets [`LocalSettings::fixed_orientations`].
     with_fixed_orientations => fixed_orientations: Vec<bool>,
 );
 

@@ -852,9 +852,7 @@ pub fn perturb<const N: usize>(
     seed: u64,
     index: u64,
 ) -> Vec<f64> {
-    let stride = Model::<N>::vars_per_body();
-    let mut rng = SplitMix64::stream(seed, index);
-    let dims = &x[items * stride..];
+    let dims = &x[items * Model::<N>::vars_per_body()..];
     // A periodic cell is the only container with N (N + 1) / 2 dimensions; its centres are
     // fractional, so the half-cell is 1/2.
     let periodic = dims.len() == N * (N + 1) / 2;
@@ -865,18 +863,16 @@ pub fn perturb<const N: usize>(
             dims.get(k).or(dims.first()).copied().unwrap_or(1.0)
         }
     };
-    let mut y = x.to_vec();
-    for i in 0..items {
-        for v in 0..stride {
-            let scale = if v < N {
-                extent(v)
-            } else {
-                std::f64::consts::PI
-            };
-            y[i * stride + v] += fraction * scale * (2.0 * rng.uniform() - 1.0);
-        }
-    }
-    y
+    jittered::<N>(x, items, (seed, index), |v| {
+        Some(
+            fraction
+                * if v < N {
+                    extent(v)
+                } else {
+                    std::f64::consts::PI
+                },
+        )
+    })
 }
 
 /// `x` with every item's angles moved by up to `amplitude` radians, from a generator seeded by
@@ -895,12 +891,25 @@ pub fn turned<const N: usize>(
     seed: u64,
     index: u64,
 ) -> Vec<f64> {
+    jittered::<N>(x, items, (seed, index), |v| (v >= N).then_some(amplitude))
+}
+
+/// `x` with item variable `v` of every item moved by a uniform draw in `±amplitude(v)`
+/// (`None`: left, and no draw made), from a generator seeded by `(seed, index)`, item by item.
+fn jittered<const N: usize>(
+    x: &[f64],
+    items: usize,
+    (seed, index): (u64, u64),
+    amplitude: impl Fn(usize) -> Option<f64>,
+) -> Vec<f64> {
     let stride = Model::<N>::vars_per_body();
     let mut rng = SplitMix64::stream(seed, index);
     let mut y = x.to_vec();
     for i in 0..items {
-        for v in N..stride {
-            y[i * stride + v] += amplitude * (2.0 * rng.uniform() - 1.0);
+        for v in 0..stride {
+            if let Some(a) = amplitude(v) {
+                y[i * stride + v] += a * (2.0 * rng.uniform() - 1.0);
+            }
         }
     }
     y

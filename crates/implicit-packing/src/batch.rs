@@ -194,11 +194,11 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
 #[cfg(target_arch = "x86_64")]
 mod avx {
     use super::{LANES, Term, Waiting};
-    use crate::derivatives::{GradientParts, PairGradient, direct_gradient};
+    use crate::derivatives::{PairGradient, PairVector, direct_gradient};
     use crate::lanes::{F64x4, Mask4, Real, lanes_of};
     use crate::pair::{BodyOf, DIRECT_CONDITION_LIMIT, epsilon_from_extremes, frame_factor};
     use crate::projection::{
-        DIRECT_B2_LIMIT, DIRECT_MAX_ITERATIONS, DirectProjection, direct_start, halley_at, norm2,
+        DIRECT_B2_LIMIT, DIRECT_MAX_ITERATIONS, DirectProjection, DirectStart, HalleyAt, norm2,
     };
     use crate::shape::Body;
 
@@ -299,7 +299,7 @@ mod avx {
         let well = (imax * jmax).le(splat(DIRECT_CONDITION_LIMIT) * (imin * jmin));
         let b2 = norm2(&b);
         let mut active = well & b2.gt(splat(1.0)) & b2.le(splat(DIRECT_B2_LIMIT));
-        let start = direct_start(&f, &c, b2);
+        let start = DirectStart::new(&f, &c, b2);
         let mut u = start.u0;
         let zero = splat(0.0);
         let mut solved = DirectProjection {
@@ -314,7 +314,7 @@ mod avx {
             if !active.any() {
                 break;
             }
-            let h = halley_at(&start.s, &c, u);
+            let h = HalleyAt::at(&start.s, &c, u);
             // The scalar loop gives up on a step that is not finite.
             active = active & splat(f64::INFINITY).gt(h.step.abs());
             let now = active & h.settled(u);
@@ -397,26 +397,26 @@ mod avx {
     struct Lanes<const N: usize> {
         centre_i: [[f64; LANES]; N],
         centre_j: [[f64; LANES]; N],
-        torque_i: [[f64; LANES]; 3],
-        torque_j: [[f64; LANES]; 3],
+        angular_i: [[f64; LANES]; 3],
+        angular_j: [[f64; LANES]; 3],
     }
 
     impl<const N: usize> Lanes<N> {
         #[inline(always)]
-        fn of(g: &GradientParts<F64x4, N>) -> Self {
+        fn of(g: &PairVector<F64x4, N>) -> Self {
             let mut out = Self {
                 centre_i: [[0.0; LANES]; N],
                 centre_j: [[0.0; LANES]; N],
-                torque_i: [[0.0; LANES]; 3],
-                torque_j: [[0.0; LANES]; 3],
+                angular_i: [[0.0; LANES]; 3],
+                angular_j: [[0.0; LANES]; 3],
             };
             for k in 0..N {
                 out.centre_i[k] = g.centre_i[k].to_array();
                 out.centre_j[k] = g.centre_j[k].to_array();
             }
             for k in 0..3 {
-                out.torque_i[k] = g.torque_i[k].to_array();
-                out.torque_j[k] = g.torque_j[k].to_array();
+                out.angular_i[k] = g.angular_i[k].to_array();
+                out.angular_j[k] = g.angular_j[k].to_array();
             }
             out
         }
@@ -426,8 +426,8 @@ mod avx {
             PairGradient {
                 centre_i: self.centre_i.map(|v| v[l]),
                 centre_j: self.centre_j.map(|v| v[l]),
-                torque_i: self.torque_i.map(|v| v[l]),
-                torque_j: self.torque_j.map(|v| v[l]),
+                angular_i: self.angular_i.map(|v| v[l]),
+                angular_j: self.angular_j.map(|v| v[l]),
             }
         }
     }
@@ -513,8 +513,8 @@ mod tests {
         core::iter::once(t.0)
             .chain(g.centre_i)
             .chain(g.centre_j)
-            .chain(g.torque_i)
-            .chain(g.torque_j)
+            .chain(g.angular_i)
+            .chain(g.angular_j)
             .map(f64::to_bits)
             .collect()
     }

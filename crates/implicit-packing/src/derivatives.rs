@@ -46,30 +46,42 @@ use crate::pair::{
 use crate::projection::DirectProjection;
 use crate::shape::{Body, angular_velocities_3d};
 
-/// Gradient of a scalar pair quantity with respect to the placements of `i` and `j`.
+/// A vector of a pair's placement space, or of its dual: centre parts and world-frame angular
+/// parts of `i` and `j`.
 ///
-/// Rotational derivatives are given as torques: for any angle `α` of body `i` with world-frame
-/// angular velocity `ω_α` (`∂Q_i/∂α = [ω_α]× Q_i`), the derivative is `ω_α · torque_i`. In 2D only
-/// the third component is non-zero and equals the derivative with respect to `θ`.
+/// As a gradient ([`PairGradient`]) the angular parts are torques: for any angle `α` of body
+/// `i` with world-frame angular velocity `ω_α` (`∂Q_i/∂α = [ω_α]× Q_i`), the derivative is
+/// `ω_α · angular_i`. As a direction ([`PairDirection`]) they are angular velocities
+/// (`dQ = [w]× Q`). In 2D only the third component is used: the derivative with respect to
+/// `θ`, or the rate of `θ`. `T` is `f64`, or one of the model's SIMD lanes types inside the
+/// crate.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairGradient<const N: usize> {
-    /// Derivative with respect to the centre `c_i`.
-    pub centre_i: [f64; N],
-    /// Derivative with respect to the centre `c_j`.
-    pub centre_j: [f64; N],
-    /// Torque on `i`: `∂/∂α_i = ω_α · torque_i`.
-    pub torque_i: [f64; 3],
-    /// Torque on `j`.
-    pub torque_j: [f64; 3],
+pub struct PairVector<T, const N: usize> {
+    /// The part of the centre `c_i`.
+    pub centre_i: [T; N],
+    /// The part of the centre `c_j`.
+    pub centre_j: [T; N],
+    /// The angular part of `i`: a torque in a gradient, an angular velocity in a direction.
+    pub angular_i: [T; 3],
+    /// The angular part of `j`.
+    pub angular_j: [T; 3],
 }
+
+/// Gradient of a scalar pair quantity with respect to the placements of `i` and `j`, the
+/// rotational part as torques.
+pub type PairGradient<const N: usize> = PairVector<f64, N>;
+
+/// A direction in the placement space of a pair: centre velocities and world angular
+/// velocities.
+pub type PairDirection<const N: usize> = PairVector<f64, N>;
 
 impl<const N: usize> PairGradient<N> {
     /// The zero gradient.
     pub const ZERO: Self = PairGradient {
         centre_i: [0.0; N],
         centre_j: [0.0; N],
-        torque_i: [0.0; 3],
-        torque_j: [0.0; 3],
+        angular_i: [0.0; 3],
+        angular_j: [0.0; 3],
     };
 
     #[inline(always)]
@@ -79,8 +91,8 @@ impl<const N: usize> PairGradient<N> {
             self.centre_j[k] += a * other.centre_j[k];
         }
         for k in 0..3 {
-            self.torque_i[k] += a * other.torque_i[k];
-            self.torque_j[k] += a * other.torque_j[k];
+            self.angular_i[k] += a * other.angular_i[k];
+            self.angular_j[k] += a * other.angular_j[k];
         }
     }
 }
@@ -175,45 +187,24 @@ fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Fr
 
 #[inline(always)]
 fn grad_d2<const N: usize>(fr: &Frames<f64, N>) -> PairGradient<N> {
-    grad_d2_parts(fr).into()
-}
-
-/// [`PairGradient`] in any [`Real`] arithmetic (one pair or four).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct GradientParts<T, const N: usize> {
-    pub centre_i: [T; N],
-    pub centre_j: [T; N],
-    pub torque_i: [T; 3],
-    pub torque_j: [T; 3],
-}
-
-impl<const N: usize> From<GradientParts<f64, N>> for PairGradient<N> {
-    #[inline(always)]
-    fn from(g: GradientParts<f64, N>) -> Self {
-        PairGradient {
-            centre_i: g.centre_i,
-            centre_j: g.centre_j,
-            torque_i: g.torque_i,
-            torque_j: g.torque_j,
-        }
-    }
+    grad_d2_parts(fr)
 }
 
 /// `∇d²` from the world-frame vectors: the force `F` on `c_i`, `−F` on `c_j`, and the torques
 /// `(y − Δ) × F` on `i` and `−y × F` on `j`.
 #[inline(always)]
-fn grad_d2_parts<T: Real, const N: usize>(fr: &Frames<T, N>) -> GradientParts<T, N> {
+fn grad_d2_parts<T: Real, const N: usize>(fr: &Frames<T, N>) -> PairVector<T, N> {
     let mut lever_i = fr.y;
     for k in 0..N {
         lever_i[k] = fr.y[k] - fr.delta[k];
     }
     let ti = torque(&lever_i, &fr.force);
     let tj = torque(&fr.y, &fr.force);
-    GradientParts {
+    PairVector {
         centre_i: fr.force,
         centre_j: each(fr.force, |v| -v),
-        torque_i: ti,
-        torque_j: each(tj, |v| -v),
+        angular_i: ti,
+        angular_j: each(tj, |v| -v),
     }
 }
 
@@ -228,7 +219,7 @@ pub(crate) fn direct_gradient<T: Real, const N: usize>(
     settled: &DirectProjection<N, T>,
     body_i: BodyOf<'_, T, N>,
     delta: &[T; N],
-) -> GradientParts<T, N> {
+) -> PairVector<T, N> {
     let zero = T::splat(0.0);
     let mut fr = Frames {
         delta: *delta,
@@ -250,11 +241,11 @@ pub(crate) fn direct_gradient<T: Real, const N: usize>(
     let g = grad_d2_parts(&fr);
     let k = T::splat(-2.0) * a;
     let axpy = |v: T| zero + k * v;
-    GradientParts {
+    PairVector {
         centre_i: each(g.centre_i, axpy),
         centre_j: each(g.centre_j, axpy),
-        torque_i: each(g.torque_i, axpy),
-        torque_j: each(g.torque_j, axpy),
+        angular_i: each(g.angular_i, axpy),
+        angular_j: each(g.angular_j, axpy),
     }
 }
 
@@ -283,8 +274,8 @@ fn grad_u<const N: usize>(
         let t = torque(&yv, &nv);
         let scale = 2.0 / (s[top] * s[top]);
         for k in 0..3 {
-            g.torque_i[k] = scale * t[k];
-            g.torque_j[k] = -scale * t[k];
+            g.angular_i[k] = scale * t[k];
+            g.angular_j[k] = -scale * t[k];
         }
         return g;
     }
@@ -315,9 +306,9 @@ fn grad_u<const N: usize>(
         g.centre_j[k] = -g.centre_i[k];
     }
     for k in 0..3 {
-        g.torque_i[k] = (2.0 * uw_delta[k] + 2.0 * y_n[k] - 2.0 * u * (yz_n[k] + y_nz[k])) / den;
+        g.angular_i[k] = (2.0 * uw_delta[k] + 2.0 * y_n[k] - 2.0 * u * (yz_n[k] + y_nz[k])) / den;
         // n × y_z = −(y_z × n).
-        g.torque_j[k] = (-2.0 * y_n[k] - 2.0 * u * (-yz_n[k] - y_nz[k])) / den;
+        g.angular_j[k] = (-2.0 * y_n[k] - 2.0 * u * (-yz_n[k] - y_nz[k])) / den;
     }
     g
 }
@@ -387,7 +378,7 @@ fn pair_gradient_impl<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGra
             l: &i.semi_axes(),
             inv_l: &st.inv_li,
         };
-        return (a * a, direct_gradient(a, d, body_i, &delta).into());
+        return (a * a, direct_gradient(a, d, body_i, &delta));
     }
     let sol = match direct {
         Some(d) => direct_solution(&st, &d),
@@ -561,20 +552,6 @@ pub fn a1_reference<const N: usize>(
 // Second derivatives: directional derivatives of the gradient (Hessian–vector products).
 // ---------------------------------------------------------------------------------------------
 
-/// A direction in the placement space of a pair: centre velocities and world angular velocities
-/// (`dQ = [w]× Q`; in 2D only `w[2]` is used).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairDirection<const N: usize> {
-    /// `δc_i`.
-    pub centre_i: [f64; N],
-    /// `δc_j`.
-    pub centre_j: [f64; N],
-    /// Angular velocity of `i`.
-    pub spin_i: [f64; 3],
-    /// Angular velocity of `j`.
-    pub spin_j: [f64; 3],
-}
-
 /// `w × v` for a world angular velocity `w` and an `N`-vector `v` (2D: rotation about e_z).
 #[inline(always)]
 pub(crate) fn spin<const N: usize>(w: &[f64; 3], v: &[f64; N]) -> [f64; N] {
@@ -640,9 +617,9 @@ impl<const N: usize> Maps<'_, N> {
         }
         o
     }
-    /// Eigen coordinates `Vᵀ P_i^½ Q_iᵀ v` of a world vector `v` (the transpose of `to_world`
-    /// with power +1).
-    fn eig_of_world_scaled(&self, v: &[f64; N]) -> [f64; N] {
+    /// Eigen coordinates `Vᵀ P_i^{±½} Q_iᵀ v` of a world vector `v`: the power +½ (`scaled`)
+    /// is the transpose of `to_world` with power +1.
+    fn eig_of_world(&self, v: &[f64; N], scaled: bool) -> [f64; N] {
         let q = self.i.rotation();
         let l = self.i.semi_axes();
         let mut frame = [0.0; N];
@@ -650,26 +627,11 @@ impl<const N: usize> Maps<'_, N> {
             for r in 0..N {
                 frame[k] += q[r][k] * v[r];
             }
-            frame[k] *= l[k];
-        }
-        let mut out = [0.0; N];
-        for k in 0..N {
-            for m in 0..N {
-                out[k] += self.sol.svd.v[k][m] * frame[m];
+            if scaled {
+                frame[k] *= l[k];
+            } else {
+                frame[k] /= l[k];
             }
-        }
-        out
-    }
-    /// Eigen coordinates `Vᵀ P_i^−½ Q_iᵀ v` of a world vector `v`.
-    fn eig_of_world_unscaled(&self, v: &[f64; N]) -> [f64; N] {
-        let q = self.i.rotation();
-        let l = self.i.semi_axes();
-        let mut frame = [0.0; N];
-        for k in 0..N {
-            for r in 0..N {
-                frame[k] += q[r][k] * v[r];
-            }
-            frame[k] /= l[k];
         }
         let mut out = [0.0; N];
         for k in 0..N {
@@ -684,7 +646,7 @@ impl<const N: usize> Maps<'_, N> {
     /// `w = w_i − w_j` (only the relative rotation moves `S`).
     fn ds_times(&self, w: &[f64; 3], yv: &[f64; N], nv: &[f64; N]) -> [f64; N] {
         let world = sub(&self.m_times(&spin(w, yv)), &spin(w, nv));
-        self.eig_of_world_scaled(&world)
+        self.eig_of_world(&world, true)
     }
 }
 
@@ -751,12 +713,12 @@ pub fn pair_gradient_derivative<const N: usize>(
     let delta = fr.delta;
     let force = fr.force;
     let n = to_world(i, &sol, &ahat, -1.0);
-    let w = sub(&dir.spin_i, &dir.spin_j);
+    let w = sub(&dir.angular_i, &dir.angular_j);
     let ddelta = sub(&dir.centre_i, &dir.centre_j);
 
     // δc (eigen coordinates) = Vᵀ P_i^−½ Q_iᵀ (δΔ − w_i × Δ).
-    let dc_world = sub(&ddelta, &spin(&dir.spin_i, &delta));
-    let dchat = maps.eig_of_world_unscaled(&dc_world);
+    let dc_world = sub(&ddelta, &spin(&dir.angular_i, &delta));
+    let dchat = maps.eig_of_world(&dc_world, false);
     let dsx = maps.ds_times(&w, &y, &n);
     let xdsx = 2.0 * dotk(&w, &torque(&y, &n));
     let mut num = 0.5 * xdsx;
@@ -774,23 +736,27 @@ pub fn pair_gradient_derivative<const N: usize>(
     }
 
     // d² part.
-    let dy = add(&spin(&dir.spin_i, &y), &to_world(i, &sol, &dxhat, 1.0));
+    let dy = add(&spin(&dir.angular_i, &y), &to_world(i, &sol, &dxhat, 1.0));
     let mut dcmx = [0.0; N];
     for k in 0..N {
         dcmx[k] = 2.0 * (dchat[k] - dxhat[k]);
     }
-    let dforce = add(&spin(&dir.spin_i, &force), &to_world(i, &sol, &dcmx, -1.0));
+    let dforce = add(
+        &spin(&dir.angular_i, &force),
+        &to_world(i, &sol, &dcmx, -1.0),
+    );
     let lever = sub(&y, &delta);
     let dlever = sub(&dy, &ddelta);
     let dti = add(&torque(&dlever, &force), &torque(&lever, &dforce));
     let dtj = scale(-1.0, &add(&torque(&dy, &force), &torque(&y, &dforce)));
-    let dd2 =
-        dotk(&force, &ddelta) + dotk(&gd.torque_i, &dir.spin_i) + dotk(&gd.torque_j, &dir.spin_j);
+    let dd2 = dotk(&force, &ddelta)
+        + dotk(&gd.angular_i, &dir.angular_i)
+        + dotk(&gd.angular_j, &dir.angular_j);
     let dgd = PairGradient {
         centre_i: dforce,
         centre_j: scale(-1.0, &dforce),
-        torque_i: dti,
-        torque_j: dtj,
+        angular_i: dti,
+        angular_j: dtj,
     };
     if a > 0.0 {
         hv.axpy(2.0 * dd2, &gd);
@@ -811,19 +777,19 @@ pub fn pair_gradient_derivative<const N: usize>(
             dsxhat[k] = dsx[k] + s[k] * dxhat[k];
             dzhat[k] = (dsxhat[k] - du * szhat[k] - u * dszhat[k]) / t[k];
         }
-        let duw = add(&spin(&dir.spin_i, &uw), &to_world(i, &sol, &dzhat, -1.0));
-        let dyz = add(&spin(&dir.spin_i, &yz), &to_world(i, &sol, &dzhat, 1.0));
+        let duw = add(&spin(&dir.angular_i, &uw), &to_world(i, &sol, &dzhat, -1.0));
+        let dyz = add(&spin(&dir.angular_i, &yz), &to_world(i, &sol, &dzhat, 1.0));
         let dn = add(
             &sub(
-                &spin(&dir.spin_j, &n),
-                &maps.m_times(&spin(&dir.spin_j, &y)),
+                &spin(&dir.angular_j, &n),
+                &maps.m_times(&spin(&dir.angular_j, &y)),
             ),
             &maps.m_times(&dy),
         );
         let dnz = add(
             &sub(
-                &spin(&dir.spin_j, &nz),
-                &maps.m_times(&spin(&dir.spin_j, &yz)),
+                &spin(&dir.angular_j, &nz),
+                &maps.m_times(&spin(&dir.angular_j, &yz)),
             ),
             &maps.m_times(&dyz),
         );
@@ -855,8 +821,8 @@ pub fn pair_gradient_derivative<const N: usize>(
         let dgu = PairGradient {
             centre_i: sub(&scale(2.0 / den, &duw), &scale(2.0 * q, &uw)),
             centre_j: sub(&scale(2.0 * q, &uw), &scale(2.0 / den, &duw)),
-            torque_i: sub(&scale(1.0 / den, &dni), &scale(q, &ni)),
-            torque_j: sub(&scale(1.0 / den, &dnj), &scale(q, &nj)),
+            angular_i: sub(&scale(1.0 / den, &dni), &scale(q, &ni)),
+            angular_j: sub(&scale(1.0 / den, &dnj), &scale(q, &nj)),
         };
         hv.axpy(2.0 * du, &gu);
         hv.axpy(-2.0 * bterm, &dgu);

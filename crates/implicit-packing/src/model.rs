@@ -424,8 +424,8 @@ impl<const N: usize> Model<N> {
                                 out_overlap,
                                 i,
                                 &hv.centre_i,
-                                &hv.torque_i,
-                                &grad.torque_i,
+                                &hv.angular_i,
+                                &grad.angular_i,
                             );
                             scatter_second(
                                 x,
@@ -433,8 +433,8 @@ impl<const N: usize> Model<N> {
                                 out_overlap,
                                 j,
                                 &hv.centre_j,
-                                &hv.torque_j,
-                                &grad.torque_j,
+                                &hv.angular_j,
+                                &grad.angular_j,
                             );
                         }
                     }
@@ -450,28 +450,28 @@ impl<const N: usize> Model<N> {
                             &xp,
                             i,
                             &gp.centre_i,
-                            &gp.torque_i,
+                            &gp.angular_i,
                             &mut tmp_p[..stride],
                         );
                         body_gradient_into(
                             &xm,
                             i,
                             &gm.centre_i,
-                            &gm.torque_i,
+                            &gm.angular_i,
                             &mut tmp_m[..stride],
                         );
                         body_gradient_into(
                             &xp,
                             j,
                             &gp.centre_j,
-                            &gp.torque_j,
+                            &gp.angular_j,
                             &mut tmp_p[6..6 + stride],
                         );
                         body_gradient_into(
                             &xm,
                             j,
                             &gm.centre_j,
-                            &gm.torque_j,
+                            &gm.angular_j,
                             &mut tmp_m[6..6 + stride],
                         );
                         for k in 0..stride {
@@ -499,7 +499,7 @@ impl<const N: usize> Model<N> {
             let d = direction(x, v, i, i);
             let cdir = ContainmentDirection {
                 centre: d.centre_i,
-                spin: d.spin_i,
+                spin: d.angular_i,
                 container: dcont,
             };
             if let Some((r, grad, hv)) =
@@ -682,8 +682,8 @@ impl<const N: usize> PeriodicSums<'_, N> {
         }
         let (oa, ob) = (owner[a] as usize, owner[b] as usize);
         for k in 0..3 {
-            self.torques[oa][k] += g.torque_i[k];
-            self.torques[ob][k] += g.torque_j[k];
+            self.torques[oa][k] += g.angular_i[k];
+            self.torques[ob][k] += g.angular_j[k];
         }
     }
 }
@@ -1192,8 +1192,8 @@ fn add_pair<const N: usize>(
         out[j * stride + k] += g.centre_j[k];
     }
     for k in 0..3 {
-        torques[i][k] += g.torque_i[k];
-        torques[j][k] += g.torque_j[k];
+        torques[i][k] += g.angular_i[k];
+        torques[j][k] += g.angular_j[k];
     }
 }
 
@@ -1558,8 +1558,8 @@ fn direction<const N: usize>(x: &[f64], v: &[f64], i: usize, j: usize) -> PairDi
     PairDirection {
         centre_i: ci,
         centre_j: cj,
-        spin_i: spin(i),
-        spin_j: spin(j),
+        angular_i: spin(i),
+        angular_j: spin(j),
     }
 }
 

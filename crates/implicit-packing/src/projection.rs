@@ -46,6 +46,21 @@ pub struct Projection<const N: usize> {
     pub hard: bool,
 }
 
+impl<const N: usize> Projection<N> {
+    /// The solution at `U = u` with its vectors zero and `d² = 0`, for the caller to fill in.
+    fn zeroed(u: f64, inside: bool, hard: bool) -> Self {
+        Projection {
+            u,
+            xhat: [0.0; N],
+            t: [0.0; N],
+            dhat: [0.0; N],
+            d2: 0.0,
+            inside,
+            hard,
+        }
+    }
+}
+
 /// Data that locates the eigen-structure for the inside parametrisation.
 struct Inside<const N: usize> {
     r: [f64; N],
@@ -245,10 +260,10 @@ pub fn solve_outside_direct<const N: usize>(
     if b2 > DIRECT_B2_LIMIT {
         return None;
     }
-    let DirectStart { s, lo, u0 } = direct_start(f, c, b2);
+    let DirectStart { s, lo, u0 } = DirectStart::new(f, c, b2);
     let mut u = u0;
     for _ in 0..DIRECT_MAX_ITERATIONS {
-        let h = halley_at(&s, c, u);
+        let h = HalleyAt::at(&s, c, u);
         if !h.step.is_finite() {
             return None;
         }
@@ -272,44 +287,42 @@ pub(crate) struct DirectStart<T, const N: usize> {
     pub u0: T,
 }
 
-/// The start of [`solve_outside_direct`], in any [`Real`] arithmetic (one pair or four).
-#[inline(always)]
-pub(crate) fn direct_start<T: Real, const N: usize>(
-    f: &[[T; N]; N],
-    c: &[T; N],
-    b2: T,
-) -> DirectStart<T, N> {
-    let mut s = *f;
-    for a in 0..N {
-        for b in a..N {
-            let mut v = f[0][a] * f[0][b];
-            for k in 1..N {
-                v = v + f[k][a] * f[k][b];
+impl<T: Real, const N: usize> DirectStart<T, N> {
+    /// The start of [`solve_outside_direct`], in any [`Real`] arithmetic (one pair or four).
+    #[inline(always)]
+    pub(crate) fn new(f: &[[T; N]; N], c: &[T; N], b2: T) -> Self {
+        let mut s = *f;
+        for a in 0..N {
+            for b in a..N {
+                let mut v = f[0][a] * f[0][b];
+                for k in 1..N {
+                    v = v + f[k][a] * f[k][b];
+                }
+                s[a][b] = v;
+                s[b][a] = v;
             }
-            s[a][b] = v;
-            s[b][a] = v;
         }
+        // Lower bound from λ_max(S) ≤ ‖F‖²_F. The start replaces S by a multiple s̄ I of the
+        // identity, U₀ = (|b| − 1)/s̄, exact when c is an eigenvector. Two means of the eigenvalues
+        // offer themselves: weighted by ĉ_k², s̄ = cᵀSc/|c|² = |b|²/|c|², which tends to put U₀
+        // below the root, and weighted by g_k² (the weights of φ), s̄ = |Sc|²/|b|², which tends to
+        // put it above; their average is the start. On the `pair` bench's pairs the median
+        // relative error of U₀ falls from 8.7e-2 (first mean alone) to 3.5e-2, and the number of
+        // solves per pair from 3.6 to 3.4.
+        // ‖F‖²_F = tr S: two additions after S instead of a chain of nine.
+        let mut fro2 = s[0][0];
+        for a in 1..N {
+            fro2 = fro2 + s[a][a];
+        }
+        let one = T::splat(1.0);
+        let bn = b2.sqrt();
+        let lo = (bn - one) / fro2;
+        let c2 = norm2(c);
+        let sc = sym_mat_vec(&s, c);
+        let sc2 = norm2(&sc);
+        let u0 = (T::splat(0.5) * (bn - one) * (c2 / b2 + b2 / sc2)).max(lo);
+        DirectStart { s, lo, u0 }
     }
-    // Lower bound from λ_max(S) ≤ ‖F‖²_F. The start replaces S by a multiple s̄ I of the
-    // identity, U₀ = (|b| − 1)/s̄, exact when c is an eigenvector. Two means of the eigenvalues
-    // offer themselves: weighted by ĉ_k², s̄ = cᵀSc/|c|² = |b|²/|c|², which tends to put U₀
-    // below the root, and weighted by g_k² (the weights of φ), s̄ = |Sc|²/|b|², which tends to
-    // put it above; their average is the start. On the `pair` bench's pairs the median
-    // relative error of U₀ falls from 8.7e-2 (first mean alone) to 3.5e-2, and the number of
-    // solves per pair from 3.6 to 3.4.
-    // ‖F‖²_F = tr S: two additions after S instead of a chain of nine.
-    let mut fro2 = s[0][0];
-    for a in 1..N {
-        fro2 = fro2 + s[a][a];
-    }
-    let one = T::splat(1.0);
-    let bn = b2.sqrt();
-    let lo = (bn - one) / fro2;
-    let c2 = norm2(c);
-    let sc = sym_mat_vec(&s, c);
-    let sc2 = norm2(&sc);
-    let u0 = (T::splat(0.5) * (bn - one) * (c2 / b2 + b2 / sc2)).max(lo);
-    DirectStart { s, lo, u0 }
 }
 
 /// What one Halley iteration of [`solve_outside_direct`] computes at `U`: with
@@ -329,52 +342,50 @@ pub(crate) struct HalleyAt<T: Real, const N: usize> {
     halley: T::Mask,
 }
 
-/// One iteration of [`solve_outside_direct`] at `u`, in any [`Real`] arithmetic.
-#[inline(always)]
-pub(crate) fn halley_at<T: Real, const N: usize>(
-    s: &[[T; N]; N],
-    c: &[T; N],
-    u: T,
-) -> HalleyAt<T, N> {
-    let one = T::splat(1.0);
-    let two = T::splat(2.0);
-    let mut m = *s;
-    for a in 0..N {
-        for b in 0..N {
-            m[a][b] = m[a][b] * u;
+impl<T: Real, const N: usize> HalleyAt<T, N> {
+    /// One iteration of [`solve_outside_direct`] at `u`, in any [`Real`] arithmetic.
+    #[inline(always)]
+    pub(crate) fn at(s: &[[T; N]; N], c: &[T; N], u: T) -> Self {
+        let one = T::splat(1.0);
+        let two = T::splat(2.0);
+        let mut m = *s;
+        for a in 0..N {
+            for b in 0..N {
+                m[a][b] = m[a][b] * u;
+            }
+            m[a][a] = m[a][a] + one;
         }
-        m[a][a] = m[a][a] + one;
-    }
-    let (adj, det) = spd_adjugate(&m);
-    let ax = sym_mat_vec(&adj, c);
-    let sax = sym_mat_vec(s, &ax);
-    // p = φ det²: with cond(S) ≤ 64 the formed S loses little that |F x|² would keep.
-    let p = dot(&ax, &sax);
-    let az = sym_mat_vec(&adj, &sax);
-    let q = dot(&sax, &az);
-    // r = (az)ᵀ S (az) = zᵀ S z det⁴, with φ'' = 6 zᵀ S z: Halley's correction.
-    let saz = sym_mat_vec(s, &az);
-    let r = dot(&az, &saz);
-    // Halley on h: δ = δ_N / (1 + δ_N h''/(2h')), δ_N = (p/q)(√p − det),
-    // h''/h' = (3/det)(q/p − r/q); over one denominator:
-    // δ = 2 det p q e / (2 det q² + 3 e (q² − r p)), e = √p − det.
-    let e = p.sqrt() - det;
-    let qq = q * q;
-    let newton_den = two * det * qq;
-    let halley_den = newton_den + T::splat(3.0) * e * (qq - r * p);
-    // Halley's factor 1 + δ_N h''/(2h') below ½ (a long step where h bends a lot): take
-    // Newton's step, (p/q) e over the same numerator, which keeps the monotone approach.
-    let halley = halley_den.ge(T::splat(0.5) * newton_den);
-    let step = (two * det * p * q * e) / T::select(halley, halley_den, newton_den);
-    HalleyAt {
-        adj,
-        det,
-        ax,
-        sax,
-        az,
-        saz,
-        step,
-        halley,
+        let (adj, det) = spd_adjugate(&m);
+        let ax = sym_mat_vec(&adj, c);
+        let sax = sym_mat_vec(s, &ax);
+        // p = φ det²: with cond(S) ≤ 64 the formed S loses little that |F x|² would keep.
+        let p = dot(&ax, &sax);
+        let az = sym_mat_vec(&adj, &sax);
+        let q = dot(&sax, &az);
+        // r = (az)ᵀ S (az) = zᵀ S z det⁴, with φ'' = 6 zᵀ S z: Halley's correction.
+        let saz = sym_mat_vec(s, &az);
+        let r = dot(&az, &saz);
+        // Halley on h: δ = δ_N / (1 + δ_N h''/(2h')), δ_N = (p/q)(√p − det),
+        // h''/h' = (3/det)(q/p − r/q); over one denominator:
+        // δ = 2 det p q e / (2 det q² + 3 e (q² − r p)), e = √p − det.
+        let e = p.sqrt() - det;
+        let qq = q * q;
+        let newton_den = two * det * qq;
+        let halley_den = newton_den + T::splat(3.0) * e * (qq - r * p);
+        // Halley's factor 1 + δ_N h''/(2h') below ½ (a long step where h bends a lot): take
+        // Newton's step, (p/q) e over the same numerator, which keeps the monotone approach.
+        let halley = halley_den.ge(T::splat(0.5) * newton_den);
+        let step = (two * det * p * q * e) / T::select(halley, halley_den, newton_den);
+        HalleyAt {
+            adj,
+            det,
+            ax,
+            sax,
+            az,
+            saz,
+            step,
+            halley,
+        }
     }
 }
 
@@ -452,7 +463,7 @@ pub fn solve<const N: usize>(s: &[f64; N], chat: &[f64; N], g: &[f64; N]) -> Pro
         } else {
             newton(|u| phi_u(s, &g2, u), lo, hi, lo)
         };
-        return finish_u(s, chat, g, u, false);
+        return finish_u(s, chat, u, false);
     }
 
     // Inside: parametrise by t = 1 + U s_max.
@@ -499,17 +510,9 @@ pub fn solve<const N: usize>(s: &[f64; N], chat: &[f64; N], g: &[f64; N]) -> Pro
         let uhi = -(1.0 - hi) / s_max;
         let u0 = -(1.0 - t) / s_max;
         let u = newton(|u| phi_u(s, &g2, u), ulo, uhi.min(0.0), u0);
-        return finish_u(s, chat, g, u, true);
+        return finish_u(s, chat, u, true);
     }
-    let mut p = Projection {
-        u: -(1.0 - t) / s_max,
-        xhat: [0.0; N],
-        t: [0.0; N],
-        dhat: [0.0; N],
-        d2: 0.0,
-        inside: true,
-        hard: false,
-    };
+    let mut p = Projection::zeroed(-(1.0 - t) / s_max, true, false);
     let one_minus_t = 1.0 - t;
     for k in 0..N {
         let tk = ins.delta[k] + t * ins.r[k];
@@ -522,22 +525,8 @@ pub fn solve<const N: usize>(s: &[f64; N], chat: &[f64; N], g: &[f64; N]) -> Pro
     p
 }
 
-fn finish_u<const N: usize>(
-    s: &[f64; N],
-    chat: &[f64; N],
-    _g: &[f64; N],
-    u: f64,
-    inside: bool,
-) -> Projection<N> {
-    let mut p = Projection {
-        u,
-        xhat: [0.0; N],
-        t: [0.0; N],
-        dhat: [0.0; N],
-        d2: 0.0,
-        inside,
-        hard: false,
-    };
+fn finish_u<const N: usize>(s: &[f64; N], chat: &[f64; N], u: f64, inside: bool) -> Projection<N> {
+    let mut p = Projection::zeroed(u, inside, false);
     for k in 0..N {
         let us = u * s[k];
         let tk = 1.0 + us;
@@ -551,15 +540,7 @@ fn finish_u<const N: usize>(
 }
 
 fn finish_hard<const N: usize>(s: &[f64; N], chat: &[f64; N], ins: &Inside<N>) -> Projection<N> {
-    let mut p = Projection {
-        u: -1.0 / ins.s_top,
-        xhat: [0.0; N],
-        t: [0.0; N],
-        dhat: [0.0; N],
-        d2: 0.0,
-        inside: true,
-        hard: true,
-    };
+    let mut p = Projection::zeroed(-1.0 / ins.s_top, true, true);
     let mut used = 0.0;
     let mut first_top = None;
     for k in 0..N {

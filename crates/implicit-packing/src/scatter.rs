@@ -126,10 +126,10 @@ pub(crate) fn add_to_items<const N: usize>(
         };
         scan_until(lists, block.end, |i, j, g| {
             if i >= block.start {
-                add(i, &g.centre_i, &g.torque_i);
+                add(i, &g.centre_i, &g.angular_i);
             }
             if block.contains(&j) {
-                add(j, &g.centre_j, &g.torque_j);
+                add(j, &g.centre_j, &g.angular_j);
             }
         });
     });
@@ -165,7 +165,7 @@ pub(crate) fn add_to_points<const N: usize>(
         scan_until(lists, block.end, |a, b, g| {
             if a >= lo {
                 add(&mut fi[a - lo], &g.centre_i);
-                add(&mut tau[a - lo], &g.torque_i);
+                add(&mut tau[a - lo], &g.angular_i);
             }
             let o = owners.owner[b] as usize;
             if block.contains(&o) {
@@ -175,7 +175,7 @@ pub(crate) fn add_to_points<const N: usize>(
                     &mut fg[b - ghost0]
                 };
                 add(f, &g.centre_j);
-                add(&mut tau[o - lo], &g.torque_j);
+                add(&mut tau[o - lo], &g.angular_j);
             }
         });
     });

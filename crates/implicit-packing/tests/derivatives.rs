@@ -157,9 +157,9 @@ fn partials<const M: usize, const Q: usize>(
 fn in_angles_3d(v: &[f64; 12], g: &PairGradient<3>) -> [f64; 12] {
     let mut out = [0.0; 12];
     out[0..3].copy_from_slice(&g.centre_i);
-    out[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &g.torque_i));
+    out[3..6].copy_from_slice(&angle_gradient_3d([v[3], v[4], v[5]], &g.angular_i));
     out[6..9].copy_from_slice(&g.centre_j);
-    out[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &g.torque_j));
+    out[9..12].copy_from_slice(&angle_gradient_3d([v[9], v[10], v[11]], &g.angular_j));
     out
 }
 
@@ -169,10 +169,10 @@ fn in_angles_2d(g: &PairGradient<2>) -> [f64; 6] {
     [
         g.centre_i[0],
         g.centre_i[1],
-        g.torque_i[2],
+        g.angular_i[2],
         g.centre_j[0],
         g.centre_j[1],
-        g.torque_j[2],
+        g.angular_j[2],
     ]
 }
 
@@ -264,10 +264,10 @@ fn envelope_form_equals_appendix_a1() {
         let d = pair_derivatives(&i, &j);
         let wi = angular_velocities_3d([v[3], v[4], v[5]]);
         let wj = angular_velocities_3d([v[9], v[10], v[11]]);
-        let gi = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_d2.torque_i);
-        let gj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_d2.torque_j);
-        let gui = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.torque_i);
-        let guj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.torque_j);
+        let gi = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_d2.angular_i);
+        let gj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_d2.angular_j);
+        let gui = angle_gradient_3d([v[3], v[4], v[5]], &d.grad_u.angular_i);
+        let guj = angle_gradient_3d([v[9], v[10], v[11]], &d.grad_u.angular_j);
         let mut env_d2 = Vec::new();
         let mut env_u = Vec::new();
         let mut a1_d2 = Vec::new();
@@ -328,13 +328,13 @@ fn hessian_vector_products_match_finite_differences() {
         let mut dir = PairDirection {
             centre_i: [dv[0], dv[1], dv[2]],
             centre_j: [dv[6], dv[7], dv[8]],
-            spin_i: [0.0; 3],
-            spin_j: [0.0; 3],
+            angular_i: [0.0; 3],
+            angular_j: [0.0; 3],
         };
         for a in 0..3 {
             for k in 0..3 {
-                dir.spin_i[k] += wi[a][k] * dv[3 + a];
-                dir.spin_j[k] += wj[a][k] * dv[9 + a];
+                dir.angular_i[k] += wi[a][k] * dv[3 + a];
+                dir.angular_j[k] += wj[a][k] * dv[9 + a];
             }
         }
         let (_, grad, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
@@ -344,11 +344,17 @@ fn hessian_vector_products_match_finite_differences() {
         exact[0..3].copy_from_slice(&hv.centre_i);
         exact[6..9].copy_from_slice(&hv.centre_j);
         for a in 0..3 {
-            let mut e_i = (0..3).map(|k| wi[a][k] * hv.torque_i[k]).sum::<f64>();
-            let mut e_j = (0..3).map(|k| wj[a][k] * hv.torque_j[k]).sum::<f64>();
+            let mut e_i = (0..3).map(|k| wi[a][k] * hv.angular_i[k]).sum::<f64>();
+            let mut e_j = (0..3).map(|k| wj[a][k] * hv.angular_j[k]).sum::<f64>();
             for b in 0..3 {
-                e_i += (0..3).map(|k| dwi[a][b][k] * grad.torque_i[k]).sum::<f64>() * dv[3 + b];
-                e_j += (0..3).map(|k| dwj[a][b][k] * grad.torque_j[k]).sum::<f64>() * dv[9 + b];
+                e_i += (0..3)
+                    .map(|k| dwi[a][b][k] * grad.angular_i[k])
+                    .sum::<f64>()
+                    * dv[3 + b];
+                e_j += (0..3)
+                    .map(|k| dwj[a][b][k] * grad.angular_j[k])
+                    .sum::<f64>()
+                    * dv[9 + b];
             }
             exact[3 + a] = e_i;
             exact[9 + a] = e_j;
@@ -378,8 +384,8 @@ fn hessian_vector_products_match_finite_differences() {
         let dir = PairDirection {
             centre_i: [dv[0], dv[1]],
             centre_j: [dv[3], dv[4]],
-            spin_i: [0.0, 0.0, dv[2]],
-            spin_j: [0.0, 0.0, dv[5]],
+            angular_i: [0.0, 0.0, dv[2]],
+            angular_j: [0.0, 0.0, dv[5]],
         };
         let (_, _, hv) = pair_gradient_derivative(&i, &j, &dir).expect("not the hard case");
         let exact = in_angles_2d(&hv);

@@ -160,18 +160,18 @@ fn direct_and_svd_routes_agree() {
         let ga: Vec<f64> = g
             .centre_i
             .iter()
-            .chain(&g.torque_i)
+            .chain(&g.angular_i)
             .chain(&g.centre_j)
-            .chain(&g.torque_j)
+            .chain(&g.angular_j)
             .copied()
             .collect();
         let gb: Vec<f64> = full
             .grad_f
             .centre_i
             .iter()
-            .chain(&full.grad_f.torque_i)
+            .chain(&full.grad_f.angular_i)
             .chain(&full.grad_f.centre_j)
-            .chain(&full.grad_f.torque_j)
+            .chain(&full.grad_f.angular_j)
             .copied()
             .collect();
         let scale = gb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -233,7 +233,7 @@ proptest! {
         prop_assert!(p.u.is_finite() && p.d2.is_finite() && p.d2 >= 0.0, "{:?}", p);
         prop_assert!(p.x.iter().all(|v| v.is_finite()), "{:?}", p);
         let q = implicit_packing::derivatives::pair_derivatives(&i, &j);
-        prop_assert!(q.grad_f.centre_i.iter().chain(q.grad_f.torque_i.iter()).all(|v| v.is_finite()), "{:?}", q);
+        prop_assert!(q.grad_f.centre_i.iter().chain(q.grad_f.angular_i.iter()).all(|v| v.is_finite()), "{:?}", q);
     }
 
     #[test]

@@ -26,8 +26,8 @@ fn is_zero<const N: usize>(g: &PairGradient<N>) -> bool {
     g.centre_i
         .iter()
         .chain(&g.centre_j)
-        .chain(&g.torque_i)
-        .chain(&g.torque_j)
+        .chain(&g.angular_i)
+        .chain(&g.angular_j)
         .all(|&v| v == 0.0)
 }
 
