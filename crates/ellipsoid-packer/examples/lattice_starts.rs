@@ -57,12 +57,11 @@ fn run<const N: usize>(
     } else {
         (0..k).map(LatticeStart::<N>::sequence).collect()
     };
-    let m = p.len();
     for (i, s) in starts.into_iter().enumerate() {
         let x0 = lattice_start_of(&p, &s);
         let label = format!("{s:?}, container {:.4?}", &x0[x0.len() - N..]);
         if tightest {
-            let x1 = turned::<N>(&x0, m, 0.01, 0, i as u64);
+            let x1 = turned::<N>(&x0, p.layout(), 0.01, 0, i as u64);
             one(format!("{label}, turned"), x1)?;
         }
         one(label, x0)?;

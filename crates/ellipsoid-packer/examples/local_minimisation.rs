@@ -2,7 +2,9 @@
 //! the face-centred cubic / hexagonal start of `ellipsoid_packer::starts`), certified and
 //! repaired: `cargo run --release -p ellipsoid-packer --example local_minimisation -- 3 ball 100`.
 //! A fifth argument chooses the inner solver: `lbfgs` (default), `spg` or `newton`; a sixth the
-//! cap on inner iterations per outer iteration (default 2000).
+//! cap on inner iterations per outer iteration (default 2000); a seventh the semi-axes of every
+//! item, separated by commas (default `2,1` in 2D, `1,0.75,0.5` in 3D; `1,1,1` for balls).
+//! Prints the time of the minimisation alone and per evaluation of the model.
 
 use ellipsoid_packer::local::{LocalSettings, local_minimisation};
 use ellipsoid_packer::starts::lattice_start;
@@ -30,8 +32,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         other => return Err(format!("unknown inner solver `{other}` (lbfgs, spg, newton)").into()),
     };
     let mut settings = LocalSettings::default().with_inner_solver(solver);
-    if let Some(cap) = args.get(6) {
+    if let Some(cap) = args.get(6).filter(|c| *c != "-") {
         settings = settings.with_max_inner_iterations(cap.parse()?);
+    }
+    let axes: Vec<f64> = match args.get(7) {
+        Some(list) => list
+            .split(',')
+            .map(|v| v.trim().parse::<f64>())
+            .collect::<Result<_, _>>()?,
+        None if dim == 2 => vec![2.0, 1.0],
+        None => vec![1.0, 0.75, 0.5],
+    };
+    if axes.len() != dim {
+        return Err(format!("{} semi-axes for dimension {dim}", axes.len()).into());
     }
     let start = Instant::now();
     // Outer iterations on stderr: a large m takes minutes.
@@ -53,24 +66,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         false
     };
-    let (density, before, factor, report, check, builds) = if dim == 2 {
-        minimise(vec![[2.0, 1.0]; m], kind, dense, &settings, &mut observe)?
-    } else {
+    let (density, before, factor, report, check, builds, seconds) = if dim == 2 {
         minimise(
-            vec![[1.0, 0.75, 0.5]; m],
+            vec![[axes[0], axes[1]]; m],
             kind,
             dense,
             &settings,
             &mut observe,
         )?
+    } else {
+        let l = [axes[0], axes[1], axes[2]];
+        minimise(vec![l; m], kind, dense, &settings, &mut observe)?
     };
     let elapsed = start.elapsed();
     println!("{check}");
     println!(
-        "{dim}D m = {m} {kind:?}: density {density:.5} (before repair {before:.5}, factor {factor:.6}), \
-         {:.2} s, {:?}, {} outer / {} inner iterations, {} evaluations, {} Hessian products, \
-         {builds} builds of the pair list",
+        "{dim}D m = {m} {axes:?} {kind:?}: density {density:.5} (before repair {before:.5}, factor \
+         {factor:.6}), {:.2} s ({seconds:.2} s the minimisation, {:.1} µs per evaluation), {:?}, \
+         {} outer / {} inner iterations, {} evaluations, {} Hessian products, {builds} builds of \
+         the pair list",
         elapsed.as_secs_f64(),
+        1e6 * seconds / report.function_evaluations.max(1) as f64,
         report.stop_reason,
         report.outer_iterations,
         report.inner_iterations,
@@ -81,8 +97,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// What one run reports: density, density before the repair, repair factor, the solver's
-/// report, the independent check and how many times the pair list was built.
-type Outcome = (f64, f64, f64, auglag::Report, String, usize);
+/// report, the independent check, how many times the pair list was built and the seconds of
+/// the minimisation alone.
+type Outcome = (f64, f64, f64, auglag::Report, String, usize, f64);
 
 /// One local minimisation of items with semi-axes `axes` in a container of `kind`, from the
 /// paper's lattice start or (`dense`) the centred lattice start.
@@ -99,7 +116,9 @@ fn minimise<const N: usize>(
     } else {
         lattice_start(&p)
     };
+    let start = Instant::now();
     let r = local_minimisation(&mut p, &x0, settings, observe)?;
+    let seconds = start.elapsed().as_secs_f64();
     let check = independent_check(&mut p, &r.x)?;
     Ok((
         r.density,
@@ -108,6 +127,7 @@ fn minimise<const N: usize>(
         r.report,
         check,
         p.pair_list_builds(),
+        seconds,
     ))
 }
 
@@ -119,7 +139,7 @@ fn independent_check<const N: usize>(
     x: &[f64],
 ) -> Result<String, Box<dyn std::error::Error>> {
     let kind = p.container_kind();
-    let dims = x[p.len() * Model::<N>::vars_per_body()..].to_vec();
+    let dims = x[x.len() - kind.dimension_count(N)..].to_vec();
     let bodies = p.bodies_at(x)?.to_vec();
     let mut overlapping = 0;
     let mut min_mu2 = f64::INFINITY;

@@ -70,9 +70,8 @@ pub fn fill<const N: usize>(
     let out_of_time = || settings.time_limit.is_some_and(|t| start.elapsed() >= t);
     // The round's threads minimise on models of their own.
     let (semi_axes, kind) = (problem.semi_axes().to_vec(), problem.container_kind());
-    let m = semi_axes.len();
     let container = x0
-        .get(m * Model::<N>::vars_per_body()..)
+        .get(problem.layout().item_variables()..)
         .unwrap_or_default()
         .to_vec();
     let given = certified_start(&mut problem, x0)?;
@@ -116,7 +115,7 @@ pub fn fill<const N: usize>(
                 } else {
                     perturb::<N>(
                         x0,
-                        m,
+                        problem.layout(),
                         settings.perturbation,
                         settings.seed,
                         shard.index() as u64,
@@ -136,7 +135,7 @@ pub fn fill<const N: usize>(
                         } else {
                             &latest_round
                         },
-                        m,
+                        problem.layout(),
                         amplitude,
                         settings.seed,
                         (index * shard.count() + shard.index()) as u64,

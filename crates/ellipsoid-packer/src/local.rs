@@ -130,7 +130,7 @@ fn placement<const N: usize>(
         .map(|l| l.map(|v| v * (1.0 + FIXED_MARGIN)))
         .collect();
     let mut solver_model = Model::<N>::new(grown, problem.container_kind())?;
-    let container = x0[problem.len() * Model::<N>::vars_per_body()..].to_vec();
+    let container = x0[problem.layout().item_variables()..].to_vec();
     let mut run = solver(settings, observe);
     let mut solve = |x: &[f64], feasibility: f64| {
         let adapter = Adapter::new(
@@ -322,11 +322,12 @@ mod tests {
     }
 
     /// Two unit spheres at `x₁` and `x₂` on the x axis in a ball of `radius`, repaired: the
-    /// variables before and after, and the dilation; the repair is certified.
+    /// variables before and after (a sphere's centre, no angles; the radius last), and the
+    /// dilation; the repair is certified.
     fn two_unit_spheres_repaired(x1: f64, x2: f64, radius: f64) -> (Vec<f64>, Vec<f64>, f64) {
         let mut p = Model::<3>::new(vec![[1.0, 1.0, 1.0]; 2], ContainerShape::Ball).unwrap();
-        let mut x = vec![0.0; 13];
-        (x[0], x[6], x[12]) = (x1, x2, radius);
+        let mut x = vec![0.0; 7];
+        (x[0], x[3], x[6]) = (x1, x2, radius);
         let (y, s, cert) = repair(&mut p, &x).unwrap();
         assert!(cert.is_feasible());
         (x, y, s)
@@ -338,8 +339,8 @@ mod tests {
         // container needs t = 3.5/3, a uniform dilation s = 2 (2.5 s + 1 ≤ 3 s).
         let (x, y, s) = two_unit_spheres_repaired(2.5, -1.5, 3.0);
         assert!((s - 3.5 / 3.0).abs() < 1e-9, "{s}");
-        assert_eq!(y[..12], x[..12]);
-        assert!((y[12] - 3.5).abs() < 1e-9);
+        assert_eq!(y[..6], x[..6]);
+        assert!((y[6] - 3.5).abs() < 1e-9);
     }
 
     #[test]
@@ -361,8 +362,8 @@ mod tests {
         // of radius 1.6, which t = 2/1.6 then makes 2. A uniform dilation needs 1/0.45.
         let (_, y, s) = two_unit_spheres_repaired(0.75, -0.75, 1.2);
         assert!((s - 4.0 / 3.0 * 1.25).abs() < 1e-9, "{s}");
-        assert!((y[0] - 1.0).abs() < 1e-9 && (y[6] + 1.0).abs() < 1e-9);
-        assert!((y[12] - 2.0).abs() < 1e-9, "{}", y[12]);
+        assert!((y[0] - 1.0).abs() < 1e-9 && (y[3] + 1.0).abs() < 1e-9);
+        assert!((y[6] - 2.0).abs() < 1e-9, "{}", y[6]);
     }
 
     #[test]
@@ -370,7 +371,7 @@ mod tests {
         // Two unit spheres 1.5 apart in a ball of radius 3: μ = 0.75, s = 4/3.
         let (_, y, s) = two_unit_spheres_repaired(-0.75, 0.75, 3.0);
         assert!((s - 4.0 / 3.0).abs() < 1e-9, "{s}");
-        assert!((y[6] - y[0] - 2.0).abs() < 1e-9);
+        assert!((y[3] - y[0] - 2.0).abs() < 1e-9);
     }
 
     #[test]

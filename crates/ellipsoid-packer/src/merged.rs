@@ -111,14 +111,15 @@ pub(crate) fn pulled_apart<const N: usize>(
             centres[j][k] += half * unit[k];
         }
     }
-    let stride = Model::<N>::vars_per_body();
+    let layout = problem.layout();
     let mut y = x.to_vec();
     for &item in pairs.iter().flat_map(|(i, j)| [i, j]) {
         let centre = match &cell {
             Some(cell) => to_fractional(cell, &centres[item]),
             None => centres[item],
         };
-        y[item * stride..item * stride + N].copy_from_slice(&centre);
+        let at = layout.start(item);
+        y[at..at + N].copy_from_slice(&centre);
     }
     Some(y)
 }
@@ -165,22 +166,22 @@ mod tests {
     #[test]
     fn merged_pairs_part_to_their_enclosing_balls() {
         let mut p = Model::<3>::new(vec![[1.0; 3]; 2], ContainerShape::Periodic).unwrap();
-        // Fractional centres, three angles each, then the cell (diagonal, then tilts).
-        let mut x = vec![0.01, 0.5, 0.5, 0.0, 0.0, 0.0, 0.99, 0.5, 0.5, 0.3, 0.2, 0.1];
+        // Fractional centres (a ball has no angles), then the cell (diagonal, then tilts).
+        let mut x = vec![0.01, 0.5, 0.5, 0.99, 0.5, 0.5];
         x.extend_from_slice(&[10.0, 10.0, 10.0, 0.0, 0.0, 0.0]);
         assert_eq!(x.len(), p.var_count());
         let y = pulled_apart(&mut p, &x, &[(0, 1)]).unwrap();
-        let gap = (y[0] + 1.0 - y[6]) * 10.0;
+        let gap = (y[0] + 1.0 - y[3]) * 10.0;
         assert!((gap - 2.0).abs() < 1e-12, "{gap}");
-        assert_eq!(&y[3..6], &x[3..6]);
         assert!(p.certify(&y).unwrap().overlapping.is_empty());
 
         let mut p = Model::<3>::new(vec![[1.0, 0.5, 0.5]; 2], ContainerShape::Box).unwrap();
         let mut x = vec![0.0; p.var_count()];
-        x[12..].copy_from_slice(&[5.0, 5.0, 5.0]);
+        x[p.layout().item_variables()..].copy_from_slice(&[5.0, 5.0, 5.0]);
         let y = pulled_apart(&mut p, &x, &[(0, 1)]).unwrap();
+        let second = p.layout().start(1);
         assert_eq!(&y[..3], &[-1.0, 0.0, 0.0]);
-        assert_eq!(&y[6..9], &[1.0, 0.0, 0.0]);
+        assert_eq!(&y[second..second + 3], &[1.0, 0.0, 0.0]);
         assert!(p.certify(&y).unwrap().overlapping.is_empty());
     }
 }

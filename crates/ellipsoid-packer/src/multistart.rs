@@ -336,7 +336,7 @@ pub fn multistart<const N: usize>(
         let stream = shard.global(0) as u64;
         perturbed = perturb::<N>(
             x0,
-            semi_axes.len(),
+            problem.layout(),
             settings.perturbation,
             settings.seed,
             stream,
@@ -430,7 +430,7 @@ pub fn multistart<const N: usize>(
                         let n = shard.global(n);
                         turned::<N>(
                             &lattice_start_of(&problem, &lattice_start(&tightest, n)),
-                            semi_axes.len(),
+                            problem.layout(),
                             LATTICE_TURN,
                             settings.seed,
                             n as u64,
@@ -442,7 +442,7 @@ pub fn multistart<const N: usize>(
                         } else {
                             &current
                         },
-                        semi_axes.len(),
+                        problem.layout(),
                         amplitude,
                         settings.seed,
                         shard.global(index) as u64,
@@ -863,9 +863,10 @@ mod tests {
     #[test]
     fn perturbation_is_bounded_and_reproducible() {
         let x = vec![1.0, 2.0, 0.5, -1.0, 0.0, 0.1, 10.0, 5.0];
-        let a = perturb::<2>(&x, 2, 0.025, 3, 4);
-        assert_eq!(a, perturb::<2>(&x, 2, 0.025, 3, 4));
-        assert_ne!(a, perturb::<2>(&x, 2, 0.025, 3, 5));
+        let layout = implicit_packing::Layout::of(&[[2.0, 1.0]; 2]);
+        let a = perturb::<2>(&x, &layout, 0.025, 3, 4);
+        assert_eq!(a, perturb::<2>(&x, &layout, 0.025, 3, 4));
+        assert_ne!(a, perturb::<2>(&x, &layout, 0.025, 3, 5));
         for k in 0..6 {
             let bound = 0.025
                 * if k % 3 == 2 {

@@ -95,14 +95,17 @@ impl<'a, const N: usize> Adapter<'a, N> {
     /// The same with the angle variables of the items marked in `items` held at their values
     /// in `x`: those items keep their orientation.
     pub(crate) fn with_frozen_orientations(mut self, items: &[bool], x: &[f64]) -> Self {
-        let stride = Model::<N>::vars_per_body();
-        self.frozen = items
+        let model = self.model.borrow();
+        let layout = model.layout();
+        let frozen = items
             .iter()
             .enumerate()
-            .filter(|(_, frozen)| **frozen)
-            .flat_map(|(i, _)| (i * stride + N..(i + 1) * stride).map(|k| (k, x[k])))
+            .filter(|&(i, frozen)| *frozen && i < layout.items())
+            .flat_map(|(i, _)| (layout.start(i) + N..layout.range(i).end).map(|k| (k, x[k])))
             .filter(|(k, _)| *k < x.len())
             .collect();
+        drop(model);
+        self.frozen = frozen;
         self
     }
 
@@ -123,7 +126,7 @@ impl<'a, const N: usize> Adapter<'a, N> {
     }
 
     fn body_variables(&self) -> usize {
-        self.model.borrow().len() * Model::<N>::vars_per_body()
+        self.model.borrow().layout().item_variables()
     }
 }
 
@@ -148,10 +151,12 @@ impl<const N: usize> auglag::Problem for Adapter<'_, N> {
         // Centres stay within a box far larger than any packing the start leads to: without
         // it a quasi-Newton step from a badly overlapping start could throw an item out to
         // 1e30, where the model refuses the point and the start is lost.
-        let stride = Model::<N>::vars_per_body();
-        for k in (0..start).filter(|k| k % stride < N) {
-            lower[k] = -self.centre_bound;
-            upper[k] = self.centre_bound;
+        let model = self.model.borrow();
+        let layout = model.layout();
+        for i in 0..layout.items() {
+            let centre = layout.start(i)..layout.start(i) + N;
+            lower[centre.clone()].fill(-self.centre_bound);
+            upper[centre].fill(self.centre_bound);
         }
         for &(k, v) in &self.frozen {
             lower[k] = v;

@@ -42,6 +42,7 @@ use crate::fixed::Unfinished;
 use crate::local::{LocalMethod, LocalResult, LocalSettings, certified_start, infeasibility};
 use crate::starts::SplitMix64;
 use auglag::Progress;
+use implicit_packing::Layout;
 use implicit_packing::containment::{Container, containment_residual};
 use implicit_packing::model::Model;
 use implicit_packing::periodic::{to_cartesian, to_fractional, widths};
@@ -250,8 +251,7 @@ fn random_packing_here<const N: usize>(
         ),
         Target::Jammed => settings.local.clone(),
     };
-    let order = spatial_order::<N>(&x0, problem.len());
-    let stride = Model::<N>::vars_per_body();
+    let order = spatial_order::<N>(&x0, problem.layout());
     let axes = problem.semi_axes();
     let mut sorted = Model::<N>::new(
         order.iter().map(|&i| axes[i]).collect(),
@@ -266,17 +266,17 @@ fn random_packing_here<const N: usize>(
     }
     let compressed = compression_to(
         &mut sorted,
-        &in_order(&x0, &order, stride),
+        &in_order(&x0, &order, problem.layout()),
         &local,
         aim,
         &mut watch,
         &mut |p| kept(p.density),
     )?;
-    drop(sorted);
     let compressed = LocalResult {
-        x: back_in_order(&compressed.x, &order, stride),
+        x: back_in_order(&compressed.x, &order, (sorted.layout(), problem.layout())),
         ..compressed
     };
+    drop(sorted);
     let Some(target) = aim else {
         return Ok(RandomPacking {
             packing: compressed,
@@ -287,7 +287,7 @@ fn random_packing_here<const N: usize>(
     let s = (target / compressed.objective)
         .powf(1.0 / N as f64)
         .max(1.0);
-    let body_variables = problem.len() * Model::<N>::vars_per_body();
+    let body_variables = problem.layout().item_variables();
     let mut x = problem.dilated(&compressed.x, s);
     x[body_variables..].copy_from_slice(container);
     match certified_start(problem, &x)? {
@@ -324,9 +324,9 @@ fn random_packing_here<const N: usize>(
 /// # References
 /// G. M. Morton, *A computer oriented geodetic data base and a new technique in file
 /// sequencing*, IBM (1966).
-pub fn spatial_order<const N: usize>(x: &[f64], m: usize) -> Vec<usize> {
-    let stride = Model::<N>::vars_per_body();
-    let centre = |i: usize| -> [f64; N] { std::array::from_fn(|k| x[i * stride + k]) };
+pub fn spatial_order<const N: usize>(x: &[f64], layout: &Layout) -> Vec<usize> {
+    let m = layout.items();
+    let centre = |i: usize| -> [f64; N] { std::array::from_fn(|k| x[layout.start(i) + k]) };
     let (mut lo, mut hi) = ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
     for i in 0..m {
         let c = centre(i);
@@ -356,22 +356,22 @@ pub fn spatial_order<const N: usize>(x: &[f64], m: usize) -> Vec<usize> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
-/// The variables `x` with the items (`stride` variables each) taken in `order`, the container's
+/// The variables `x` with the items (at their places in `layout`) taken in `order`, the container's
 /// variables last.
-fn in_order(x: &[f64], order: &[usize], stride: usize) -> Vec<f64> {
+fn in_order(x: &[f64], order: &[usize], layout: &Layout) -> Vec<f64> {
     let mut out = Vec::with_capacity(x.len());
     for &i in order {
-        out.extend_from_slice(&x[i * stride..(i + 1) * stride]);
+        out.extend_from_slice(&x[layout.range(i)]);
     }
-    out.extend_from_slice(&x[order.len() * stride..]);
+    out.extend_from_slice(&x[layout.item_variables()..]);
     out
 }
 
 /// The inverse of [`in_order`]: item `k` of `sorted` is item `order[k]` of the result.
-fn back_in_order(sorted: &[f64], order: &[usize], stride: usize) -> Vec<f64> {
+fn back_in_order(sorted: &[f64], order: &[usize], (from, to): (&Layout, &Layout)) -> Vec<f64> {
     let mut out = sorted.to_vec();
     for (k, &i) in order.iter().enumerate() {
-        out[i * stride..(i + 1) * stride].copy_from_slice(&sorted[k * stride..(k + 1) * stride]);
+        out[to.range(i)].copy_from_slice(&sorted[from.range(k)]);
     }
     out
 }
@@ -1041,16 +1041,25 @@ mod tests {
     }
 
     /// The Z-order of the 4 × 4 points of a square visits each 2 × 2 quadrant in turn, and
-    /// the sorted variables go back to the same bits.
+    /// the sorted variables go back to the same bits, with round items (no angle) among the
+    /// others.
     #[test]
     fn the_spatial_order_visits_quadrants_in_turn_and_is_undone() {
-        // Items 0..16 at (a, b) with item index 4a + b, angles 0.5 i; container last.
+        // Items 0..16 at (a, b) with item index 4a + b, the odd ones ellipses with angle 0.5 i;
+        // container last.
+        let axes: Vec<[f64; 2]> = (0..16)
+            .map(|i| if i % 2 == 0 { [1.0, 1.0] } else { [2.0, 1.0] })
+            .collect();
+        let layout = Layout::of(&axes);
         let mut x = Vec::new();
         for i in 0..16 {
-            x.extend_from_slice(&[(i / 4) as f64, (i % 4) as f64, 0.5 * i as f64]);
+            x.extend_from_slice(&[(i / 4) as f64, (i % 4) as f64]);
+            if i % 2 == 1 {
+                x.push(0.5 * i as f64);
+            }
         }
         x.extend_from_slice(&[9.0, 8.0]);
-        let order = spatial_order::<2>(&x, 16);
+        let order = spatial_order::<2>(&x, &layout);
         let mut seen = order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..16).collect::<Vec<_>>());
@@ -1061,10 +1070,11 @@ mod tests {
                 "{order:?}"
             );
         }
-        let sorted = in_order(&x, &order, 3);
-        assert_eq!(sorted[..3], x[3 * order[0]..3 * order[0] + 3]);
-        assert_eq!(sorted[48..], [9.0, 8.0]);
-        assert_eq!(back_in_order(&sorted, &order, 3), x);
+        let sorted_layout = Layout::of(&order.iter().map(|&i| axes[i]).collect::<Vec<_>>());
+        let sorted = in_order(&x, &order, &layout);
+        assert_eq!(sorted[sorted_layout.range(0)], x[layout.range(order[0])]);
+        assert_eq!(sorted[sorted.len() - 2..], [9.0, 8.0]);
+        assert_eq!(back_in_order(&sorted, &order, (&sorted_layout, &layout)), x);
     }
 
     #[test]
@@ -1248,7 +1258,7 @@ mod tests {
         let settings = RandomSettings::new(Target::Fraction, 5);
         let r = random_packing(&mut p, &dims, &settings, &mut |_| false).unwrap();
         assert!(r.packing.certificate.is_feasible());
-        assert_eq!(&r.packing.x[m * 6..], &dims[..]);
+        assert_eq!(&r.packing.x[p.layout().item_variables()..], &dims[..]);
         assert!(
             (r.packing.density - 0.5).abs() < 1e-12,
             "{}",
@@ -1285,7 +1295,7 @@ mod tests {
         let d = r.packing.density;
         eprintln!("jammed bidisperse discs: {d} from {}", r.start_density);
         assert!(d > 0.78 && d < 0.9069, "jammed at {d}");
-        let cell = &r.packing.x[48 * 3..];
+        let cell = &r.packing.x[p.layout().item_variables()..];
         assert_eq!(cell[2], 0.0, "the square stays a square");
         assert!((cell[0] - cell[1]).abs() < 1e-12 * cell[0]);
     }
@@ -1300,7 +1310,7 @@ mod tests {
             panic!("an interrupted run reached its fraction: {r:?}");
         };
         assert!(u.interrupted);
-        assert_eq!(&u.x[60..], &[half, half]);
+        assert_eq!(&u.x[p.layout().item_variables()..], &[half, half]);
         assert!((u.density - 0.8).abs() < 1e-12);
     }
 }

@@ -218,7 +218,7 @@ fn least_uniform_dilation<const N: usize>(
 /// The container's dimensions of `x` multiplied by `t` (scaled about its centre); the items
 /// stay.
 fn container_scaled<const N: usize>(problem: &Model<N>, x: &[f64], t: f64) -> Vec<f64> {
-    let bodies_end = problem.len() * Model::<N>::vars_per_body();
+    let bodies_end = problem.layout().item_variables();
     let mut y = x.to_vec();
     y[bodies_end..].iter_mut().for_each(|v| *v *= t);
     y

@@ -727,6 +727,31 @@ mod tests {
         ));
     }
 
+    /// Nineteen unit circles in a circle, round items without angles whose pairs take the
+    /// closed form: the recommended multi-start reaches the optimal radius 1 + √2 + √6 (Fodor
+    /// 1999) to 1e-7 within three local minimisations, certified, and never below it.
+    #[test]
+    fn nineteen_circles_reach_their_optimal_circle() {
+        let optimum = 1.0 + 2f64.sqrt() + 6f64.sqrt();
+        let p = problem([1.0, 1.0], 19, ContainerShape::Ball, Goal::Densest);
+        let settings = Settings {
+            multistart: MultiStartSettings::recommended(2, 1)
+                .with_threads(1)
+                .with_max_local_minimisations(3)
+                .with_time_limit(None),
+            orientations: Vec::new(),
+        };
+        let run = packed(Packer::new(p, settings).unwrap().run(&mut ()).unwrap());
+        assert!(run.certificate.is_feasible());
+        let Container::Ball { radius } = run.configuration.container else {
+            panic!("{:?}", run.configuration.container)
+        };
+        assert!(
+            radius >= optimum * (1.0 - 1e-12) && radius <= optimum * (1.0 + 1e-7),
+            "{radius} against {optimum}"
+        );
+    }
+
     #[test]
     fn a_random_packing_is_jammed_certified_with_its_history() {
         let cell =

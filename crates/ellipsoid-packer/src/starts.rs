@@ -37,6 +37,7 @@
 //!   1999, chapter 1 (the hexagonal and face-centred cubic lattices).
 
 use crate::Error;
+use implicit_packing::Layout;
 use implicit_packing::containment::ContainerShape;
 use implicit_packing::model::Model;
 
@@ -155,12 +156,14 @@ pub fn lattice_start_of<const N: usize>(problem: &Model<N>, start: &LatticeStart
         return periodic_lattice_start(problem, per_cell, &start.shift);
     }
     let (points, dims) = lattice_cut(problem, start);
-    let stride = Model::<N>::vars_per_body();
+    let layout = problem.layout();
     let mut x = vec![0.0; problem.var_count()];
-    for (i, p) in points.iter().enumerate() {
-        x[i * stride..i * stride + N].copy_from_slice(p);
+    for (i, p) in points.iter().enumerate().take(m) {
+        let at = layout.start(i);
+        x[at..at + N].copy_from_slice(p);
     }
-    x[m * stride..].copy_from_slice(&dims[..problem.var_count() - m * stride]);
+    let nb = layout.item_variables();
+    x[nb..].copy_from_slice(&dims[..problem.var_count() - nb]);
     x
 }
 
@@ -350,7 +353,7 @@ pub fn fill_start<const N: usize>(
     start: &LatticeStart<N>,
     container: &[f64],
 ) -> Result<Vec<f64>, Error> {
-    let body_variables = problem.len() * Model::<N>::vars_per_body();
+    let body_variables = problem.layout().item_variables();
     if container.len() != problem.var_count() - body_variables {
         return Err(implicit_packing::Error::LengthMismatch {
             what: "container variables",
@@ -491,12 +494,13 @@ pub fn lattice_start<const N: usize>(problem: &Model<N>) -> Vec<f64> {
     let m = problem.len();
     let spacing = lattice_semi_axes(problem);
     let points = lattice_points::<N>(m, &spacing);
-    let stride = Model::<N>::vars_per_body();
+    let layout = problem.layout();
     let mut x = vec![0.0; problem.var_count()];
     let mut reach = [0.0_f64; N];
     let mut radius = 0.0_f64;
     for (i, (p, l)) in points.iter().zip(problem.semi_axes()).enumerate() {
-        x[i * stride..i * stride + N].copy_from_slice(p);
+        let at = layout.start(i);
+        x[at..at + N].copy_from_slice(p);
         let r = l.iter().fold(0.0_f64, |a, &b| a.max(b));
         let norm = p.iter().map(|v| v * v).sum::<f64>().sqrt();
         radius = radius.max(norm + r);
@@ -506,7 +510,7 @@ pub fn lattice_start<const N: usize>(problem: &Model<N>) -> Vec<f64> {
     }
     // The enclosing balls touch the container; the same relative gap as the lattice.
     let (radius, reach) = (radius * (1.0 + 1e-9), reach.map(|r| r * (1.0 + 1e-9)));
-    let dims = &mut x[m * stride..];
+    let dims = &mut x[layout.item_variables()..];
     match problem.container_kind() {
         ContainerShape::Ball => dims[0] = radius,
         ContainerShape::Ellipsoid => dims.fill(radius),
@@ -634,12 +638,12 @@ pub fn periodic_lattice_start<const N: usize>(
     let unit: [[f64; N]; N] = std::array::from_fn(|r| unit[r].map(|v| v * l[r]));
     let counts = supercell::<N>(m, sites.len(), &std::array::from_fn(|k| unit[k][k]));
     let mut x = vec![0.0; problem.var_count()];
-    place_on_sites(&mut x, m, &sites, &counts, shift);
-    let stride = Model::<N>::vars_per_body();
+    place_on_sites(&mut x, problem.layout(), &sites, &counts, shift);
+    let nb = problem.layout().item_variables();
     // The supercell H diag(c), with the same relative gap as the lattice.
     for k in 0..N * (N + 1) / 2 {
         let (r, c) = implicit_packing::periodic::entry::<N>(k);
-        x[m * stride + k] = unit[r][c] * counts[c] as f64 * (1.0 + 1e-9);
+        x[nb + k] = unit[r][c] * counts[c] as f64 * (1.0 + 1e-9);
     }
     x
 }
@@ -648,12 +652,12 @@ pub fn periodic_lattice_start<const N: usize>(
 /// (each with `sites`, moved by `shift`) into the variables `x`; the angles stay as they are.
 fn place_on_sites<const N: usize>(
     x: &mut [f64],
-    m: usize,
+    layout: &Layout,
     sites: &[[f64; N]],
     counts: &[usize; N],
     shift: &[f64; N],
 ) {
-    let stride = Model::<N>::vars_per_body();
+    let m = layout.items();
     let mut item = 0;
     let mut n = [0usize; N];
     loop {
@@ -662,7 +666,7 @@ fn place_on_sites<const N: usize>(
                 return;
             }
             for k in 0..N {
-                x[item * stride + k] = (n[k] as f64 + site[k] + shift[k]) / counts[k] as f64;
+                x[layout.start(item) + k] = (n[k] as f64 + site[k] + shift[k]) / counts[k] as f64;
             }
             item += 1;
         }
@@ -726,8 +730,8 @@ fn periodic_fill_start<const N: usize>(
     ranked.sort_by(|a, b| a.0.0.total_cmp(&b.0.0).then(a.0.1.cmp(&b.0.1)));
     let (_, counts, sites) = &ranked[start.orientation % ranked.len()];
     let mut x = vec![0.0; problem.var_count()];
-    place_on_sites(&mut x, m, sites, counts, &start.shift);
-    x[m * Model::<N>::vars_per_body()..].copy_from_slice(container);
+    place_on_sites(&mut x, problem.layout(), sites, counts, &start.shift);
+    x[problem.layout().item_variables()..].copy_from_slice(container);
     x
 }
 
@@ -847,12 +851,12 @@ fn lattice_points<const N: usize>(m: usize, l: &[f64; N]) -> Vec<[f64; N]> {
 /// `fraction × π`, from a generator seeded by `(seed, index)`.
 pub fn perturb<const N: usize>(
     x: &[f64],
-    items: usize,
+    layout: &Layout,
     fraction: f64,
     seed: u64,
     index: u64,
 ) -> Vec<f64> {
-    let dims = &x[items * Model::<N>::vars_per_body()..];
+    let dims = &x[layout.item_variables()..];
     // A periodic cell is the only container with N (N + 1) / 2 dimensions; its centres are
     // fractional, so the half-cell is 1/2.
     let periodic = dims.len() == N * (N + 1) / 2;
@@ -863,7 +867,7 @@ pub fn perturb<const N: usize>(
             dims.get(k).or(dims.first()).copied().unwrap_or(1.0)
         }
     };
-    jittered::<N>(x, items, (seed, index), |v| {
+    jittered::<N>(x, layout, (seed, index), |v| {
         Some(
             fraction
                 * if v < N {
@@ -886,29 +890,28 @@ pub fn perturb<const N: usize>(
 /// twice).
 pub fn turned<const N: usize>(
     x: &[f64],
-    items: usize,
+    layout: &Layout,
     amplitude: f64,
     seed: u64,
     index: u64,
 ) -> Vec<f64> {
-    jittered::<N>(x, items, (seed, index), |v| (v >= N).then_some(amplitude))
+    jittered::<N>(x, layout, (seed, index), |v| (v >= N).then_some(amplitude))
 }
 
 /// `x` with item variable `v` of every item moved by a uniform draw in `±amplitude(v)`
 /// (`None`: left, and no draw made), from a generator seeded by `(seed, index)`, item by item.
 fn jittered<const N: usize>(
     x: &[f64],
-    items: usize,
+    layout: &Layout,
     (seed, index): (u64, u64),
     amplitude: impl Fn(usize) -> Option<f64>,
 ) -> Vec<f64> {
-    let stride = Model::<N>::vars_per_body();
     let mut rng = SplitMix64::stream(seed, index);
     let mut y = x.to_vec();
-    for i in 0..items {
-        for v in 0..stride {
+    for i in 0..layout.items() {
+        for (v, at) in layout.range(i).enumerate() {
             if let Some(a) = amplitude(v) {
-                y[i * stride + v] += a * (2.0 * rng.uniform() - 1.0);
+                y[at] += a * (2.0 * rng.uniform() - 1.0);
             }
         }
     }
@@ -1053,9 +1056,9 @@ mod tests {
     fn turning_moves_only_angles_within_the_amplitude_and_reproducibly() {
         let p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerShape::Box).unwrap();
         let x = lattice_start_of(&p, &LatticeStart::sequence(1));
-        let y = turned::<3>(&x, 20, 0.01, 7, 3);
-        assert_eq!(y, turned::<3>(&x, 20, 0.01, 7, 3));
-        assert_ne!(y, turned::<3>(&x, 20, 0.01, 7, 4));
+        let y = turned::<3>(&x, p.layout(), 0.01, 7, 3);
+        assert_eq!(y, turned::<3>(&x, p.layout(), 0.01, 7, 3));
+        assert_ne!(y, turned::<3>(&x, p.layout(), 0.01, 7, 4));
         for (i, (a, b)) in x.iter().zip(&y).enumerate() {
             let angle = i < 20 * 6 && i % 6 >= 3;
             assert!(

@@ -109,7 +109,8 @@ fn small_cell<const N: usize>(
 /// The variables of `m` items tiled from the small cell `x` of `k` items: the cell repeated
 /// `c_1 × … × c_N` times (the counts of [`supercell`]), the first `m` images kept.
 fn tiled<const N: usize>(x: &[f64], k: usize, m: usize) -> Vec<f64> {
-    let stride = Model::<N>::vars_per_body();
+    // The items are alike: each has the same variables, and the cell's follow them.
+    let stride = (x.len() - N * (N + 1) / 2) / k;
     let cell_vars = &x[k * stride..];
     let heights: [f64; N] = std::array::from_fn(|d| cell_vars[d]);
     let counts = supercell::<N>(m, k, &heights);

@@ -23,8 +23,8 @@ fn densest<const N: usize>(axes: [f64; N], per_cell: usize, loose: f64) -> (f64,
     let mut model = Model::<N>::new(vec![axes; per_cell], ContainerShape::Periodic).unwrap();
     let x0 = periodic_lattice_start(&model, per_cell, &[0.0; N]);
     let mut x = model.dilated(&x0, loose);
-    let stride = Model::<N>::vars_per_body();
-    for (k, v) in x[..per_cell * stride].iter_mut().enumerate() {
+    let nb = model.layout().item_variables();
+    for (k, v) in x[..nb].iter_mut().enumerate() {
         *v += 0.05 * (((k * 7919) % 13) as f64 / 6.0 - 1.0);
     }
     let start_cert = model.certify(&x).unwrap();

@@ -7,7 +7,8 @@
 //! the time goes (variables, the scan of the pair list, separation certificate, pair kernel four
 //! pairs at a time as the model runs it, and one at a time for comparison), and what a rebuild
 //! of the pair list costs (the model's evaluations at a fixed point reuse it; in a solve it is
-//! rebuilt about once every few hundred evaluations, see `model::PAIR_LIST_SKIN`).
+//! rebuilt about once every few hundred evaluations, see `model::PAIR_LIST_SKIN`); and balls of
+//! the same volumes against the ellipsoids (no angles, the closed-form pair term).
 #![allow(clippy::needless_range_loop)]
 
 use implicit_packing::batch::pair_gradients;
@@ -207,10 +208,61 @@ fn main() {
         per_body[2] * 1e9,
         per_body[2] / per_body[0]
     );
+    for m in [10_000, 100_000] {
+        balls_against_ellipsoids(m);
+    }
     #[cfg(feature = "rayon")]
     for m in [10_000, 100_000] {
         threads::compare(m);
     }
+}
+
+/// The configuration of [`configuration`] with every ellipsoid replaced by the ball of its
+/// volume at its centre: no angles, and every pair in the closed form of module `round`.
+fn balls(m: usize, density: f64) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let (axes, x) = configuration(m, density);
+    let balls: Vec<[f64; 3]> = axes
+        .iter()
+        .map(|l| [(l[0] * l[1] * l[2]).cbrt(); 3])
+        .collect();
+    let mut y = Vec::with_capacity(3 * m + 3);
+    for i in 0..m {
+        y.extend_from_slice(&x[6 * i..6 * i + 3]);
+    }
+    y.extend_from_slice(&x[6 * m..]);
+    (balls, y)
+}
+
+/// Value and gradient of `m` balls against `m` ellipsoids of the same volumes and centres,
+/// timed in turn (best of 12 rounds): what a scene of balls costs against one of ellipsoids.
+fn balls_against_ellipsoids(m: usize) {
+    let mut cases: Vec<(Model<3>, Vec<f64>, ModelGradient, f64)> =
+        [configuration(m, 0.6), balls(m, 0.6)]
+            .into_iter()
+            .map(|(axes, x)| {
+                let p = Model::<3>::new(axes, ContainerShape::Box).expect("valid problem");
+                (p, x, ModelGradient::default(), f64::INFINITY)
+            })
+            .collect();
+    for _ in 0..12 {
+        for (p, x, g, t_best) in cases.iter_mut() {
+            let passes = if m >= 100_000 { 2 } else { 10 };
+            let t = best(passes, || {
+                black_box(p.evaluate(x, Some(g)).expect("evaluates"));
+            });
+            *t_best = t_best.min(t);
+        }
+    }
+    let per = |t: f64| t * 1e9 / m as f64;
+    let (ellipsoids, balls) = (cases[0].3, cases[1].3);
+    println!(
+        "m = {m:6}: value+gradient of balls {:.0} ns per item, of ellipsoids {:.0} ns: {:.2}x; variables {} against {}",
+        per(balls),
+        per(ellipsoids),
+        ellipsoids / balls,
+        cases[1].1.len(),
+        cases[0].1.len()
+    );
 }
 
 /// Value and gradient on pools of one and two threads, in a box and in the periodic cube of

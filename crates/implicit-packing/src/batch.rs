@@ -31,6 +31,8 @@ pub(crate) struct Waiting<const N: usize> {
     i: usize,
     j: usize,
     line: CentreLine<N>,
+    /// Both items round: the closed form of module `round` solves the pair, not the kernel.
+    round: bool,
 }
 
 /// What the queue computes for a pair: `f` with its gradient ([`WithGradient`]) or `f`
@@ -121,6 +123,7 @@ impl<const N: usize, K> Default for KernelQueue<N, K> {
                 in_j: [0.0; N],
                 norm2: 0.0,
             },
+            round: false,
         };
         Self {
             waiting: [empty; CAPACITY],
@@ -151,9 +154,11 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
             return;
         }
         let line = centre_line(bi, bj);
+        // Two round items whose enclosing balls meet overlap or touch: no certificate needed.
+        let round = bi.is_round() && bj.is_round();
         // Written in any case; the count advances only for a pair that must be solved.
-        let keep = !certified_separated(bi, bj, &line);
-        self.waiting[self.len] = Waiting { i, j, line };
+        let keep = round || !certified_separated(bi, bj, &line);
+        self.waiting[self.len] = Waiting { i, j, line, round };
         self.len += usize::from(keep);
         if self.len == CAPACITY {
             self.solve_fours(bodies, emit);
@@ -177,11 +182,17 @@ impl<const N: usize, K: Kernel<N>> KernelQueue<N, K> {
     fn solve_fours(&mut self, bodies: &[Body<N>], emit: &mut impl FnMut(usize, usize, &K::Out)) {
         let (fours, _) = self.waiting[..self.len].as_chunks::<LANES>();
         for w in fours {
-            for (k, out) in K::four(bodies, w).iter().enumerate() {
+            // The kernel does not solve round pairs; four of them skip it.
+            let solved = if w.iter().all(|p| p.round) {
+                core::array::from_fn(|_| None)
+            } else {
+                K::four(bodies, w)
+            };
+            for (k, out) in solved.iter().enumerate() {
                 let (i, j) = (w[k].i, w[k].j);
                 match out {
-                    Some(o) => emit(i, j, o),
-                    None => emit(i, j, &K::one(&bodies[i], &bodies[j])),
+                    Some(o) if !w[k].round => emit(i, j, o),
+                    _ => emit(i, j, &K::one(&bodies[i], &bodies[j])),
                 }
             }
         }
@@ -577,7 +588,12 @@ mod tests {
             let (bi, bj) = (&bodies[i], &bodies[j]);
             let line = centre_line(bi, bj);
             if !bounding_spheres_apart(bi, bj) && !certified_separated(bi, bj, &line) {
-                waiting[p % 4].push(Waiting { i, j, line });
+                waiting[p % 4].push(Waiting {
+                    i,
+                    j,
+                    line,
+                    round: false,
+                });
             }
         }
         let has_lanes = simd::has_avx2_fma();

@@ -44,6 +44,7 @@ use crate::pair::{
     direct_solution, setup_from, solve_direct, solve_pair_with, solve_svd,
 };
 use crate::projection::DirectProjection;
+use crate::round::RoundPair;
 use crate::shape::{Body, angular_velocities_3d};
 
 /// A vector of a pair's placement space, or of its dual: centre parts and world-frame angular
@@ -342,6 +343,9 @@ pub fn pair_gradient<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGrad
     // The bounding-sphere exit ahead of the dispatch, as in `overlap_measure`.
     if bounding_spheres_apart(i, j) {
         return (0.0, PairGradient::ZERO);
+    }
+    if i.is_round() && j.is_round() {
+        return round_pair_gradient(i, j);
     }
     simd::multiversion!(call pair_gradient_impl::<N>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>)
     )
@@ -671,6 +675,9 @@ pub fn pair_gradient_derivative<const N: usize>(
     j: &Body<N>,
     dir: &PairDirection<N>,
 ) -> Option<(f64, PairGradient<N>, PairGradient<N>)> {
+    if i.is_round() && j.is_round() {
+        return Some(round_pair_gradient_derivative(i, j, dir));
+    }
     let sol = solve_pair_with(i, j, false);
     if sol.proj.hard {
         return None;
@@ -842,4 +849,58 @@ pub fn angular_velocity_derivatives_3d(angles: [f64; 3]) -> [[[f64; 3]; 3]; 3] {
         [z, z, [-cp, -sp, 0.0]],
         [z, z, z],
     ]
+}
+
+/// The gradient of the closed form for the slope `f'(t)`: `±f'(t) n / r_i` on the centres, no
+/// torque (module `round`).
+fn round_gradient<const N: usize>(pair: &RoundPair<N>, slope: f64) -> PairGradient<N> {
+    let mut g = PairGradient::ZERO;
+    for k in 0..N {
+        g.centre_i[k] = slope * pair.normal[k] / pair.r_i;
+        g.centre_j[k] = -g.centre_i[k];
+    }
+    g
+}
+
+/// `f` and its gradient for two round items: no torques.
+pub fn round_pair_gradient<const N: usize>(i: &Body<N>, j: &Body<N>) -> (f64, PairGradient<N>) {
+    let pair = RoundPair::of(i, j);
+    let f = pair.value();
+    if f == 0.0 {
+        return (0.0, PairGradient::ZERO);
+    }
+    (f, round_gradient(&pair, pair.slope()))
+}
+
+/// `f`, its gradient and the Hessian of `f` times the direction `dir` for two round items (the
+/// angular parts of `dir` play no part).
+pub fn round_pair_gradient_derivative<const N: usize>(
+    i: &Body<N>,
+    j: &Body<N>,
+    dir: &PairDirection<N>,
+) -> (f64, PairGradient<N>, PairGradient<N>) {
+    let pair = RoundPair::of(i, j);
+    let f = pair.value();
+    if f == 0.0 {
+        return (0.0, PairGradient::ZERO, PairGradient::ZERO);
+    }
+    let slope = pair.slope();
+    let mut du = [0.0; N];
+    for k in 0..N {
+        du[k] = dir.centre_i[k] - dir.centre_j[k];
+    }
+    let n = &pair.normal;
+    let along = (0..N).map(|k| n[k] * du[k]).sum::<f64>();
+    let radial = pair.curvature() / (pair.r_i * pair.r_i);
+    let tangential = if pair.distance > 0.0 {
+        slope / (pair.r_i * pair.distance)
+    } else {
+        0.0
+    };
+    let mut hv = PairGradient::ZERO;
+    for k in 0..N {
+        hv.centre_i[k] = radial * along * n[k] + tangential * (du[k] - along * n[k]);
+        hv.centre_j[k] = -hv.centre_i[k];
+    }
+    (f, round_gradient(&pair, slope), hv)
 }

@@ -11,11 +11,13 @@
 //! * [`shape`]: centres, semi-axes, rotations (eqs. 1–2), quaternions;
 //! * [`pair`]: the pair term `f` (eqs. 3, 21–22, 34–36, Prop. 3.3);
 //! * `projection` (feature `internals`): the secular equation of the projection onto `xᵀ S x = 1`;
+//! * [`round`]: the pair term of two circles or balls in closed form;
 //! * [`derivatives`]: first derivatives of the pair term (Appendix A.1 and the envelope form)
 //!   and exact Hessian–vector products;
 //! * [`containment`]: exact containment in a ball, an ellipsoid or a box, with first
 //!   derivatives and exact Hessian–vector products;
 //! * [`periodic`]: periodic cells (fractional coordinates, lattice images);
+//! * [`layout`]: where each item's variables are (a round item has no angles);
 //! * [`model`]: the whole sum over the grid's candidate pairs (Section 5.2), containment and
 //!   objective, with gradients and Hessian–vector products;
 //! * [`certificate`]: the verdict that decides whether a configuration is a packing, independent
@@ -41,6 +43,7 @@ pub mod containment;
 pub mod derivatives;
 pub mod error;
 pub(crate) mod lanes;
+pub mod layout;
 pub(crate) mod linalg;
 pub mod model;
 pub mod pair;
@@ -49,6 +52,7 @@ pub mod periodic;
 pub mod projection;
 #[cfg(not(feature = "internals"))]
 mod projection;
+pub mod round;
 #[cfg(feature = "rayon")]
 pub(crate) mod scatter;
 pub mod shape;
@@ -57,6 +61,7 @@ pub(crate) mod trig;
 pub use certificate::Certificate;
 pub use containment::{Container, ContainerShape};
 pub use error::Error;
+pub use layout::Layout;
 pub use model::Model;
 pub use pair::{PairTerm, Route, epsilon, overlap_measure, pair_term, pair_term_by};
 pub use shape::{Body, Ellipse, Ellipsoid, Item, Orientation};

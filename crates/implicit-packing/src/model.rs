@@ -1,11 +1,12 @@
 //! The whole model: the sum of the pair terms over the grid's candidate pairs (Section 5.2),
 //! the containment residuals and the objective, with gradients, in `O(m)` time and memory.
 //!
-//! Variables, in this order (`q = 1` angle in 2D, `q = 3` in 3D):
+//! Variables, in this order ([`Layout`]):
 //!
 //! ```text
 //! x = [ c_1, Ω_1, c_2, Ω_2, …, c_m, Ω_m, container dimensions ]
-//! Ω_i = θ_i (eq. 1) or [φ_i, θ_i, ψ_i] (eq. 2); container: [r] or N semi-axes / half-sides.
+//! Ω_i = θ_i (eq. 1) or [φ_i, θ_i, ψ_i] (eq. 2), none for a round item (a circle or a ball);
+//! container: [r] or N semi-axes / half-sides.
 //! ```
 //!
 //! Quantities (all ≥ 0):
@@ -60,6 +61,9 @@ use crate::derivatives::{
     pair_gradient_derivative,
 };
 use crate::error::Error;
+use crate::layout::{
+    Layout, frame_times, spheroid_axis, spheroid_frame_rotation, spheroid_rotation, spheroid_rows,
+};
 use crate::pair::overlap_measure;
 use crate::periodic::{ImageSet, Lattice, entry};
 #[cfg(feature = "rayon")]
@@ -113,6 +117,7 @@ pub use crate::certificate::Certificate;
 #[derive(Debug)]
 pub struct Model<const N: usize> {
     semi_axes: Vec<[f64; N]>,
+    layout: Layout,
     kind: ContainerShape,
     bodies: Vec<Body<N>>,
     centres: Vec<[f64; N]>,
@@ -183,6 +188,7 @@ impl<const N: usize> Model<N> {
         let lattice =
             (kind == ContainerShape::Periodic).then(|| Lattice::new(r_max, PAIR_LIST_SKIN * r_min));
         Ok(Model {
+            layout: Layout::of(&semi_axes),
             semi_axes,
             kind,
             lattice,
@@ -224,14 +230,14 @@ impl<const N: usize> Model<N> {
         self.semi_axes.is_empty()
     }
 
-    /// Variables per ellipsoid: `N` centre coordinates and the angles.
-    pub const fn vars_per_body() -> usize {
-        N + angle_count(N)
+    /// Where each item's variables are: its centre, then its angles (none for a round item).
+    pub fn layout(&self) -> &Layout {
+        &self.layout
     }
 
     /// Total number of variables.
     pub fn var_count(&self) -> usize {
-        self.len() * Self::vars_per_body() + self.kind.dimension_count(N)
+        self.layout.item_variables() + self.kind.dimension_count(N)
     }
 
     /// The container kind.
@@ -248,32 +254,32 @@ impl<const N: usize> Model<N> {
     fn load(&mut self, x: &[f64]) -> Result<Container<N>, Error> {
         let n = self.var_count();
         Error::check_length("variables", n, x.len())?;
-        if let Some(index) = first_bad_variable::<N>(x, self.len()) {
+        if let Some(index) = first_bad_variable::<N>(x, &self.layout) {
             let value = x[index];
             return Err(Error::NonFiniteVariable { index, value });
         }
-        let container =
-            Container::from_dimensions(self.kind, &x[self.len() * Self::vars_per_body()..])?;
+        let layout = &self.layout;
+        let container = Container::from_dimensions(self.kind, &x[layout.item_variables()..])?;
         self.bodies.clear();
         self.centres.clear();
         self.spins.clear();
-        let stride = Self::vars_per_body();
         if let (Some(lattice), Container::Periodic { cell }) = (&mut self.lattice, container) {
             // The centre variables are fractional coordinates: the body sits at H s.
-            fractional_centres(x, self.semi_axes.len(), &mut lattice.fractional)?;
+            fractional_centres(x, layout, &mut lattice.fractional)?;
             let fractional = &lattice.fractional;
             let body_at = |(i, l): (usize, &[f64; N])| {
                 let mut vars = [0.0; 6];
-                vars[..stride].copy_from_slice(&x[i * stride..(i + 1) * stride]);
+                let own = layout.range(i);
+                let width = own.len();
+                vars[..width].copy_from_slice(&x[own]);
                 vars[..N].copy_from_slice(&crate::periodic::to_cartesian(&cell, &fractional[i]));
-                make_body_and_spins(l, &vars[..stride])
+                make_body_and_spins(l, &vars[..width])
             };
             make_bodies(&self.semi_axes, body_at, &mut self.bodies, &mut self.spins);
             lattice.update(&cell, &self.bodies)?;
             return Ok(container);
         }
-        let body_of =
-            |(i, l): (usize, &[f64; N])| make_body_and_spins(l, &x[i * stride..(i + 1) * stride]);
+        let body_of = |(i, l): (usize, &[f64; N])| make_body_and_spins(l, &x[layout.range(i)]);
         make_bodies(&self.semi_axes, body_of, &mut self.bodies, &mut self.spins);
         self.centres.extend(self.bodies.iter().map(|b| b.centre()));
         Ok(container)
@@ -312,7 +318,8 @@ impl<const N: usize> Model<N> {
             objective,
             ..Evaluation::default()
         };
-        let nb = self.len() * Self::vars_per_body();
+        let layout = &self.layout;
+        let nb = layout.item_variables();
         let (list, centres) = (&mut self.pairs, &self.centres);
         let bodies = &self.bodies;
         let spins = &self.spins;
@@ -327,7 +334,7 @@ impl<const N: usize> Model<N> {
                 g.reset(x.len());
                 let (sum, count) = pair_sum_gradient(
                     (list, centres),
-                    bodies,
+                    (bodies, layout),
                     &mut self.ranges,
                     &mut self.torques,
                     &mut g.overlap,
@@ -340,6 +347,7 @@ impl<const N: usize> Model<N> {
                 // costs several ns per ellipsoid.
                 let (r, dc) = body_terms(
                     (bodies, spins, &self.torques),
+                    layout,
                     &container,
                     &mut g.overlap[..nb],
                     &mut g.containment[..nb],
@@ -393,8 +401,8 @@ impl<const N: usize> Model<N> {
             return self.hessian_product_periodic(x, v, &container, out);
         }
         out.reset(n);
-        let stride = Self::vars_per_body();
-        let nb = self.len() * stride;
+        let layout = &self.layout;
+        let nb = layout.item_variables();
         let nc = self.kind.dimension_count(N);
         let (list, centres) = (&mut self.pairs, &self.centres);
         let bodies = &self.bodies;
@@ -406,32 +414,30 @@ impl<const N: usize> Model<N> {
         let semi_axes = &self.semi_axes;
         let shifted = |i: usize, sign: f64| -> Body<N> {
             let mut vars = [0.0; 6];
-            for k in 0..stride {
-                vars[k] = x[i * stride + k] + sign * h * v[i * stride + k];
+            let own = layout.range(i);
+            for (k, at) in own.clone().enumerate() {
+                vars[k] = x[at] + sign * h * v[at];
             }
-            make_body(&semi_axes[i], &vars[..stride])
+            make_body(&semi_axes[i], &vars[..own.len()])
         };
         {
             let out_overlap = &mut out.overlap;
             list.for_each_close_pair(centres, |i, j, _, _| {
-                let dir = direction(x, v, i, j);
+                let dir = direction((x, v), (layout, semi_axes), i, j);
                 match pair_gradient_derivative(&bodies[i], &bodies[j], &dir) {
                     Some((f, grad, hv)) => {
                         if f > 0.0 {
+                            let (ri, rj) = (layout.range(i), layout.range(j));
                             scatter_second(
-                                x,
-                                v,
-                                out_overlap,
-                                i,
+                                (&x[ri.clone()], &v[ri.clone()], &mut out_overlap[ri]),
+                                &semi_axes[i],
                                 &hv.centre_i,
                                 &hv.angular_i,
                                 &grad.angular_i,
                             );
                             scatter_second(
-                                x,
-                                v,
-                                out_overlap,
-                                j,
+                                (&x[rj.clone()], &v[rj.clone()], &mut out_overlap[rj]),
+                                &semi_axes[j],
                                 &hv.centre_j,
                                 &hv.angular_j,
                                 &grad.angular_j,
@@ -444,39 +450,28 @@ impl<const N: usize> Model<N> {
                         let xp = shifted_vars(x, v, h);
                         let xm = shifted_vars(x, v, -h);
                         let inv = 0.5 / h;
-                        let mut tmp_p = [0.0; 12];
-                        let mut tmp_m = [0.0; 12];
-                        body_gradient_into(
-                            &xp,
-                            i,
-                            &gp.centre_i,
-                            &gp.angular_i,
-                            &mut tmp_p[..stride],
-                        );
-                        body_gradient_into(
-                            &xm,
-                            i,
-                            &gm.centre_i,
-                            &gm.angular_i,
-                            &mut tmp_m[..stride],
-                        );
-                        body_gradient_into(
-                            &xp,
-                            j,
-                            &gp.centre_j,
-                            &gp.angular_j,
-                            &mut tmp_p[6..6 + stride],
-                        );
-                        body_gradient_into(
-                            &xm,
-                            j,
-                            &gm.centre_j,
-                            &gm.angular_j,
-                            &mut tmp_m[6..6 + stride],
-                        );
-                        for k in 0..stride {
-                            out_overlap[i * stride + k] += (tmp_p[k] - tmp_m[k]) * inv;
-                            out_overlap[j * stride + k] += (tmp_p[6 + k] - tmp_m[6 + k]) * inv;
+                        let sides = [
+                            (
+                                i,
+                                (&gp.centre_i, &gp.angular_i),
+                                (&gm.centre_i, &gm.angular_i),
+                            ),
+                            (
+                                j,
+                                (&gp.centre_j, &gp.angular_j),
+                                (&gm.centre_j, &gm.angular_j),
+                            ),
+                        ];
+                        for (b, (fp, tp), (fm, tm)) in sides {
+                            let own = layout.range(b);
+                            let (mut tmp_p, mut tmp_m) = ([0.0; 6], [0.0; 6]);
+                            let width = own.len();
+                            let l = &semi_axes[b];
+                            body_gradient_into((&xp, own.start), l, fp, tp, &mut tmp_p[..width]);
+                            body_gradient_into((&xm, own.start), l, fm, tm, &mut tmp_m[..width]);
+                            for (k, at) in own.enumerate() {
+                                out_overlap[at] += (tmp_p[k] - tmp_m[k]) * inv;
+                            }
                         }
                     }
                 }
@@ -496,7 +491,8 @@ impl<const N: usize> Model<N> {
         let mut dcont = [0.0; N];
         dcont[..nc].copy_from_slice(&v[nb..nb + nc]);
         for i in 0..self.len() {
-            let d = direction(x, v, i, i);
+            let own = layout.range(i);
+            let d = direction((x, v), (layout, semi_axes), i, i);
             let cdir = ContainmentDirection {
                 centre: d.centre_i,
                 spin: d.angular_i,
@@ -507,10 +503,8 @@ impl<const N: usize> Model<N> {
             {
                 if r > 0.0 {
                     scatter_second(
-                        x,
-                        v,
-                        &mut out.containment,
-                        i,
+                        (&x[own.clone()], &v[own.clone()], &mut out.containment[own]),
+                        &semi_axes[i],
                         &hv.centre,
                         &hv.torque,
                         &grad.torque,
@@ -527,10 +521,24 @@ impl<const N: usize> Model<N> {
             let inv = 0.5 / h;
             let mut tp = [0.0; 6];
             let mut tm = [0.0; 6];
-            body_gradient_into(&xp, i, &gp.centre, &gp.torque, &mut tp[..stride]);
-            body_gradient_into(&xm, i, &gm.centre, &gm.torque, &mut tm[..stride]);
-            for k in 0..stride {
-                out.containment[i * stride + k] += (tp[k] - tm[k]) * inv;
+            let width = own.len();
+            let l = &semi_axes[i];
+            body_gradient_into(
+                (&xp, own.start),
+                l,
+                &gp.centre,
+                &gp.torque,
+                &mut tp[..width],
+            );
+            body_gradient_into(
+                (&xm, own.start),
+                l,
+                &gm.centre,
+                &gm.torque,
+                &mut tm[..width],
+            );
+            for (k, at) in own.enumerate() {
+                out.containment[at] += (tp[k] - tm[k]) * inv;
             }
             for k in 0..nc {
                 out.containment[nb + k] += (gp.container[k] - gm.container[k]) * inv;
@@ -608,8 +616,10 @@ impl<const N: usize> Model<N> {
     }
 
     /// The variable vector of a configuration: each body's centre and angles (eq. 1's `θ`, or
-    /// eq. 2's `[φ, θ, ψ]` recovered from the rotation, e.g. of a quaternion), then the
-    /// container dimensions.
+    /// eq. 2's `[φ, θ, ψ]` recovered from the rotation, e.g. of a quaternion; none for a round
+    /// item, whose rotation is dropped, and a spheroid's `[θ, ψ]` of the direction of its
+    /// distinct axis, its turn about that axis dropped: see [`Layout`]), then the container
+    /// dimensions.
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] if the number of bodies or dimensions is wrong,
@@ -639,6 +649,9 @@ impl<const N: usize> Model<N> {
                 None => x.extend_from_slice(&b.centre()),
             }
             let q = b.rotation();
+            if self.layout.angles(i) == 0 {
+                continue;
+            }
             if N == 2 {
                 x.push(q[1][0].atan2(q[0][0]));
             } else {
@@ -648,7 +661,15 @@ impl<const N: usize> Model<N> {
                         m[r][c] = q[r][c];
                     }
                 }
-                x.extend_from_slice(&angles_from_rotation(&m));
+                match spheroid_axis(&self.semi_axes[i]) {
+                    // Only the direction of the distinct axis counts: `R e_1 = P_d Q e_d`,
+                    // whatever `R`'s φ.
+                    Some(d) => {
+                        let angles = angles_from_rotation(&spheroid_frame_rotation(d, &m));
+                        x.extend_from_slice(&angles[1..]);
+                    }
+                    None => x.extend_from_slice(&angles_from_rotation(&m)),
+                }
             }
         }
         x.extend_from_slice(container);
@@ -712,7 +733,7 @@ impl<const N: usize> Model<N> {
             Some(g) => {
                 g.reset(n);
                 ev.overlap = self.periodic_gradient(cell, &mut g.overlap, &mut ev.pairs)?;
-                let nb = self.len() * Self::vars_per_body();
+                let nb = self.layout.item_variables();
                 g.objective[nb..nb + N].copy_from_slice(&dobj);
             }
         }
@@ -766,13 +787,13 @@ impl<const N: usize> Model<N> {
             crate::scatter::add_to_points(&lists, &lattice.images, acc.forces, acc.torques);
         }
         let sum = acc.sum;
+        let nb = self.layout.item_variables();
         let dcell = cell_gradient(
             (cell, &lattice.images, &lattice.fractional),
             (&self.forces, &self.torques),
             (&self.bodies, &self.spins),
-            &mut out[..m * Self::vars_per_body()],
+            (&self.layout, &mut out[..nb]),
         );
-        let nb = m * Self::vars_per_body();
         for k in 0..N * (N + 1) / 2 {
             let (r, c) = entry::<N>(k);
             out[nb + k] += dcell[r][c];
@@ -807,7 +828,7 @@ impl<const N: usize> Model<N> {
             out.overlap[k] = (gp.overlap[k] - gm.overlap[k]) / (2.0 * h);
         }
         let hess = container.measure_hessian();
-        let nb = self.len() * Self::vars_per_body();
+        let nb = self.layout.item_variables();
         for r in 0..N {
             out.objective[nb + r] = (0..N).map(|c| hess[r][c] * v[nb + c]).sum();
         }
@@ -821,19 +842,20 @@ impl<const N: usize> Model<N> {
     /// function is multiplied by `s²` (PW85 theory). In a periodic cell the centres are
     /// fractional and only the cell is scaled.
     pub fn dilated(&self, x: &[f64], s: f64) -> Vec<f64> {
-        let stride = Self::vars_per_body();
-        let bodies_end = self.len() * stride;
-        let periodic = self.kind == ContainerShape::Periodic;
-        x.iter()
-            .enumerate()
-            .map(|(k, &v)| {
-                if k >= bodies_end || (!periodic && k % stride < N) {
-                    v * s
-                } else {
-                    v
+        let mut y = x.to_vec();
+        let bodies_end = self.layout.item_variables().min(y.len());
+        for v in &mut y[bodies_end..] {
+            *v *= s;
+        }
+        if self.kind != ContainerShape::Periodic {
+            for i in 0..self.len() {
+                let start = self.layout.start(i);
+                for v in y.iter_mut().skip(start).take(N) {
+                    *v *= s;
                 }
-            })
-            .collect()
+            }
+        }
+        y
     }
 
     /// Reference for the periodic cell: the overlap sum over every pair of the lattice by brute
@@ -1028,49 +1050,50 @@ fn containment_sum<const N: usize>(bodies: &[Body<N>], container: &Container<N>)
 /// order (on rayon's pool with the `rayon` feature, one task per group).
 fn body_terms<const N: usize>(
     (bodies, spins, torques): (&[Body<N>], &[[f64; 2]], &[[f64; 3]]),
+    layout: &Layout,
     container: &Container<N>,
     overlap: &mut [f64],
     containment: &mut [f64],
 ) -> (f64, [f64; N]) {
     let group = |first: usize, overlap: &mut [f64], containment: &mut [f64]| {
         let (mut r_sum, mut dc) = (0.0, [0.0; N]);
-        for (k, (dov, dco)) in overlap
-            .chunks_exact_mut(Model::<N>::vars_per_body())
-            .zip(containment.chunks_exact_mut(Model::<N>::vars_per_body()))
-            .enumerate()
-        {
-            let (b, i) = (&bodies[first + k], first + k);
+        let base = layout.start(first);
+        let end = (first + BODIES_PER_TASK).min(bodies.len());
+        for i in first..end {
+            let own = layout.range(i);
+            let own = own.start - base..own.end - base;
+            let b = &bodies[i];
             let spin = spin_rows(b, spins[i]);
-            scatter_force_torque(dov, 0, &[0.0; N], &torques[i], &spin);
+            scatter_force_torque(&mut overlap[own.clone()], &[0.0; N], &torques[i], &spin);
             let (r, cg) = containment_gradient(b, container);
             if r == 0.0 {
                 continue;
             }
             r_sum += r;
-            scatter_force_torque(dco, 0, &cg.centre, &cg.torque, &spin);
+            scatter_force_torque(&mut containment[own], &cg.centre, &cg.torque, &spin);
             for (d, c) in dc.iter_mut().zip(cg.container) {
                 *d += c;
             }
         }
         (r_sum, dc)
     };
-    let width = BODIES_PER_TASK * Model::<N>::vars_per_body();
+    let bounds = layout.groups(BODIES_PER_TASK);
+    let pieces = layout
+        .split_mut(overlap, &bounds)
+        .into_iter()
+        .zip(layout.split_mut(containment, &bounds))
+        .enumerate();
     #[cfg(feature = "rayon")]
     let groups: Vec<(f64, [f64; N])> = {
         use rayon::prelude::*;
-        overlap
-            .par_chunks_mut(width)
-            .zip(containment.par_chunks_mut(width))
-            .enumerate()
+        let pieces: Vec<_> = pieces.collect();
+        pieces
+            .into_par_iter()
             .map(|(t, (ov, co))| group(t * BODIES_PER_TASK, ov, co))
             .collect()
     };
     #[cfg(not(feature = "rayon"))]
-    let groups = overlap
-        .chunks_mut(width)
-        .zip(containment.chunks_mut(width))
-        .enumerate()
-        .map(|(t, (ov, co))| group(t * BODIES_PER_TASK, ov, co));
+    let groups = pieces.map(|(t, (ov, co))| group(t * BODIES_PER_TASK, ov, co));
     let (mut r_sum, mut dc) = (0.0, [0.0; N]);
     for (r, d) in groups {
         r_sum += r;
@@ -1097,14 +1120,15 @@ fn cell_gradient<const N: usize>(
     (cell, images, fractional): (&[[f64; N]; N], &ImageSet<N>, &[[f64; N]]),
     (forces, torques): (&[[f64; N]], &[[f64; 3]]),
     (bodies, spins): (&[Body<N>], &[[f64; 2]]),
-    out: &mut [f64],
+    (layout, out): (&Layout, &mut [f64]),
 ) -> [[f64; N]; N] {
-    let stride = Model::<N>::vars_per_body();
     let group = |first: usize, out: &mut [f64]| {
         let mut dcell = [[0.0; N]; N];
         let mut ghost = images.first_ghost(first);
-        for (k, vars) in out.chunks_exact_mut(stride).enumerate() {
-            let i = first + k;
+        let base = layout.start(first);
+        for i in first..(first + BODIES_PER_TASK).min(bodies.len()) {
+            let own = layout.range(i);
+            let vars = &mut out[own.start - base..own.end - base];
             let mut force = [0.0; N];
             let mut add_point = |e: usize| {
                 let (f, u) = (forces[e], images.fractional(e, fractional));
@@ -1123,26 +1147,27 @@ fn cell_gradient<const N: usize>(
             let spin = spin_rows(&bodies[i], spins[i]);
             let ds: [f64; N] =
                 std::array::from_fn(|c| (0..=c).map(|r| cell[r][c] * force[r]).sum());
-            scatter_force_torque(vars, 0, &ds, &torques[i], &spin);
+            scatter_force_torque(vars, &ds, &torques[i], &spin);
         }
         dcell
     };
-    let width = BODIES_PER_TASK * stride;
+    let bounds = layout.groups(BODIES_PER_TASK);
+    let pieces = layout.split_mut(out, &bounds).into_iter().enumerate();
     #[cfg(feature = "rayon")]
-    let groups: Vec<[[f64; N]; N]> = if out.len() > width {
+    let groups: Vec<[[f64; N]; N]> = if bounds.len() > 2 {
         use rayon::prelude::*;
-        out.par_chunks_mut(width)
-            .enumerate()
+        let pieces: Vec<_> = pieces.collect();
+        pieces
+            .into_par_iter()
             .map(|(t, vars)| group(t * BODIES_PER_TASK, vars))
             .collect()
     } else {
-        vec![group(0, out)]
+        pieces
+            .map(|(t, vars)| group(t * BODIES_PER_TASK, vars))
+            .collect()
     };
     #[cfg(not(feature = "rayon"))]
-    let groups = out
-        .chunks_mut(width)
-        .enumerate()
-        .map(|(t, vars)| group(t * BODIES_PER_TASK, vars));
+    let groups = pieces.map(|(t, vars)| group(t * BODIES_PER_TASK, vars));
     let mut dcell = [[0.0; N]; N];
     for d in groups {
         for a in 0..N {
@@ -1154,24 +1179,24 @@ fn cell_gradient<const N: usize>(
     dcell
 }
 
-/// Adds a force and a torque on body `b` to `out`: the force on its centre, and on its angle
-/// `α` the derivative `ω_α · τ` (`spin` holds the rows `ω_α`, precomputed by `load`).
+/// Adds a force and a torque on a body to `out`, its variables: the force on its centre, and
+/// on its angle `α` the derivative `ω_α · τ` (`spin` holds the rows `ω_α` of all of eq. 1's
+/// or eq. 2's angles, precomputed by `load`; an item with fewer angles has the last ones).
 #[inline(always)]
 fn scatter_force_torque<const N: usize>(
     out: &mut [f64],
-    b: usize,
     force: &[f64; N],
     torque: &[f64; 3],
     spin: &[[f64; 3]; 3],
 ) {
-    let stride = Model::<N>::vars_per_body();
-    let base = b * stride;
+    let (centre, angles) = out.split_at_mut(N);
     for k in 0..N {
-        out[base + k] += force[k];
+        centre[k] += force[k];
     }
-    for a in 0..angle_count(N) {
-        out[base + N + a] +=
-            spin[a][0] * torque[0] + spin[a][1] * torque[1] + spin[a][2] * torque[2];
+    let first = angle_count(N) - angles.len();
+    for (a, d) in angles.iter_mut().enumerate() {
+        let w = &spin[first + a];
+        *d += w[0] * torque[0] + w[1] * torque[1] + w[2] * torque[2];
     }
 }
 
@@ -1180,16 +1205,15 @@ fn scatter_force_torque<const N: usize>(
 #[cfg(not(feature = "rayon"))]
 #[inline(always)]
 fn add_pair<const N: usize>(
-    out: &mut [f64],
+    (out, starts): (&mut [f64], &[usize]),
     torques: &mut [[f64; 3]],
     i: usize,
     j: usize,
     g: &PairGradient<N>,
 ) {
-    let stride = Model::<N>::vars_per_body();
     for k in 0..N {
-        out[i * stride + k] += g.centre_i[k];
-        out[j * stride + k] += g.centre_j[k];
+        out[starts[i] + k] += g.centre_i[k];
+        out[starts[j] + k] += g.centre_j[k];
     }
     for k in 0..3 {
         torques[i][k] += g.angular_i[k];
@@ -1211,6 +1235,10 @@ fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3
         spin[0] = [q[0][0], q[1][0], q[2][0]];
         spin[1] = [-sp, cp, 0.0];
         spin[2][2] = 1.0;
+        if let Some(d) = turned_spheroid(&body.semi_axes()) {
+            // A spheroid has no φ: only the rows of θ and ψ are read.
+            spin = spheroid_rows(d, &spin);
+        }
     }
     spin
 }
@@ -1219,7 +1247,7 @@ fn spin_rows<const N: usize>(body: &Body<N>, [sp, cp]: [f64; 2]) -> [[f64; 3]; 3
 /// body's torque left in `torques`.
 fn pair_sum_gradient<const N: usize>(
     (list, centres): Candidates<'_, N>,
-    bodies: &[Body<N>],
+    (bodies, layout): (&[Body<N>], &Layout),
     #[cfg_attr(not(feature = "rayon"), allow(unused_variables))] ranges: &mut RangeWork<N>,
     torques: &mut Vec<[f64; 3]>,
     out: &mut [f64],
@@ -1232,7 +1260,7 @@ fn pair_sum_gradient<const N: usize>(
         let mut emit = |i: usize, j: usize, &(f, ref g): &Term<N>| {
             if f > 0.0 {
                 sum += f;
-                add_pair(out, torques, i, j, g);
+                add_pair((out, layout.starts()), torques, i, j, g);
             }
         };
         let count = through_kernel::<N, WithGradient>((list, centres), bodies, &mut emit)?;
@@ -1261,7 +1289,7 @@ fn pair_sum_gradient<const N: usize>(
             .iter()
             .map(|s| s.kept.2.as_slice())
             .collect();
-        crate::scatter::add_to_items(&lists, Model::<N>::vars_per_body(), out, torques);
+        crate::scatter::add_to_items(&lists, layout.starts(), out, torques);
         Ok((sum, count))
     }
 }
@@ -1373,56 +1401,57 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> Resu
 /// The first variable of `x` (`m` items, then the container) that is NaN or infinite, or a
 /// centre coordinate beyond [`MAX_MAGNITUDE`]; in tasks of [`BODIES_PER_TASK`] items on
 /// rayon's pool with the feature.
-fn first_bad_variable<const N: usize>(x: &[f64], m: usize) -> Option<usize> {
-    let stride = Model::<N>::vars_per_body();
-    let (items, container) = x.split_at(m * stride);
-    let in_group = |(g, vars): (usize, &[f64])| {
-        vars.iter().enumerate().find_map(|(k, &v)| {
-            let limit = if k % stride < N {
-                MAX_MAGNITUDE
-            } else {
-                f64::INFINITY
-            };
-            (!(v.is_finite() && v.abs() <= limit)).then_some(g * BODIES_PER_TASK * stride + k)
+fn first_bad_variable<const N: usize>(x: &[f64], layout: &Layout) -> Option<usize> {
+    let nb = layout.item_variables();
+    let (items, container) = x.split_at(nb);
+    let bounds = layout.groups(BODIES_PER_TASK);
+    let in_group = |g: usize| {
+        let (first, end) = (bounds[g], bounds[g + 1]);
+        (first..end).find_map(|i| {
+            layout.range(i).find(|&k| {
+                let limit = if k - layout.start(i) < N {
+                    MAX_MAGNITUDE
+                } else {
+                    f64::INFINITY
+                };
+                !(items[k].is_finite() && items[k].abs() <= limit)
+            })
         })
     };
-    let chunks = items.chunks(BODIES_PER_TASK * stride);
+    let groups = bounds.len() - 1;
     #[cfg(feature = "rayon")]
-    let bad = if chunks.len() > 1 {
+    let bad = if groups > 1 {
         use rayon::prelude::*;
-        items
-            .par_chunks(BODIES_PER_TASK * stride)
-            .enumerate()
-            .find_map_first(in_group)
+        (0..groups).into_par_iter().find_map_first(in_group)
     } else {
-        chunks.enumerate().find_map(in_group)
+        (0..groups).find_map(in_group)
     };
     #[cfg(not(feature = "rayon"))]
-    let bad = chunks.enumerate().find_map(in_group);
+    let bad = (0..groups).find_map(in_group);
     bad.or_else(|| {
         let k = container.iter().position(|v| !v.is_finite())?;
-        Some(m * stride + k)
+        Some(nb + k)
     })
 }
 
-/// The fractional centres `s_i` of the `m` items of a periodic cell's variables `x`, written to
+/// The fractional centres `s_i` of the items of a periodic cell's variables `x`, written to
 /// `out`.
 ///
 /// # Errors
 /// [`Error::FractionalOutOfRange`] for the first coordinate beyond [`MAX_CELLS`] cells.
 fn fractional_centres<const N: usize>(
     x: &[f64],
-    m: usize,
+    layout: &Layout,
     out: &mut Vec<[f64; N]>,
 ) -> Result<(), Error> {
-    let stride = Model::<N>::vars_per_body();
-    let centre = |vars: &[f64]| -> [f64; N] { std::array::from_fn(|k| vars[k]) };
+    let m = layout.items();
+    let centre = |i: usize| -> [f64; N] { std::array::from_fn(|k| x[layout.start(i) + k]) };
     let far = |s: &[f64; N]| s.iter().any(|v| v.abs() > MAX_CELLS);
     #[cfg(feature = "rayon")]
     let first = if m > BODIES_PER_TASK {
         use rayon::prelude::*;
-        x[..m * stride]
-            .par_chunks(stride)
+        (0..m)
+            .into_par_iter()
             .with_min_len(BODIES_PER_TASK)
             .map(centre)
             .collect_into_vec(out);
@@ -1430,15 +1459,15 @@ fn fractional_centres<const N: usize>(
             .with_min_len(BODIES_PER_TASK)
             .position_first(far)
     } else {
-        serial_centres(x, m, centre, out, far)
+        serial_centres(m, centre, out, far)
     };
     #[cfg(not(feature = "rayon"))]
-    let first = serial_centres(x, m, centre, out, far);
+    let first = serial_centres(m, centre, out, far);
     match first {
         Some(i) => {
             let k = (0..N).find(|&k| out[i][k].abs() > MAX_CELLS).unwrap_or(0);
             Err(Error::FractionalOutOfRange {
-                index: i * stride + k,
+                index: layout.start(i) + k,
                 value: out[i][k],
             })
         }
@@ -1446,18 +1475,16 @@ fn fractional_centres<const N: usize>(
     }
 }
 
-/// [`fractional_centres`] on the current thread: the centres written to `out`, the first
+/// [`fractional_centres`] on the current thread: the `m` centres written to `out`, the first
 /// that is `far`.
 fn serial_centres<const N: usize>(
-    x: &[f64],
     m: usize,
-    centre: impl Fn(&[f64]) -> [f64; N],
+    centre: impl Fn(usize) -> [f64; N],
     out: &mut Vec<[f64; N]>,
     far: impl Fn(&[f64; N]) -> bool,
 ) -> Option<usize> {
     out.clear();
-    let stride = Model::<N>::vars_per_body();
-    out.extend(x[..m * stride].chunks(stride).map(centre));
+    out.extend((0..m).map(centre));
     out.iter().position(far)
 }
 
@@ -1506,13 +1533,18 @@ fn make_body<const N: usize>(l: &[f64; N], vars: &[f64]) -> Body<N> {
 }
 
 /// A body from its variables `[c, Ω]` and the angular velocities `ω_α` of its angles (rows;
-/// 2D: `ω_θ = e_z`), from one set of sines and cosines.
+/// 2D: `ω_θ = e_z`), from one set of sines and cosines. A round item has no angles: its
+/// rotation is the identity.
 fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, [f64; 2]) {
     let mut c = [0.0; N];
     c.copy_from_slice(&vars[..N]);
     let mut q = [[0.0; N]; N];
-    let mut spin = [0.0; 2];
-    if N == 2 {
+    let mut spin = [0.0, 1.0];
+    if vars.len() == N {
+        for (a, row) in q.iter_mut().enumerate() {
+            row[a] = 1.0;
+        }
+    } else if N == 2 {
         let r = rotation_2d(vars[2]);
         for a in 0..2 {
             for b in 0..2 {
@@ -1520,7 +1552,10 @@ fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, 
             }
         }
     } else {
-        let (r, w) = rotation_and_velocities_3d([vars[3], vars[4], vars[5]]);
+        let (mut r, w) = rotation_and_velocities_3d(full_angles(&vars[N..]));
+        if let Some(d) = turned_spheroid(l) {
+            r = spheroid_rotation(d, &r);
+        }
         for a in 0..N {
             for b in 0..N {
                 q[a][b] = r[a][b];
@@ -1532,29 +1567,62 @@ fn make_body_and_spins<const N: usize>(l: &[f64; N], vars: &[f64]) -> (Body<N>, 
     (Body::from_parts_unchecked(c, *l, q), spin)
 }
 
+/// The distinct axis `d` of a spheroid whose frame `P_d` is not the identity (module
+/// `layout`): its rotation and its angles' angular velocities are conjugated by `P_d`.
+fn turned_spheroid<const N: usize>(l: &[f64; N]) -> Option<usize> {
+    spheroid_axis(l).filter(|&d| d != 0)
+}
+
+/// The world angular velocities of eq. 2's angles (rows) at the angles `full`, for an item
+/// with semi-axes `l` (a spheroid's taken through its frame).
+fn angle_rows<const N: usize>(l: &[f64; N], full: [f64; 3]) -> [[f64; 3]; 3] {
+    let w = angular_velocities_3d(full);
+    match turned_spheroid(l) {
+        Some(d) => spheroid_rows(d, &w),
+        None => w,
+    }
+}
+
+/// Eq. 2's `[φ, θ, ψ]` of an item's angles in 3D: an item with fewer than three has the last
+/// ones, the first being 0.
+fn full_angles(angles: &[f64]) -> [f64; 3] {
+    let mut full = [0.0; 3];
+    full[3 - angles.len()..].copy_from_slice(angles);
+    full
+}
+
 /// The pair direction of `v` for the bodies `i`, `j`: centre velocities and world angular
-/// velocities `w = Σ_α ω_α v_α` (2D: `w = v_θ e_z`).
-fn direction<const N: usize>(x: &[f64], v: &[f64], i: usize, j: usize) -> PairDirection<N> {
-    let stride = Model::<N>::vars_per_body();
+/// velocities `w = Σ_α ω_α v_α` (2D: `w = v_θ e_z`; none for a round item).
+fn direction<const N: usize>(
+    (x, v): (&[f64], &[f64]),
+    (layout, semi_axes): (&Layout, &[[f64; N]]),
+    i: usize,
+    j: usize,
+) -> PairDirection<N> {
     let spin = |b: usize| -> [f64; 3] {
-        let base = b * stride;
-        if N == 2 {
-            [0.0, 0.0, v[base + 2]]
+        let own = layout.range(b);
+        let (xa, va) = (&x[own.start + N..own.end], &v[own.start + N..own.end]);
+        if va.is_empty() {
+            [0.0; 3]
+        } else if N == 2 {
+            [0.0, 0.0, va[0]]
         } else {
-            let w = angular_velocities_3d([x[base + 3], x[base + 4], x[base + 5]]);
+            let w = angle_rows(&semi_axes[b], full_angles(xa));
+            let first = 3 - va.len();
             let mut s = [0.0; 3];
-            for a in 0..3 {
+            for (a, &rate) in va.iter().enumerate() {
                 for k in 0..3 {
-                    s[k] += w[a][k] * v[base + 3 + a];
+                    s[k] += w[first + a][k] * rate;
                 }
             }
             s
         }
     };
+    let (si, sj) = (layout.start(i), layout.start(j));
     let mut ci = [0.0; N];
     let mut cj = [0.0; N];
-    ci.copy_from_slice(&v[i * stride..i * stride + N]);
-    cj.copy_from_slice(&v[j * stride..j * stride + N]);
+    ci.copy_from_slice(&v[si..si + N]);
+    cj.copy_from_slice(&v[sj..sj + N]);
     PairDirection {
         centre_i: ci,
         centre_j: cj,
@@ -1563,34 +1631,41 @@ fn direction<const N: usize>(x: &[f64], v: &[f64], i: usize, j: usize) -> PairDi
     }
 }
 
-/// Adds the second-order terms of body `b` to `out`: `δ(force)` on the centre, and on angle `α`
-/// `ω_α · δτ + Σ_β (∂ω_α/∂β v_β) · τ` (the parametrisation's own curvature; zero in 2D).
+/// Adds the second-order terms of a body to `out`, with `x` and `v` its variables and
+/// direction: `δ(force)` on the centre, and on angle `α` `ω_α · δτ + Σ_β (∂ω_α/∂β v_β) · τ`
+/// (the parametrisation's own curvature; zero in 2D).
 fn scatter_second<const N: usize>(
-    x: &[f64],
-    v: &[f64],
-    out: &mut [f64],
-    b: usize,
+    (x, v, out): (&[f64], &[f64], &mut [f64]),
+    l: &[f64; N],
     dforce: &[f64; N],
     dtorque: &[f64; 3],
     torque: &[f64; 3],
 ) {
-    let stride = Model::<N>::vars_per_body();
-    let base = b * stride;
     for k in 0..N {
-        out[base + k] += dforce[k];
+        out[k] += dforce[k];
+    }
+    let angles = out.len() - N;
+    if angles == 0 {
+        return;
     }
     if N == 2 {
-        out[base + 2] += dtorque[2];
+        out[2] += dtorque[2];
     } else {
-        let ang = [x[base + 3], x[base + 4], x[base + 5]];
-        let w = angular_velocities_3d(ang);
-        let dw = angular_velocity_derivatives_3d(ang);
-        for a in 0..3 {
-            let mut e = (0..3).map(|k| w[a][k] * dtorque[k]).sum::<f64>();
-            for bb in 0..3 {
-                e += (0..3).map(|k| dw[a][bb][k] * torque[k]).sum::<f64>() * v[base + 3 + bb];
+        let ang = full_angles(&x[N..]);
+        let w = angle_rows(l, ang);
+        let mut dw = angular_velocity_derivatives_3d(ang);
+        if let Some(d) = turned_spheroid(l) {
+            for rows in &mut dw {
+                *rows = spheroid_rows(d, rows);
             }
-            out[base + 3 + a] += e;
+        }
+        let first = 3 - angles;
+        for a in first..3 {
+            let mut e = (0..3).map(|k| w[a][k] * dtorque[k]).sum::<f64>();
+            for bb in first..3 {
+                e += (0..3).map(|k| dw[a][bb][k] * torque[k]).sum::<f64>() * v[N + bb - first];
+            }
+            out[N + a - first] += e;
         }
     }
 }
@@ -1612,25 +1687,33 @@ fn shifted_vars<'a>(x: &'a [f64], v: &'a [f64], h: f64) -> ShiftedVars<'a> {
     ShiftedVars { x, v, h }
 }
 
-/// The variable-space gradient of body `b` (centre, then angles at the shifted point) from a
-/// force and a torque.
+/// The variable-space gradient of the body whose variables start at `base` (centre, then
+/// angles at the shifted point) from a force and a torque; `out` is as long as its variables.
 fn body_gradient_into<const N: usize>(
-    xs: &ShiftedVars<'_>,
-    b: usize,
+    (xs, base): (&ShiftedVars<'_>, usize),
+    l: &[f64; N],
     force: &[f64; N],
     torque: &[f64; 3],
     out: &mut [f64],
 ) {
-    let stride = Model::<N>::vars_per_body();
-    let base = b * stride;
     out[..N].copy_from_slice(force);
+    let angles = out.len() - N;
+    if angles == 0 {
+        return;
+    }
     if N == 2 {
         out[2] = torque[2];
     } else {
-        let g = angle_gradient_3d(
-            [xs.get(base + 3), xs.get(base + 4), xs.get(base + 5)],
-            torque,
-        );
-        out[3..6].copy_from_slice(&g);
+        let mut shifted = [0.0; 3];
+        for (a, v) in shifted.iter_mut().take(angles).enumerate() {
+            *v = xs.get(base + N + a);
+        }
+        // (P_dᵀ ω)·τ = ω·(P_d τ) for a spheroid's rows.
+        let torque = match turned_spheroid(l) {
+            Some(d) => frame_times(d, torque),
+            None => *torque,
+        };
+        let g = angle_gradient_3d(full_angles(&shifted[..angles]), &torque);
+        out[N..].copy_from_slice(&g[3 - angles..]);
     }
 }

@@ -435,6 +435,9 @@ pub fn overlap_measure<const N: usize>(i: &Body<N>, j: &Body<N>) -> f64 {
     if bounding_spheres_apart(i, j) {
         return 0.0;
     }
+    if i.is_round() && j.is_round() {
+        return crate::round::round_overlap_measure(i, j);
+    }
     simd::multiversion!(call overlap_measure_impl::<N>(i: &Body<N>, j: &Body<N>) -> f64)
 }
 

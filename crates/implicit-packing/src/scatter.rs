@@ -97,30 +97,32 @@ fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize], width: usize) ->
     out
 }
 
-/// Adds the terms `lists` of items in a container to the centres' derivatives in `out`
-/// (`stride` variables per item, the centre first) and to the per-item `torques`, on rayon's
-/// pool, each item's terms in the order of `lists`.
+/// Adds the terms `lists` of items in a container to the centres' derivatives in `out` (item
+/// `i`'s variables from `starts[i]`, the centre first) and to the per-item `torques`, on
+/// rayon's pool, each item's terms in the order of `lists`.
 pub(crate) fn add_to_items<const N: usize>(
     lists: &[&[Entry<N>]],
-    stride: usize,
+    starts: &[usize],
     out: &mut [f64],
     torques: &mut [[f64; 3]],
 ) {
     let items = torques.len();
     let bounds = block_bounds(lists, items);
-    let outs = split_at_bounds(&mut out[..items * stride], &bounds, stride);
+    let var_bounds: Vec<usize> = bounds.iter().map(|&b| starts[b]).collect();
+    let outs = split_at_bounds(&mut out[..starts[items]], &var_bounds, 1);
     let taus = split_at_bounds(torques, &bounds, 1);
     let blocks: Vec<_> = (bounds.windows(2).map(|w| w[0]..w[1]))
         .zip(outs)
         .zip(taus)
         .collect();
     for_each_block(blocks, |((block, out), tau)| {
+        let base = starts[block.start];
         let mut add = |item: usize, centre: &[f64; N], torque: &[f64; 3]| {
-            let k = item - block.start;
-            for (o, c) in out[k * stride..k * stride + N].iter_mut().zip(centre) {
+            let at = starts[item] - base;
+            for (o, c) in out[at..at + N].iter_mut().zip(centre) {
                 *o += c;
             }
-            for (t, c) in tau[k].iter_mut().zip(torque) {
+            for (t, c) in tau[item - block.start].iter_mut().zip(torque) {
                 *t += c;
             }
         };

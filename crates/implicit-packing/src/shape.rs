@@ -123,6 +123,12 @@ impl<const N: usize> Body<N> {
         self.l_min
     }
 
+    /// Whether the body is round (a circle or a ball): all semi-axes equal, so that its
+    /// rotation does not matter.
+    pub fn is_round(&self) -> bool {
+        self.l_min == self.l_max
+    }
+
     fn assemble(centre: [f64; N], semi_axes: [f64; N], rotation: [[f64; N]; N]) -> Self {
         let (l_min, l_max) = extremes(&semi_axes);
         Body {

@@ -24,26 +24,42 @@ fn config3(
             ]
         })
         .collect();
+    let x = placed3(rng, &axes, |_| 3, density, kind);
+    (axes, x)
+}
+
+/// The variables of items with semi-axes `axes`, the last `angles(i)` of eq. 2's angles each
+/// (random), on a jittered cubic lattice at about the given volume fraction; container
+/// dimensions last.
+fn placed3(
+    rng: &mut Rng,
+    axes: &[[f64; 3]],
+    angles: impl Fn(usize) -> usize,
+    density: f64,
+    kind: ContainerShape,
+) -> Vec<f64> {
+    let m = axes.len();
     let vol: f64 = axes
         .iter()
         .map(|l| 4.0 / 3.0 * std::f64::consts::PI * l[0] * l[1] * l[2])
         .sum();
     let (side, per, h) = lattice::<3>(vol, density, m);
     let mut x = Vec::new();
+    let ranges = [(-3.0, 3.0), (-1.4, 1.4), (-3.0, 3.0)];
     for i in 0..m {
         let (a, b, c) = (i % per, (i / per) % per, i / (per * per));
         for idx in [a, b, c] {
             x.push(jittered(idx, h, side, rng));
         }
-        x.push(rng.range(-3.0, 3.0));
-        x.push(rng.range(-1.4, 1.4));
-        x.push(rng.range(-3.0, 3.0));
+        for &(lo, hi) in &ranges[3 - angles(i)..] {
+            x.push(rng.range(lo, hi));
+        }
     }
     match kind {
         ContainerShape::Ball => x.push(0.45 * side * 3f64.sqrt()),
         _ => x.extend_from_slice(&[0.45 * side, 0.5 * side, 0.55 * side]),
     }
-    (axes, x)
+    x
 }
 
 /// For `m` items of total area or volume `measure` at `density`: the side of their square or
@@ -65,19 +81,30 @@ fn config2(rng: &mut Rng, m: usize, density: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
     let axes: Vec<[f64; 2]> = (0..m)
         .map(|_| [rng.range(0.8, 1.2), rng.range(0.4, 0.7)])
         .collect();
+    let x = placed2(rng, &axes, density);
+    (axes, x)
+}
+
+/// The variables of ellipses and circles with semi-axes `axes` (an angle for each ellipse,
+/// random; none for a circle) on a jittered square lattice at about the given area fraction,
+/// then a box's half-sides.
+fn placed2(rng: &mut Rng, axes: &[[f64; 2]], density: f64) -> Vec<f64> {
+    let m = axes.len();
     let area: f64 = axes
         .iter()
         .map(|l| std::f64::consts::PI * l[0] * l[1])
         .sum();
     let (side, per, h) = lattice::<2>(area, density, m);
     let mut x = Vec::new();
-    for i in 0..m {
+    for (i, l) in axes.iter().enumerate() {
         x.push(jittered(i % per, h, side, rng));
         x.push(jittered(i / per, h, side, rng));
-        x.push(rng.range(-3.0, 3.0));
+        if l[0] != l[1] {
+            x.push(rng.range(-3.0, 3.0));
+        }
     }
     x.extend_from_slice(&[0.45 * side, 0.48 * side]);
-    (axes, x)
+    x
 }
 
 /// Every kind of container.
@@ -331,55 +358,58 @@ type Grad<'a> = &'a mut dyn FnMut(&[f64], &mut ModelGradient);
 #[test]
 fn hessian_vector_products_match_finite_differences() {
     let mut rng = Rng::new(55);
-    let check = |p: Hvp<'_>, grad: Grad<'_>, x: &[f64], rng: &mut Rng| {
-        let n = x.len();
-        let (mut hu, mut hv) = (ModelGradient::default(), ModelGradient::default());
-        let (mut gp, mut gm) = (ModelGradient::default(), ModelGradient::default());
-        let mut worst = [0.0f64; 3];
-        let mut worst_sym = 0.0f64;
-        for _ in 0..5 {
-            let u: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
-            let v: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
-            p(x, &u, &mut hu);
-            p(x, &v, &mut hv);
-            let h = 1e-6;
-            let xp: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + h * b).collect();
-            let xm: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a - h * b).collect();
-            grad(&xp, &mut gp);
-            grad(&xm, &mut gm);
-            for (q, (an, (pp, mm))) in [
-                (&hv.overlap, (&gp.overlap, &gm.overlap)),
-                (&hv.containment, (&gp.containment, &gm.containment)),
-                (&hv.objective, (&gp.objective, &gm.objective)),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                let scale = an.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-                for k in 0..n {
-                    let fd = (pp[k] - mm[k]) / (2.0 * h);
-                    worst[q] = worst[q].max((fd - an[k]).abs() / scale.max(1e-300));
-                }
-            }
-            let uhv: f64 = u.iter().zip(&hv.overlap).map(|(a, b)| a * b).sum();
-            let vhu: f64 = v.iter().zip(&hu.overlap).map(|(a, b)| a * b).sum();
-            worst_sym = worst_sym.max((uhv - vhu).abs() / uhv.abs().max(vhu.abs()));
-        }
-        println!(
-            "model HVP vs FD of the gradient: overlap {:.2e}, containment {:.2e}, objective {:.2e}; asymmetry {worst_sym:.2e}",
-            worst[0], worst[1], worst[2]
-        );
-        assert!(
-            worst.iter().all(|&w| w <= 1e-6) && worst_sym <= 1e-9,
-            "{worst:?} {worst_sym}"
-        );
-    };
     for kind in KINDS {
         let (axes, x) = config3(&mut rng, 27, 0.55, kind);
-        on_two_copies(axes, kind, &x, &mut rng, check);
+        on_two_copies(axes, kind, &x, &mut rng, hvp_check);
     }
     let (axes, x) = config2(&mut rng, 25, 0.6);
-    on_two_copies(axes, ContainerShape::Box, &x, &mut rng, check);
+    on_two_copies(axes, ContainerShape::Box, &x, &mut rng, hvp_check);
+}
+
+/// The Hessian–vector products `p` against central differences of the gradient `grad` along
+/// random directions, and their symmetry `uᵀHv = vᵀHu`.
+fn hvp_check(p: Hvp<'_>, grad: Grad<'_>, x: &[f64], rng: &mut Rng) {
+    let n = x.len();
+    let (mut hu, mut hv) = (ModelGradient::default(), ModelGradient::default());
+    let (mut gp, mut gm) = (ModelGradient::default(), ModelGradient::default());
+    let mut worst = [0.0f64; 3];
+    let mut worst_sym = 0.0f64;
+    for _ in 0..5 {
+        let u: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+        let v: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+        p(x, &u, &mut hu);
+        p(x, &v, &mut hv);
+        let h = 1e-6;
+        let xp: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + h * b).collect();
+        let xm: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a - h * b).collect();
+        grad(&xp, &mut gp);
+        grad(&xm, &mut gm);
+        for (q, (an, (pp, mm))) in [
+            (&hv.overlap, (&gp.overlap, &gm.overlap)),
+            (&hv.containment, (&gp.containment, &gm.containment)),
+            (&hv.objective, (&gp.objective, &gm.objective)),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let scale = an.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            for k in 0..n {
+                let fd = (pp[k] - mm[k]) / (2.0 * h);
+                worst[q] = worst[q].max((fd - an[k]).abs() / scale.max(1e-300));
+            }
+        }
+        let uhv: f64 = u.iter().zip(&hv.overlap).map(|(a, b)| a * b).sum();
+        let vhu: f64 = v.iter().zip(&hu.overlap).map(|(a, b)| a * b).sum();
+        worst_sym = worst_sym.max((uhv - vhu).abs() / uhv.abs().max(vhu.abs()));
+    }
+    println!(
+        "model HVP vs FD of the gradient: overlap {:.2e}, containment {:.2e}, objective {:.2e}; asymmetry {worst_sym:.2e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(
+        worst.iter().all(|&w| w <= 1e-6) && worst_sym <= 1e-9,
+        "{worst:?} {worst_sym}"
+    );
 }
 
 /// Runs `check` with the Hessian–vector products of one model of `axes` in a container of
@@ -477,23 +507,37 @@ fn hessian_vector_product_in_the_hard_case_is_finite() {
     assert!(out.overlap.iter().any(|&a| a != 0.0));
 }
 
-/// Bodies → variables → bodies is the identity (up to rounding of the angle recovery).
+/// Bodies → variables → bodies is the identity (up to rounding of the angle recovery), for
+/// ellipsoids, balls (no angles) and spheroids (the direction of the distinct axis), and a
+/// spheroid at zero angles is unrotated.
 #[test]
 fn pack_variables_round_trips() {
     let mut rng = Rng::new(77);
-    let (axes, x) = config3(&mut rng, 8, 0.4, ContainerShape::Ball);
-    let mut p = Model::<3>::new(axes, ContainerShape::Ball).unwrap();
-    let bodies = p.bodies_at(&x).unwrap().to_vec();
-    let y = p.pack_variables(&bodies, &x[x.len() - 1..]).unwrap();
-    let again = p.bodies_at(&y).unwrap().to_vec();
-    for (a, b) in bodies.iter().zip(&again) {
-        let (qa, qb) = (a.rotation(), b.rotation());
-        for r in 0..3 {
-            assert!((a.centre()[r] - b.centre()[r]).abs() == 0.0);
-            for c in 0..3 {
-                assert!((qa[r][c] - qb[r][c]).abs() < 1e-13);
+    let general = config3(&mut rng, 8, 0.4, ContainerShape::Ball);
+    for (axes, x) in [general, mixed3(&mut rng, 10, 0.4, ContainerShape::Ball)] {
+        let mut p = Model::<3>::new(axes, ContainerShape::Ball).unwrap();
+        let bodies = p.bodies_at(&x).unwrap().to_vec();
+        let y = p.pack_variables(&bodies, &x[x.len() - 1..]).unwrap();
+        assert_eq!(y.len(), x.len());
+        let again = p.bodies_at(&y).unwrap().to_vec();
+        for (a, b) in bodies.iter().zip(&again) {
+            let (sa, sb) = (a.shape_matrix(), b.shape_matrix());
+            for r in 0..3 {
+                assert_eq!(a.centre()[r], b.centre()[r]);
+                for c in 0..3 {
+                    assert!((sa[r][c] - sb[r][c]).abs() < 1e-13, "{sa:?} {sb:?}");
+                }
             }
         }
+    }
+    let spheroids = vec![[1.0, 1.0, 2.0], [1.0, 2.0, 1.0]];
+    let mut q = Model::<3>::new(spheroids, ContainerShape::Ball).unwrap();
+    let at_zero = [0.0, 0.0, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 9.0];
+    for b in q.bodies_at(&at_zero).unwrap() {
+        assert_eq!(
+            b.rotation(),
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        );
     }
     let q = Model::<2>::new(vec![[1.0, 0.5]], ContainerShape::Box).unwrap();
     let e = implicit_packing::Ellipse::ellipse([0.3, -0.2], [1.0, 0.5], 2.5).unwrap();
@@ -517,8 +561,9 @@ fn pack_variables_round_trips() {
 #[test]
 fn containment_hessian_in_the_hard_case_is_finite() {
     let mut p = Model::<3>::new(vec![[1.0, 1.0, 0.25]], ContainerShape::Ball).unwrap();
-    let x = [0.0, 0.0, 0.0, 0.1, 0.2, 0.3, 0.8];
-    let v = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6, 0.7];
+    // A spheroid: its centre, the two angles of its axis, the radius.
+    let x = [0.0, 0.0, 0.0, 0.2, 0.3, 0.8];
+    let v = [0.1, -0.2, 0.3, -0.5, 0.6, 0.7];
     let mut out = ModelGradient::default();
     p.hessian_vector_product(&x, &v, &mut out).unwrap();
     assert!(out.containment.iter().all(|a| a.is_finite()));
@@ -531,8 +576,8 @@ fn containment_hessian_in_the_hard_case_is_finite() {
 #[test]
 fn centres_along_a_short_axis_give_finite_overlaps() {
     fn overlaps<const N: usize>(axes: [f64; N], along: usize) -> Vec<f64> {
-        let stride = Model::<N>::vars_per_body();
         let mut model = Model::<N>::new(vec![axes; 2], ContainerShape::Box).unwrap();
+        let stride = model.layout().range(0).len();
         (1..2000)
             .map(|k| {
                 let mut x = vec![0.0; 2 * stride + N];
@@ -574,4 +619,114 @@ fn runs_are_placed_inside_a_pool_of_the_threads_asked() {
         .unwrap();
     let nested = pool.install(|| on_threads(0, inside).unwrap());
     assert_eq!(nested, (true, 2));
+}
+
+/// The semi-axes of `m` items of every kind that carries its own angles (module `layout`):
+/// balls, spheroids whose distinct axis is each of the three, general ellipsoids, of sizes
+/// near 1.
+fn mixed_axes3(rng: &mut Rng, m: usize) -> Vec<[f64; 3]> {
+    (0..m)
+        .map(|i| {
+            let (a, c) = (rng.range(0.7, 0.9), rng.range(0.4, 0.6));
+            match i % 5 {
+                0 => [a; 3],
+                1 => [a, a, c],
+                2 => [a, c, a],
+                3 => [c, a, a],
+                _ => [a, rng.range(0.55, 0.65), c],
+            }
+        })
+        .collect()
+}
+
+/// Items of [`mixed_axes3`] placed with the angles each carries; container dimensions last.
+fn mixed3(
+    rng: &mut Rng,
+    m: usize,
+    density: f64,
+    kind: ContainerShape,
+) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let axes = mixed_axes3(rng, m);
+    let layout = implicit_packing::Layout::of(&axes);
+    let x = placed3(rng, &axes, |i| layout.angles(i), density, kind);
+    assert_eq!(x.len(), layout.item_variables() + kind.dimension_count(3));
+    (axes, x)
+}
+
+/// A ball has no angles and a spheroid two: the layout's variables, the gradient (against
+/// central differences) and the Hessian–vector products (against differences of the
+/// gradient) of scenes mixing them with general ellipsoids, in every container, and of
+/// circles with ellipses; the grid sum is still the all-pairs sum.
+#[test]
+fn round_items_and_spheroids_carry_only_their_angles() {
+    let mut rng = Rng::new(88);
+    for kind in KINDS {
+        let (axes, x) = mixed3(&mut rng, 30, 0.55, kind);
+        let mut p = Model::<3>::new(axes.clone(), kind).unwrap();
+        assert_eq!(p.var_count(), x.len());
+        // 6 balls (3 variables), 18 spheroids (5), 6 ellipsoids (6).
+        assert_eq!(
+            p.var_count(),
+            6 * 3 + 18 * 5 + 6 * 6 + kind.dimension_count(3)
+        );
+        fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
+        let ev = p.evaluate(&x, None).unwrap();
+        assert_same_bits(ev.overlap, p.overlap_all_pairs(&x).unwrap());
+        on_two_copies(axes, kind, &x, &mut rng, hvp_check);
+    }
+    // Circles (no angle) and ellipses in a box.
+    let axes: Vec<[f64; 2]> = (0..30)
+        .map(|i| [1.0, if i % 2 == 0 { 1.0 } else { 0.5 }])
+        .collect();
+    let x = placed2(&mut rng, &axes, 0.6);
+    assert_eq!(x.len(), 15 * 2 + 15 * 3 + 2);
+    let mut p = Model::<2>::new(axes.clone(), ContainerShape::Box).unwrap();
+    fd_check(&mut |x, g| p.evaluate(x, g).unwrap(), &x);
+    on_two_copies(axes, ContainerShape::Box, &x, &mut rng, hvp_check);
+}
+
+/// Two balls by the closed form of module `round` and by the general solution of eq. 35
+/// (`pair_term`): the same `f`, and the closed-form gradient against central differences.
+#[test]
+fn the_closed_form_of_two_balls_is_the_general_pair_term() {
+    let mut rng = Rng::new(90);
+    let mut worst = 0.0f64;
+    for _ in 0..2000 {
+        let (ri, rj) = (rng.range(0.2, 2.0), rng.range(0.2, 2.0));
+        let dist = rng.range(0.01, 1.0) * (ri + rj);
+        let dir = [
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        ];
+        let n = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let cj: [f64; 3] = std::array::from_fn(|k| dist * dir[k] / n);
+        let bi = implicit_packing::Body::from_angles([0.0; 3], [ri; 3], [0.0; 3]).unwrap();
+        let bj = implicit_packing::Body::from_angles(cj, [rj; 3], [0.3, 0.2, 0.1]).unwrap();
+        let closed = implicit_packing::round::round_overlap_measure(&bi, &bj);
+        let general = implicit_packing::pair_term(&bi, &bj).f;
+        assert_eq!(closed, implicit_packing::overlap_measure(&bi, &bj));
+        worst = worst.max((closed - general).abs() / (1.0 + general));
+        let (f, g) = implicit_packing::derivatives::round_pair_gradient(&bi, &bj);
+        assert_eq!(f, closed);
+        let h = 1e-7;
+        for k in 0..3 {
+            let mut cp = cj;
+            cp[k] += h;
+            let mut cm = cj;
+            cm[k] -= h;
+            let at = |c: [f64; 3]| {
+                let b = implicit_packing::Body::from_angles(c, [rj; 3], [0.0; 3]).unwrap();
+                implicit_packing::round::round_overlap_measure(&bi, &b)
+            };
+            let fd = (at(cp) - at(cm)) / (2.0 * h);
+            assert!(
+                (fd - g.centre_j[k]).abs() <= 1e-6 * (1.0 + fd.abs()),
+                "{fd} {:?}",
+                g
+            );
+        }
+    }
+    println!("two balls, closed form against eq. 35: worst |difference| / (1 + f) {worst:.2e}");
+    assert!(worst < 1e-12, "{worst}");
 }

@@ -144,7 +144,10 @@ fn hexagonal_packings_of_discs_and_ellipses_are_tangent() {
     let hex = 3f64.sqrt();
     for (axes, cell) in [([1.0, 1.0], [2.0, hex, 1.0]), ([2.0, 1.0], [4.0, hex, 2.0])] {
         let mut model = Model::<2>::new(vec![axes], ContainerShape::Periodic).unwrap();
-        let mut x = vec![0.3, 0.6, 0.0];
+        // A disc has no angle; the ellipse's is 0.
+        let mut x = vec![0.3, 0.6];
+        x.extend(std::iter::repeat_n(0.0, model.layout().angles(0)));
+        let items = x.len();
         x.extend_from_slice(&cell);
         let cert = model.certify(&x).unwrap();
         assert!(cert.is_feasible(), "{axes:?}: {cert:?}");
@@ -157,7 +160,11 @@ fn hexagonal_packings_of_discs_and_ellipses_are_tangent() {
         let density = area / model.evaluate(&x, None).unwrap().objective;
         assert!((density - std::f64::consts::PI / (2.0 * hex)).abs() < 1e-15);
         let shrunk = model.dilated(&x, 1.0 - 1e-6);
-        assert_eq!(&shrunk[..3], &x[..3], "fractional centres are not dilated");
+        assert_eq!(
+            &shrunk[..items],
+            &x[..items],
+            "fractional centres are not dilated"
+        );
         let cert = model.certify(&shrunk).unwrap();
         assert_eq!(cert.overlapping_pairs(), vec![(0, 0); 3], "{axes:?}");
         assert!(model.evaluate(&shrunk, None).unwrap().overlap > 0.0);
@@ -177,8 +184,8 @@ fn face_centred_cubic_spheres_are_tangent_in_both_cells() {
         [0.5, 0.0, 0.5],
         [0.0, 0.5, 0.5],
     ] {
+        // A ball has no angles.
         x.extend_from_slice(&s);
-        x.extend_from_slice(&[0.4, 1.1, -0.3]);
     }
     x.extend_from_slice(&[a, a, a, 0.0, 0.0, 0.0]);
     let cert = cubic.certify(&x).unwrap();
@@ -198,9 +205,6 @@ fn face_centred_cubic_spheres_are_tangent_in_both_cells() {
         0.1,
         0.2,
         0.3,
-        0.0,
-        0.0,
-        0.0,
         2.0,
         3f64.sqrt(),
         (8.0f64 / 3.0).sqrt(),
