@@ -354,7 +354,11 @@ fn structure_lines(s: &structure::Structure) -> Vec<String> {
         .iter()
         .map(|n| format!("axis {}: S = {:.4}", n.axis + 1, n.order))
         .collect();
-    lines.push(format!("nematic order: {}", axes.join(", ")));
+    lines.push(if axes.is_empty() {
+        "nematic order: none (every item is round)".to_string()
+    } else {
+        format!("nematic order: {}", axes.join(", "))
+    });
     // "hexatic (bonds < 1.7000, 5.93 per item): psi6 = 0.7012, psi6_local_mean = 0.8120"
     let (kind, figures) = s.bond_order.named_figures();
     if let [(_, cutoff), (_, mean_bonds), order @ ..] = figures.as_slice() {

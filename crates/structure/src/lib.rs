@@ -130,8 +130,8 @@ pub struct Structure {
     /// The mean equivalent diameter `2 (∏ l_k)^(1/N)` (the diameter of the disc or sphere of
     /// the same area or volume), the unit of the default cutoffs.
     pub mean_equivalent_diameter: f64,
-    /// Nematic order of each body axis (axis k: the column k of the rotation, along semi-axis
-    /// k).
+    /// Nematic order of each body axis that some item defines (axis k: the column k of the
+    /// rotation, along semi-axis k; none for round items, a spheroid's distinct axis only).
     pub nematic: Vec<Nematic>,
     /// Steinhardt's Q₄, Q₆ (3D) or the hexatic ψ₆ (2D).
     pub bond_order: BondOrder,

@@ -5,6 +5,10 @@
 //! −1/2 for axes all perpendicular to one direction) and whose eigenvector is the director.
 //! In 2D S equals `|⟨e^{2iθ}⟩|`, the order parameter S₂ of two-dimensional nematics.
 //!
+//! An axis counts only for the items that define it, those whose semi-axis along it differs
+//! from their others: a circle or a ball defines none (its rotation is arbitrary, the identity
+//! in a packing), a spheroid only its distinct axis. An axis no item defines has no order.
+//!
 //! # References
 //! - P. G. de Gennes, J. Prost, *The Physics of Liquid Crystals*, 2nd ed., Oxford (1993), §2.1.
 
@@ -23,14 +27,23 @@ pub struct Nematic {
     pub director: [f64; 3],
 }
 
-/// [`Nematic`] of every body axis.
+/// [`Nematic`] of every body axis that some item defines (see the module documentation),
+/// averaged over those items.
 pub fn nematic_order<const N: usize>(bodies: &[Body<N>]) -> Vec<Nematic> {
-    (0..N).map(|axis| of_axis(bodies, axis)).collect()
+    (0..N).filter_map(|axis| of_axis(bodies, axis)).collect()
 }
 
-fn of_axis<const N: usize>(bodies: &[Body<N>], axis: usize) -> Nematic {
+/// Whether `axis` is defined for `body`: its semi-axis along it differs from the others.
+fn defines<const N: usize>(body: &Body<N>, axis: usize) -> bool {
+    let l = body.semi_axes();
+    (0..N).all(|k| k == axis || l[k] != l[axis])
+}
+
+fn of_axis<const N: usize>(bodies: &[Body<N>], axis: usize) -> Option<Nematic> {
     let mut t = [[0.0; 3]; 3];
-    for b in bodies {
+    let mut count = 0usize;
+    for b in bodies.iter().filter(|b| defines(b, axis)) {
+        count += 1;
         let r = b.rotation();
         let u: [f64; 3] = std::array::from_fn(|k| if k < N { r[k][axis] } else { 0.0 });
         for p in 0..3 {
@@ -39,7 +52,10 @@ fn of_axis<const N: usize>(bodies: &[Body<N>], axis: usize) -> Nematic {
             }
         }
     }
-    let m = bodies.len().max(1) as f64;
+    if count == 0 {
+        return None;
+    }
+    let m = count as f64;
     let n = N as f64;
     let q = |p: usize, r: usize| (n * t[p][r] / m - if p == r { 1.0 } else { 0.0 }) / (n - 1.0);
     let (order, director) = if N == 2 {
@@ -58,11 +74,11 @@ fn of_axis<const N: usize>(bodies: &[Body<N>], axis: usize) -> Nematic {
         .copied()
         .fold(0.0_f64, |a, b| if b.abs() > a.abs() { b } else { a });
     let sign = if largest < 0.0 { -1.0 } else { 1.0 };
-    Nematic {
+    Some(Nematic {
         axis,
         order,
         director: director.map(|v| v * sign),
-    }
+    })
 }
 
 #[cfg(test)]
@@ -83,6 +99,22 @@ mod tests {
         assert!((s[0].order - 1.0).abs() < 1e-12);
         assert!((s[0].director[0] - 1.0).abs() < 1e-12);
         assert!(s[1].order < 1.0);
+    }
+
+    /// Balls define no axis; spheroids only their distinct one, whose order counts them alone.
+    #[test]
+    fn round_items_have_no_axes_and_spheroids_one() {
+        let ball = Body::from_angles([0.0; 3], [1.0; 3], [0.0; 3]).unwrap();
+        assert!(nematic_order(&[ball, ball]).is_empty());
+        let along_z = Body::from_angles([0.0; 3], [1.0, 1.0, 2.0], [0.0; 3]).unwrap();
+        let s = nematic_order(&[along_z, ball, along_z]);
+        assert_eq!(s.len(), 1);
+        assert_eq!(s[0].axis, 2);
+        assert!((s[0].order - 1.0).abs() < 1e-12);
+        assert!((s[0].director[2] - 1.0).abs() < 1e-12);
+        let circle = Body::ellipse([0.0, 0.0], [1.0, 1.0], 0.0).unwrap();
+        let ellipse = Body::ellipse([0.0, 0.0], [2.0, 1.0], 0.4).unwrap();
+        assert_eq!(nematic_order(&[circle, ellipse]).len(), 2);
     }
 
     #[test]
