@@ -186,15 +186,10 @@ fn frames<const N: usize>(i: &Body<N>, j: &Body<N>, sol: &PairSolution<N>) -> Fr
     Frames { delta, y, force }
 }
 
-#[inline(always)]
-fn grad_d2<const N: usize>(fr: &Frames<f64, N>) -> PairGradient<N> {
-    grad_d2_parts(fr)
-}
-
 /// `∇d²` from the world-frame vectors: the force `F` on `c_i`, `−F` on `c_j`, and the torques
 /// `(y − Δ) × F` on `i` and `−y × F` on `j`.
 #[inline(always)]
-fn grad_d2_parts<T: Real, const N: usize>(fr: &Frames<T, N>) -> PairVector<T, N> {
+fn grad_d2<T: Real, const N: usize>(fr: &Frames<T, N>) -> PairVector<T, N> {
     let mut lever_i = fr.y;
     for k in 0..N {
         lever_i[k] = fr.y[k] - fr.delta[k];
@@ -239,7 +234,7 @@ pub(crate) fn direct_gradient<T: Real, const N: usize>(
             fr.force[r] = fr.force[r] + body_i.q[r][m] * fs[m];
         }
     }
-    let g = grad_d2_parts(&fr);
+    let g = grad_d2(&fr);
     let k = T::splat(-2.0) * a;
     let axpy = |v: T| zero + k * v;
     PairVector {

@@ -143,13 +143,6 @@ impl Layout {
         self.starts[self.items()]
     }
 
-    /// Whether variable `k` (of the items') is a centre coordinate; `k` below
-    /// [`Layout::item_variables`].
-    pub fn is_centre(&self, k: usize) -> bool {
-        let i = self.starts.partition_point(|&s| s <= k) - 1;
-        k - self.starts[i] < self.dimension
-    }
-
     /// `starts[i]` for every item, then the container's start.
     pub(crate) fn starts(&self) -> &[usize] {
         &self.starts
@@ -191,8 +184,7 @@ mod tests {
         assert_eq!((l.range(0), l.range(1), l.range(2)), (0..3, 3..9, 9..12));
         assert_eq!((l.angles(0), l.angles(1), l.angles(2)), (0, 3, 0));
         assert_eq!(l.item_variables(), 12);
-        let centres: Vec<usize> = (0..12).filter(|&k| l.is_centre(k)).collect();
-        assert_eq!(centres, vec![0, 1, 2, 3, 4, 5, 9, 10, 11]);
+        assert_eq!((l.start(0), l.start(1), l.start(2)), (0, 3, 9));
         let circles = Layout::of(&[[1.0, 1.0], [2.0, 1.0]]);
         assert_eq!((circles.range(0), circles.range(1)), (0..2, 2..5));
     }
