@@ -6,9 +6,11 @@
 //! (`docs/figures/paper_<name>.{svg,png}`) and the packings themselves
 //! (`validation/paper-packings/<name>/packing.csv` + `summary.json`, which `ellipack verify`
 //! re-checks and `ellipack pack --resume` continues from), and each run's history
-//! (`validation/paper-runs/<name>.csv`, the density-against-time figure's data). A fresh run
-//! whose packing is less dense than the committed one (which must read back and verify)
-//! writes only its history for that instance: its committed packing, picture and row stay.
+//! (`validation/paper-runs/<name>.csv`, the density-against-time figure's data) with its row in
+//! `validation/paper_latest_runs.csv` (every instance's latest run: the code version it ran
+//! and how long it took to reach the paper). A fresh run whose packing is less dense than the
+//! committed one (which must read back and verify) writes only its history and latest-run row
+//! for that instance: its committed packing, picture and row stay.
 
 use crate::plot::{Corner, Figure, Kind, Panel, Series, render};
 use ellipack::folder::HISTORY_FILE;
@@ -21,6 +23,7 @@ use ellipack::write_atomically;
 use ellipsoid_packer::multistart::{Callbacks, MultiStartProgress};
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// The four instances the multi-start issue sets targets for.
@@ -51,6 +54,10 @@ pub struct Options {
     /// packing's summary.json.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// End each instance's run as soon as its best certified density reaches the paper's
+    /// (within the same budget): the question is then how long the paper's density takes.
+    #[arg(long)]
+    pub until_paper: bool,
 }
 
 /// One instance's result.
@@ -99,6 +106,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         n => n,
     };
     let mut rows = Vec::new();
+    let mut latest = Vec::new();
     let mut problems = Vec::new();
     for instance in instances {
         eprintln!(
@@ -141,7 +149,8 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             resume_from: earlier.as_ref().map(|(_, p)| p.clone()),
             ..RunOptions::default()
         };
-        let outcome = run_noting_gains(&scene, &run_options, |p| {
+        let stop_at = instance.reference_density().filter(|_| options.until_paper);
+        let outcome = run_noting_gains(&scene, &run_options, stop_at, |p| {
             eprintln!(
                 "  {:8.1} s: best certified density {:.5} ({} local minimisations)",
                 p.elapsed.as_secs_f64(),
@@ -161,6 +170,21 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         )
         .map_err(|e| e.to_string())?;
         let c = outcome.summary.certificate;
+        latest.push(LatestRun {
+            instance,
+            density: outcome.summary.density,
+            seconds_to_paper: instance
+                .reference_density()
+                .and_then(|paper| seconds_to_reach(&history, paper)),
+            seconds_to_best: outcome.seconds_to_best,
+            local_minimisations: outcome.summary.local_minimisations,
+            budget_seconds: options.minutes * 60.0,
+            until_paper: options.until_paper,
+            resumed: earlier.is_some(),
+            certified: c.is_certified(),
+            machine: crate::provenance::machine_with_threads(threads),
+            commit: crate::provenance::commit(),
+        });
         if !c.is_certified() {
             problems.push(format!(
                 "{}: {} overlapping pairs, {} containment violations",
@@ -231,21 +255,13 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
         }
         rows.push(row);
     }
-    // Rows of instances not run this time stay as the last run left them, so instances can
-    // be run one at a time (each takes its full budget).
     let table = root.join("validation/paper_tables.csv");
-    for old in earlier_rows(&table) {
-        if !rows.iter().any(|r| r.instance.name == old.instance.name) {
-            rows.push(old);
-        }
-    }
-    rows.sort_by_key(|r| {
-        INSTANCES
-            .iter()
-            .position(|i| i.name == r.instance.name)
-            .unwrap_or(usize::MAX)
-    });
+    let rows = merged_by_instance(rows, earlier_rows(&table), |r| r.instance);
     write_atomically(&table, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+    let latest_table = root.join(LATEST_RUNS);
+    let latest = merged_by_instance(latest, LatestRun::read_all(&latest_table), |r| r.instance);
+    write_atomically(&latest_table, LatestRun::csv(&latest).as_bytes())
+        .map_err(|e| e.to_string())?;
     let curves = curves(root, &rows);
     let mut outputs = crate::output::Outputs::new(false);
     render(
@@ -257,7 +273,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
     .map_err(|e| e.to_string())?;
     write_atomically(
         &root.join("docs/paper-tables.md"),
-        markdown(&rows, &curves).as_bytes(),
+        markdown(&rows, &curves, &latest).as_bytes(),
     )
     .map_err(|e| e.to_string())?;
     Ok(problems)
@@ -269,28 +285,164 @@ const DENSITY_TIME_FIGURE: &str = "paper_density_time";
 /// The folder of each instance's latest run history, `<instance>.csv`.
 const RUNS_DIR: &str = "validation/paper-runs";
 
+/// The table of each instance's latest run.
+const LATEST_RUNS: &str = "validation/paper_latest_runs.csv";
+
+/// This run's rows and the earlier rows of the instances it did not run, in the order of
+/// [`INSTANCES`]: rows of instances not run stay as the last run left them, so instances can be
+/// run one at a time (each takes its full budget).
+fn merged_by_instance<R>(
+    mut rows: Vec<R>,
+    earlier: Vec<R>,
+    instance: impl Fn(&R) -> &'static Instance,
+) -> Vec<R> {
+    for old in earlier {
+        if !rows.iter().any(|r| instance(r).name == instance(&old).name) {
+            rows.push(old);
+        }
+    }
+    rows.sort_by_key(|r| {
+        INSTANCES
+            .iter()
+            .position(|i| i.name == instance(r).name)
+            .unwrap_or(usize::MAX)
+    });
+    rows
+}
+
 /// Runs `scene` through the `ellipack pack` pipeline, calling `gained` with the report of each
 /// local minimisation that raised the best certified density: the studies follow a long run by
 /// its gains only, not by every start.
+///
+/// With `stop_at`, the run ends (as if interrupted, keeping its best certified packing) once
+/// that density is reached.
 ///
 /// # Errors
 /// What [`run`] refuses.
 pub(crate) fn run_noting_gains(
     scene: &Scene,
     options: &RunOptions,
+    stop_at: Option<f64>,
     mut gained: impl FnMut(&MultiStartProgress) + Sync,
 ) -> Result<RunOutcome, ellipack::Error> {
     let mut best = 0.0;
+    let reached = AtomicBool::new(false);
     run(
         scene,
         options,
-        &mut Callbacks::on_finished(|p: &MultiStartProgress| {
-            if p.best_density > best {
-                best = p.best_density;
-                gained(p);
-            }
-        }),
+        &mut Callbacks {
+            finished: |p: &MultiStartProgress| {
+                if p.best_density > best {
+                    best = p.best_density;
+                    gained(p);
+                }
+                if stop_at.is_some_and(|target| p.best_density >= target) {
+                    reached.store(true, Ordering::Relaxed);
+                }
+            },
+            iteration: |_: &ellipsoid_packer::multistart::SolverProgress<'_>| {},
+            should_stop: || reached.load(Ordering::Relaxed),
+        },
     )
+}
+
+/// An instance's latest run, whether or not it wrote the row: the table that says what one
+/// version of the code does in a given budget.
+#[derive(Clone, Debug, PartialEq)]
+struct LatestRun {
+    instance: &'static Instance,
+    /// The run's best certified density.
+    density: f64,
+    /// Seconds from the run's start until its best certified density first reached the
+    /// paper's (none: it did not).
+    seconds_to_paper: Option<f64>,
+    seconds_to_best: f64,
+    local_minimisations: u64,
+    budget_seconds: f64,
+    /// Whether the run was to end at the paper's density (`--until-paper`).
+    until_paper: bool,
+    /// Whether the run went on from the committed packing (its times count from its own start).
+    resumed: bool,
+    certified: bool,
+    /// Processor, cores and threads used.
+    machine: String,
+    commit: String,
+}
+
+impl LatestRun {
+    const HEADER: &'static str = "instance,paper_density,density,ratio,seconds_to_paper,\
+        seconds_to_best,local_minimisations,wall_budget_seconds,until_paper,resumed,certified,\
+        machine,commit\n";
+
+    fn csv(runs: &[LatestRun]) -> String {
+        let mut out = String::from(Self::HEADER);
+        for r in runs {
+            let paper = r.instance.reference_density();
+            let _ = writeln!(
+                out,
+                "{},{},{:.9},{},{},{:.1},{},{:.0},{},{},{},\"{}\",{}",
+                r.instance.name,
+                paper.map_or(String::new(), |d| format!("{d:.5}")),
+                r.density,
+                paper.map_or(String::new(), |d| format!("{:.5}", r.density / d)),
+                r.seconds_to_paper
+                    .map_or(String::new(), |t| format!("{t:.1}")),
+                r.seconds_to_best,
+                r.local_minimisations,
+                r.budget_seconds,
+                r.until_paper,
+                r.resumed,
+                r.certified,
+                r.machine.replace('"', "'"),
+                r.commit,
+            );
+        }
+        out
+    }
+
+    /// The rows of an earlier table (none if it is missing or unreadable: the file is
+    /// regenerated, never an input anyone edits).
+    fn read_all(path: &Path) -> Vec<LatestRun> {
+        let Ok(mut reader) = csv::Reader::from_path(path) else {
+            return Vec::new();
+        };
+        let Ok(headers) = reader.headers().cloned() else {
+            return Vec::new();
+        };
+        let column = |name: &str| headers.iter().position(|h| h == name);
+        let mut runs = Vec::new();
+        for record in reader.records().flatten() {
+            let field = |name: &str| column(name).and_then(|k| record.get(k)).unwrap_or("");
+            let number = |name: &str| field(name).parse::<f64>().ok();
+            let (Some(instance), Some(density)) = (by_name(field("instance")), number("density"))
+            else {
+                continue;
+            };
+            runs.push(LatestRun {
+                instance,
+                density,
+                seconds_to_paper: number("seconds_to_paper"),
+                seconds_to_best: number("seconds_to_best").unwrap_or(f64::NAN),
+                local_minimisations: field("local_minimisations").parse().unwrap_or(0),
+                budget_seconds: number("wall_budget_seconds").unwrap_or(f64::NAN),
+                until_paper: field("until_paper") == "true",
+                resumed: field("resumed") == "true",
+                certified: field("certified") == "true",
+                machine: field("machine").to_string(),
+                commit: field("commit").to_string(),
+            });
+        }
+        runs
+    }
+}
+
+/// Seconds from a run's start until the best density of its history first reached `paper`.
+fn seconds_to_reach(history: &str, paper: f64) -> Option<f64> {
+    best_density_steps(history, paper)
+        .0
+        .into_iter()
+        .find(|&(_, ratio)| ratio >= 1.0)
+        .map(|(t, _)| t)
 }
 
 /// One instance's best certified density against wall time, relative to the paper's.
@@ -469,7 +621,12 @@ const PAPER_TO_BEST: &[(&str, &str, u32)] = &[
 
 /// The instance names of `rows`, comma-separated (`none` for no row).
 fn names_of<'a>(rows: impl Iterator<Item = &'a Row>) -> String {
-    let names: Vec<&str> = rows.map(|r| r.instance.name).collect();
+    names_of_instances(rows.map(|r| r.instance))
+}
+
+/// The names of `instances`, comma-separated (`none` for no instance).
+fn names_of_instances(instances: impl Iterator<Item = &'static Instance>) -> String {
+    let names: Vec<&str> = instances.map(|i| i.name).collect();
     if names.is_empty() {
         "none".into()
     } else {
@@ -576,7 +733,68 @@ fn csv(rows: &[Row]) -> String {
     out
 }
 
-fn markdown(rows: &[Row], curves: &[Curve]) -> String {
+/// The page's section on the latest run of each instance: one table, and which commits and
+/// budgets its rows ran with.
+fn latest_runs_section(runs: &[LatestRun]) -> String {
+    if runs.is_empty() {
+        return String::new();
+    }
+    let mut commits: Vec<(&str, usize)> = Vec::new();
+    for r in runs {
+        match commits.iter_mut().find(|(c, _)| *c == r.commit) {
+            Some((_, k)) => *k += 1,
+            None => commits.push((&r.commit, 1)),
+        }
+    }
+    let commits: Vec<String> = commits
+        .iter()
+        .map(|(c, k)| format!("`{c}` ({k} rows)"))
+        .collect();
+    let reached = runs.iter().filter(|r| r.seconds_to_paper.is_some()).count();
+    let missed = names_of_instances(
+        runs.iter()
+            .filter(|r| r.seconds_to_paper.is_none())
+            .map(|r| r.instance),
+    );
+    let mut out = format!(
+        "## The latest run of each instance\n\n\
+         Every run writes its row here, also a run that ended less dense than the committed \
+         packing (`validation/paper_latest_runs.csv`): what one version of the code does in the \
+         given budget. A run `until paper` ended as soon as its best certified density reached \
+         the paper's; its density is then its first above the paper's, not the most it could \
+         reach. A resumed run counts its times from its own start. Commits: {}. {reached} of {} \
+         rows reached the paper's density; not reached: {missed}.\n\n\
+         | instance | paper density (48 h) | latest run | latest / paper | reached the paper at (s) | time to best (s) | local minimisations | wall budget (min) | until paper | resumed | machine | certified | commit |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|---|\n",
+        commits.join(", "),
+        runs.len(),
+    );
+    let yes_no = |b: bool| if b { "yes" } else { "no" };
+    for r in runs {
+        let paper = r.instance.reference_density();
+        let _ = writeln!(
+            out,
+            "| {} | {} | {:.5} | {} | {} | {:.1} | {} | {:.0} | {} | {} | {} | {} | {} |",
+            r.instance.name,
+            paper.map_or("—".into(), |d| format!("{d:.5}")),
+            r.density,
+            paper.map_or("—".into(), |d| format!("{:.4}", r.density / d)),
+            r.seconds_to_paper.map_or("—".into(), |t| format!("{t:.1}")),
+            r.seconds_to_best,
+            r.local_minimisations,
+            r.budget_seconds / 60.0,
+            yes_no(r.until_paper),
+            yes_no(r.resumed),
+            r.machine,
+            if r.certified { "yes" } else { "**no**" },
+            r.commit,
+        );
+    }
+    out.push('\n');
+    out
+}
+
+fn markdown(rows: &[Row], curves: &[Curve], latest: &[LatestRun]) -> String {
     let mut out = String::from(
         "# The paper's instances\n\nGenerated by `cargo xtask paper-tables` (do not edit; \
          each run replaces the rows of the instances it ran, except that a fresh run less dense \
@@ -592,7 +810,9 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
          variables; `compression-lagrangian`: compression of the container first, then the \
          augmented Lagrangian from its packing; `cargo xtask paper-tables --method`). Each row \
          ran with the code of the commit in its row, which may differ from today's: `cargo \
-         xtask paper-tables` runs the rows again with the code of the checkout. The paper's figures are the best of a 48-hour multi-start \
+         xtask paper-tables` runs the rows again with the code of the checkout, and the section \
+         on the latest run of each instance gives what that code reached, also where it did not \
+         replace the packing. The paper's figures are the best of a 48-hour multi-start \
          on an Intel i7-3770 (Birgin, Lobato, Martínez, Section 6; `≈` where the paper gives a \
          radius only). The packings are in `validation/paper-packings/<instance>/` (`ellipack \
          verify` re-checks them, `ellipack pack --instance <instance> --resume --out <that \
@@ -622,6 +842,7 @@ fn markdown(rows: &[Row], curves: &[Curve]) -> String {
         );
     }
     out.push('\n');
+    out.push_str(&latest_runs_section(latest));
     let curve_of = |r: &Row| curves.iter().find(|c| c.instance.name == r.instance.name);
     let _ = writeln!(
         out,
@@ -674,6 +895,70 @@ mod tests {
             best_density_steps("local_minimisation,seconds\n", 0.9).0,
             []
         );
+    }
+
+    #[test]
+    fn the_paper_is_reached_at_the_first_best_at_or_above_it() {
+        let history = "local_minimisation,seconds,density,best_density\n\
+                       1,2.0,0.80,0.80\n2,4.0,0.899,0.899\n3,6.5,0.90,0.90\n4,9.0,0.95,0.95\n";
+        assert_eq!(seconds_to_reach(history, 0.9), Some(6.5));
+        assert_eq!(seconds_to_reach(history, 0.96), None);
+    }
+
+    /// The latest runs' table is read back to carry the rows of instances not run: no column
+    /// may be lost.
+    #[test]
+    fn latest_runs_read_back_to_the_same_text() {
+        let run = |name: &str, seconds_to_paper: Option<f64>, until_paper: bool| LatestRun {
+            instance: by_name(name).expect("an instance"),
+            density: 0.876543219,
+            seconds_to_paper,
+            seconds_to_best: 321.5,
+            local_minimisations: 77,
+            budget_seconds: 600.0,
+            until_paper,
+            resumed: !until_paper,
+            certified: true,
+            machine: "AMD EPYC, 2 cores, 2 threads used".into(),
+            commit: "abc1234".into(),
+        };
+        let runs = vec![
+            run("ellipse-100", Some(120.25), true),
+            run("circle-231", None, false),
+        ];
+        let path = std::env::temp_dir().join(format!("latest-runs-{}.csv", std::process::id()));
+        std::fs::write(&path, LatestRun::csv(&runs)).expect("written");
+        let back = LatestRun::read_all(&path);
+        std::fs::remove_file(&path).expect("removed");
+        assert_eq!(LatestRun::csv(&back), LatestRun::csv(&runs));
+        assert_eq!(back[1].seconds_to_paper, None);
+        assert!(back[0].until_paper && !back[0].resumed);
+        let section = latest_runs_section(&back);
+        assert!(
+            section.contains("1 of 2 rows reached the paper's density; not reached: circle-231")
+        );
+        assert!(section.contains("`abc1234` (2 rows)"));
+    }
+
+    /// A run told to stop at a density ends at the first local minimisation that reaches it;
+    /// without it, the run takes all the local minimisations it is given.
+    #[test]
+    fn a_run_ends_once_it_reaches_the_density_to_stop_at() {
+        let mut scene = Scene::from_toml_str(
+            "dimension = 2\nseed = 3\n[container]\nkind = \"circle\"\n\
+             [[shapes]]\ncount = 5\nsemi_axes = [1.0, 0.5]\n",
+            "five ellipses",
+        )
+        .expect("a scene");
+        scene.solver.threads = 1;
+        scene.solver.local_minimisations = Some(6);
+        let options = RunOptions::default();
+        let whole = run_noting_gains(&scene, &options, None, |_| {}).expect("packed");
+        assert_eq!(whole.summary.local_minimisations, 6);
+        let stopped = run_noting_gains(&scene, &options, Some(0.1), |_| {}).expect("packed");
+        assert_eq!(stopped.summary.local_minimisations, 1);
+        assert!(stopped.summary.density >= 0.1);
+        assert!(stopped.summary.certificate.is_certified());
     }
 
     #[test]

@@ -448,7 +448,7 @@ pub fn run_ours_as(
     let n = scene.item_count();
     let options = RunOptions::default();
     let mut points = Vec::new();
-    let outcome = run_noting_gains(&scene, &options, |p| {
+    let outcome = run_noting_gains(&scene, &options, None, |p| {
         eprintln!(
             "  ours N = {n}: {:8.1} s: {:.5}",
             p.elapsed.as_secs_f64(),
