@@ -621,11 +621,15 @@ mod tests {
     }
 
     /// 20 ellipsoids cannot be placed in a container smaller than their volume: the placement
-    /// stalls, and its point comes back repaired, a packing.
+    /// stalls, and its point comes back repaired, a packing. The trial is a packing shrunk
+    /// by 0.8, so the repair stays within its factor of 4.
     #[test]
     fn a_placement_given_up_leaves_its_point_repaired() {
         let mut p = Model::<3>::new(vec![[1.0, 0.75, 0.5]; 20], ContainerShape::Ball).unwrap();
-        let trial = p.dilated(&lattice_start(&p), 0.5);
+        let x0 = lattice_start(&p);
+        let packed =
+            local_minimisation(&mut p, &x0, &LocalSettings::default(), &mut |_| false).unwrap();
+        let trial = p.dilated(&packed.x, 0.8);
         let d = density(&mut p, &trial);
         assert!(d > 1.0, "{d}");
         let settings = LocalSettings::default().with_max_inner_iterations(20);

@@ -175,7 +175,18 @@ fn least_uniform_dilation<const N: usize>(
     x: &[f64],
     certificate: &Certificate,
 ) -> Result<(Vec<f64>, f64, Certificate), Error> {
+    let given_up = |c: &Certificate| Error::NotCertifiable {
+        max_dilation: MAX_DILATION,
+        overlapping: c.overlapping.len(),
+        outside: c.outside.len(),
+    };
     let mut s = pair_dilation(certificate);
+    // Two items collapsed into each other (μ near 0, as when the solver ends with a pair's
+    // centres almost together) would need a dilation of thousands: a container that size
+    // holds nothing worth keeping, so the point is given up as for an item far outside.
+    if s > MAX_DILATION {
+        return Err(given_up(certificate));
+    }
     // Containment and any pair the formula could not settle: grow until certified, then
     // bisect back to the least factor that passes.
     let mut lo = 1.0;
@@ -187,11 +198,7 @@ fn least_uniform_dilation<const N: usize>(
         lo = s;
         s = 1.0 + 2.0 * (s - 1.0).max(1e-9);
         if s > MAX_DILATION {
-            return Err(Error::NotCertifiable {
-                max_dilation: MAX_DILATION,
-                overlapping: cert.overlapping.len(),
-                outside: cert.outside.len(),
-            });
+            return Err(given_up(&cert));
         }
         y = dilate::<N>(problem, x, s);
         cert = problem.certify(&y)?;
