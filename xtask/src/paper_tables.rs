@@ -400,25 +400,11 @@ impl LatestRun {
         out
     }
 
-    /// The rows of an earlier table (none if it is missing or unreadable: the file is
-    /// regenerated, never an input anyone edits).
+    /// The rows of an earlier table ([`read_rows`]).
     fn read_all(path: &Path) -> Vec<LatestRun> {
-        let Ok(mut reader) = csv::Reader::from_path(path) else {
-            return Vec::new();
-        };
-        let Ok(headers) = reader.headers().cloned() else {
-            return Vec::new();
-        };
-        let column = |name: &str| headers.iter().position(|h| h == name);
-        let mut runs = Vec::new();
-        for record in reader.records().flatten() {
-            let field = |name: &str| column(name).and_then(|k| record.get(k)).unwrap_or("");
+        read_rows(path, |field, instance, density| {
             let number = |name: &str| field(name).parse::<f64>().ok();
-            let (Some(instance), Some(density)) = (by_name(field("instance")), number("density"))
-            else {
-                continue;
-            };
-            runs.push(LatestRun {
+            LatestRun {
                 instance,
                 density,
                 seconds_to_paper: number("seconds_to_paper"),
@@ -428,11 +414,10 @@ impl LatestRun {
                 until_paper: field("until_paper") == "true",
                 resumed: field("resumed") == "true",
                 certified: field("certified") == "true",
-                machine: field("machine").to_string(),
-                commit: field("commit").to_string(),
-            });
-        }
-        runs
+                machine: field("machine"),
+                commit: field("commit"),
+            }
+        })
     }
 }
 
@@ -659,9 +644,14 @@ fn paper_to_best(name: &str) -> Option<(&'static str, u32)> {
         .map(|&(_, t, k)| (t, k))
 }
 
-/// The rows of an earlier `paper_tables.csv` (none if it is missing or unreadable: the file
-/// is regenerated, never an input anyone edits).
-fn earlier_rows(path: &Path) -> Vec<Row> {
+/// The rows of an earlier table at `path`, each made by `row` from its fields (by column
+/// name; empty when missing), its instance and its density. None if the file is missing or
+/// unreadable, and rows without a known instance or a density are skipped: the file is
+/// regenerated, never an input anyone edits.
+fn read_rows<R>(
+    path: &Path,
+    row: impl Fn(&dyn Fn(&str) -> String, &'static Instance, f64) -> R,
+) -> Vec<R> {
     let Ok(mut reader) = csv::Reader::from_path(path) else {
         return Vec::new();
     };
@@ -671,13 +661,28 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
     let column = |name: &str| headers.iter().position(|h| h == name);
     let mut rows = Vec::new();
     for record in reader.records().flatten() {
-        let field = |name: &str| column(name).and_then(|k| record.get(k)).unwrap_or("");
-        let number = |name: &str| field(name).parse::<f64>().ok();
-        let (Some(instance), Some(density)) = (by_name(field("instance")), number("density"))
-        else {
+        let field = |name: &str| {
+            column(name)
+                .and_then(|k| record.get(k))
+                .unwrap_or("")
+                .to_string()
+        };
+        let (Some(instance), Some(density)) = (
+            by_name(&field("instance")),
+            field("density").parse::<f64>().ok(),
+        ) else {
             continue;
         };
-        rows.push(Row {
+        rows.push(row(&field, instance, density));
+    }
+    rows
+}
+
+/// The rows of an earlier `paper_tables.csv` ([`read_rows`]).
+fn earlier_rows(path: &Path) -> Vec<Row> {
+    read_rows(path, |field, instance, density| {
+        let number = |name: &str| field(name).parse::<f64>().ok();
+        Row {
             instance,
             density,
             seconds_to_best: number("seconds_to_best").unwrap_or(f64::NAN),
@@ -686,19 +691,18 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
             certified: field("certified") == "true",
             min_mu2: number("min_mu2"),
             budget_seconds: number("wall_budget_seconds").unwrap_or(f64::NAN),
-            machine: field("machine").to_string(),
+            machine: field("machine"),
             // Rows written before the column existed were all run with the default method.
-            method: match field("method") {
+            method: match field("method").as_str() {
                 "" => SolverSettings::defaults(Dimension::Two)
                     .method
                     .name()
                     .to_string(),
                 m => m.to_string(),
             },
-            commit: field("commit").to_string(),
-        });
-    }
-    rows
+            commit: field("commit"),
+        }
+    })
 }
 
 fn csv(rows: &[Row]) -> String {
