@@ -103,18 +103,16 @@ fn lagrangian<const N: usize>(
         if first.report.stop_reason == auglag::StopReason::Interrupted {
             break;
         }
-        let pairs = merged_pairs(&problem.certify(&first.x)?);
+        let pairs = crate::merged::merged(&problem.certify(&first.x)?);
         if pairs.is_empty() {
             break;
         }
         let Some(apart) = crate::merged::pulled_apart(problem, &first.x, &pairs) else {
             break;
         };
-        let again = solve(problem, &apart, settings.feasibility_tolerance)?;
-        let mut report = again.report.clone();
-        add_counts(&mut report, &first.report);
-        report.stop_reason = again.report.stop_reason;
-        first = auglag::Solution { report, ..again };
+        let mut again = solve(problem, &apart, settings.feasibility_tolerance)?;
+        add_counts(&mut again.report, &first.report);
+        first = again;
     }
     let mut best = certified(problem, first)?;
     if let Some(tolerance) = settings.polish_tolerance
@@ -133,25 +131,15 @@ fn lagrangian<const N: usize>(
 
 /// Solves from pairs pulled apart in one local minimisation at most: the pairs that merge
 /// again after as many pulls are given up with the point.
-const PULLS_PER_MINIMISATION: usize = 3;
-
-/// The pairs of `certificate` merged into one another ([`crate::merged::MERGED_DILATION`]).
 ///
 /// The overlap measure is bounded, so where the solver shrinks the container against a few
 /// deep overlaps it can push those pairs through one another and stop with them merged
-/// (`PenaltyTooLarge`): a point no dilation of 4 repairs. From a perturbation of the best
-/// packing of 100 ellipsoids (1, 0.75, 0.5) in a ball at the paper's amplitude 0.1 this was
-/// every start tried, with 2 to 5 such pairs among points of density 0.61–0.68 before repair.
-/// Pulled apart ([`crate::merged::pulled_apart`]), they are ordinary overlaps for the next
-/// solve.
-fn merged_pairs(certificate: &implicit_packing::Certificate) -> Vec<(usize, usize)> {
-    certificate
-        .overlapping
-        .iter()
-        .filter(|o| o.mu2 * crate::merged::MERGED_DILATION.powi(2) <= 1.0)
-        .map(|o| o.items)
-        .collect()
-}
+/// (`PenaltyTooLarge`, [`crate::merged::merged`]): a point no dilation of 4 repairs. From a
+/// perturbation of the best packing of 100 ellipsoids (1, 0.75, 0.5) in a ball at the paper's
+/// amplitude 0.1 this was every start tried, with 2 to 5 such pairs among points of density
+/// 0.61–0.68 before repair. Pulled apart ([`crate::merged::pulled_apart`]), they are ordinary
+/// overlaps for the next solve.
+const PULLS_PER_MINIMISATION: usize = 3;
 
 /// [`local_minimisation`] in feasibility mode: the container stays as the start gives it, the
 /// solver drives overlap and containment to zero for items grown by [`FIXED_MARGIN`], and the
@@ -423,14 +411,13 @@ mod tests {
         let x0 = lattice_start(&p);
         let packed = local_minimisation(&mut p, &x0, &settings, &mut |_| false).unwrap();
         let start = crate::starts::perturb::<3>(&packed.x, p.layout(), 0.1, 0, 1);
-        let mut solved_once = Vec::new();
         let mut never = |_: &Progress<'_>| false;
         let mut solve = solver::<3>(&settings, &mut never);
         let adapter = Adapter::new(&mut p, centre_bound::<3>(&start), None);
         let first = solve(&adapter, &start, settings.feasibility_tolerance).unwrap();
         drop(adapter);
-        solved_once.extend(merged_pairs(&p.certify(&first.x).unwrap()));
-        assert!(!solved_once.is_empty(), "the first solve merged no pair");
+        let merged = crate::merged::merged(&p.certify(&first.x).unwrap());
+        assert!(!merged.is_empty(), "the first solve merged no pair");
         let r = local_minimisation(&mut p, &start, &settings, &mut |_| false).unwrap();
         assert!(r.certificate.is_feasible());
         assert!(r.repair_factor < 1.001, "{}", r.repair_factor);

@@ -57,10 +57,16 @@ pub(crate) fn merged_pairs(
     if too_much == 0 || too_much as f64 > few {
         return Vec::new();
     }
+    merged(certificate)
+}
+
+/// The pairs of `certificate` merged into one another: their centres need a dilation of at
+/// least [`MERGED_DILATION`], 1/μ ≥ 2 (μ² ≤ 1/4).
+pub(crate) fn merged(certificate: &Certificate) -> Vec<(usize, usize)> {
     certificate
         .overlapping
         .iter()
-        .filter(|o| asks(o.mu2) >= MERGED_DILATION)
+        .filter(|o| o.mu2 * MERGED_DILATION * MERGED_DILATION <= 1.0)
         .map(|o| o.items)
         .collect()
 }
