@@ -182,6 +182,7 @@ pub fn run_all(root: &Path, options: &Options) -> Result<Vec<String>, String> {
             until_paper: options.until_paper,
             resumed: earlier.is_some(),
             certified: c.is_certified(),
+            method: scene.solver.method.name().to_string(),
             machine: crate::provenance::machine_with_threads(threads),
             commit: crate::provenance::commit(),
         });
@@ -364,6 +365,8 @@ struct LatestRun {
     /// Whether the run went on from the committed packing (its times count from its own start).
     resumed: bool,
     certified: bool,
+    /// The local minimisation's method (its name in scene files).
+    method: String,
     /// Processor, cores and threads used.
     machine: String,
     commit: String,
@@ -372,7 +375,7 @@ struct LatestRun {
 impl LatestRun {
     const HEADER: &'static str = "instance,paper_density,density,ratio,seconds_to_paper,\
         seconds_to_best,local_minimisations,wall_budget_seconds,until_paper,resumed,certified,\
-        machine,commit\n";
+        method,machine,commit\n";
 
     fn csv(runs: &[LatestRun]) -> String {
         let mut out = String::from(Self::HEADER);
@@ -380,7 +383,7 @@ impl LatestRun {
             let paper = r.instance.reference_density();
             let _ = writeln!(
                 out,
-                "{},{},{:.9},{},{},{:.1},{},{:.0},{},{},{},\"{}\",{}",
+                "{},{},{:.9},{},{},{:.1},{},{:.0},{},{},{},{},\"{}\",{}",
                 r.instance.name,
                 paper.map_or(String::new(), |d| format!("{d:.5}")),
                 r.density,
@@ -393,6 +396,7 @@ impl LatestRun {
                 r.until_paper,
                 r.resumed,
                 r.certified,
+                r.method,
                 r.machine.replace('"', "'"),
                 r.commit,
             );
@@ -414,6 +418,7 @@ impl LatestRun {
                 until_paper: field("until_paper") == "true",
                 resumed: field("resumed") == "true",
                 certified: field("certified") == "true",
+                method: method_or_default(field("method")),
                 machine: field("machine"),
                 commit: field("commit"),
             }
@@ -678,6 +683,18 @@ fn read_rows<R>(
     rows
 }
 
+/// A row's method: rows written before the column existed were all run with the default one.
+fn method_or_default(method: String) -> String {
+    if method.is_empty() {
+        SolverSettings::defaults(Dimension::Two)
+            .method
+            .name()
+            .to_string()
+    } else {
+        method
+    }
+}
+
 /// The rows of an earlier `paper_tables.csv` ([`read_rows`]).
 fn earlier_rows(path: &Path) -> Vec<Row> {
     read_rows(path, |field, instance, density| {
@@ -692,14 +709,7 @@ fn earlier_rows(path: &Path) -> Vec<Row> {
             min_mu2: number("min_mu2"),
             budget_seconds: number("wall_budget_seconds").unwrap_or(f64::NAN),
             machine: field("machine"),
-            // Rows written before the column existed were all run with the default method.
-            method: match field("method").as_str() {
-                "" => SolverSettings::defaults(Dimension::Two)
-                    .method
-                    .name()
-                    .to_string(),
-                m => m.to_string(),
-            },
+            method: method_or_default(field("method")),
             commit: field("commit"),
         }
     })
@@ -768,8 +778,8 @@ fn latest_runs_section(runs: &[LatestRun]) -> String {
          the paper's; its density is then its first above the paper's, not the most it could \
          reach. A resumed run counts its times from its own start. Commits: {}. {reached} of {} \
          rows reached the paper's density; not reached: {missed}.\n\n\
-         | instance | paper density (48 h) | latest run | latest / paper | reached the paper at (s) | time to best (s) | local minimisations | wall budget (min) | until paper | resumed | machine | certified | commit |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|---|\n",
+         | instance | paper density (48 h) | latest run | latest / paper | reached the paper at (s) | time to best (s) | local minimisations | wall budget (min) | until paper | resumed | method | machine | certified | commit |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|---|---|\n",
         commits.join(", "),
         runs.len(),
     );
@@ -778,7 +788,7 @@ fn latest_runs_section(runs: &[LatestRun]) -> String {
         let paper = r.instance.reference_density();
         let _ = writeln!(
             out,
-            "| {} | {} | {:.5} | {} | {} | {:.1} | {} | {:.0} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {:.5} | {} | {} | {:.1} | {} | {:.0} | {} | {} | {} | {} | {} | {} |",
             r.instance.name,
             paper.map_or("—".into(), |d| format!("{d:.5}")),
             r.density,
@@ -789,6 +799,7 @@ fn latest_runs_section(runs: &[LatestRun]) -> String {
             r.budget_seconds / 60.0,
             yes_no(r.until_paper),
             yes_no(r.resumed),
+            r.method,
             r.machine,
             if r.certified { "yes" } else { "**no**" },
             r.commit,
@@ -806,9 +817,9 @@ fn markdown(rows: &[Row], curves: &[Curve], latest: &[LatestRun]) -> String {
          instance is packed by the pipeline of `ellipack pack`: the multi-start of \
          `ellipsoid-packer` (the paper's lattice start; the 16 tightest cuts of the dense \
          lattice, every item turned by up to 0.01 rad; then perturbations of the best packing at \
-         amplitudes 1, 1/2 and 1/4 of the paper's, every 8th start a further lattice start, and \
-         a new chain from fresh lattice starts after 300 starts without a relative gain of \
-         1e-5), every local minimisation certified with PW85 and exact containment and repaired, \
+         amplitudes 1, 1/2 and 1/4 of the paper's, every 8th start a further lattice start, \
+         perturbations twice as wide after 32 starts without a relative gain of 1e-5, and a new \
+         chain from fresh lattice starts after 300 such starts), every local minimisation certified with PW85 and exact containment and repaired, \
          for the wall time, with the local method and on the machine given in its row \
          (`lagrangian`: the paper's augmented Lagrangian with the container among the \
          variables; `compression-lagrangian`: compression of the container first, then the \
@@ -923,6 +934,12 @@ mod tests {
             until_paper,
             resumed: !until_paper,
             certified: true,
+            method: if until_paper {
+                "lagrangian"
+            } else {
+                "compression-lagrangian"
+            }
+            .into(),
             machine: "AMD EPYC, 2 cores, 2 threads used".into(),
             commit: "abc1234".into(),
         };

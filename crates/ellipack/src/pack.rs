@@ -249,6 +249,7 @@ fn settings_of(scene: &Scene, options: &RunOptions, n: usize) -> Settings {
     multistart.perturbation_levels = scene.solver.perturbation_levels;
     multistart.fresh_lattice_every = count(scene.solver.fresh_lattice_every);
     multistart.restart_after = count(scene.solver.restart_after);
+    multistart.widen_after = count(scene.solver.widen_after);
     multistart.threads = scene.solver.threads;
     multistart.max_local_minimisations = scene.solver.local_minimisations.map_or(usize::MAX, count);
     multistart.time_limit = Some(scene.solver.time_limit);

@@ -77,6 +77,8 @@
 //! fresh_lattice_every = 8             # every 8th later start a new lattice start (0: never)
 //! restart_after = 300                 # new chain from fresh lattice starts after 300 starts
 //!                                     # without a 1e-5 gain (0: never; needs from_best)
+//! widen_after = 32                    # perturbations twice as wide after 32 starts without
+//!                                     # a gain, until the chain gains (0: never)
 //!
 //! [output]                            # optional; the defaults are shown
 //! # directory = "out"                 # default directory (--out overrides it)
@@ -397,6 +399,9 @@ pub struct SolverSettings {
     /// chain's best packing by more than 1e-5 relative, a round of fresh lattice starts
     /// begins a new chain (0: never).
     pub restart_after: u64,
+    /// With `from_best`: after this many starts in a row without improving the current
+    /// chain's best packing, its perturbations move twice as far until it gains (0: never).
+    pub widen_after: u64,
 }
 
 /// Starts without improvement after which a run begins a new chain, unless the scene says
@@ -432,6 +437,7 @@ impl SolverSettings {
             fresh_lattice_every: wide(run.fresh_lattice_every),
             start: StartName::Lattice,
             restart_after: wide(run.restart_after),
+            widen_after: wide(run.widen_after),
         }
     }
 }
@@ -686,6 +692,7 @@ struct RawSolver {
     perturbation_levels: Option<Spanned<i64>>,
     fresh_lattice_every: Option<Spanned<i64>>,
     restart_after: Option<Spanned<i64>>,
+    widen_after: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -1181,6 +1188,7 @@ impl Scene {
             s.fresh_lattice_every.to_string(),
         );
         line(&mut out, "restart_after", s.restart_after.to_string());
+        line(&mut out, "widen_after", s.widen_after.to_string());
         let o = &self.output;
         out.push_str("\n[output]\n");
         if let Some(dir) = &o.directory {
@@ -1925,6 +1933,9 @@ impl Validator<'_> {
         }
         if let Some(n) = &raw.restart_after {
             s.restart_after = self.count(n, "solver.restart_after", 0)?;
+        }
+        if let Some(n) = &raw.widen_after {
+            s.widen_after = self.count(n, "solver.widen_after", 0)?;
         }
         if let Some(n) = &raw.perturbation_levels {
             let v = self.count(n, "solver.perturbation_levels", 1)?;

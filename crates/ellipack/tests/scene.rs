@@ -131,6 +131,16 @@ fn restarts_are_on_by_default_and_can_be_turned_off() {
 }
 
 #[test]
+fn widening_is_on_by_default_and_can_be_turned_off() {
+    assert_eq!(
+        parse(&minimal_2d("")).unwrap().solver.widen_after,
+        ellipsoid_packer::multistart::WIDEN_AFTER as u64
+    );
+    let off = parse(&minimal_2d("[solver]\nwiden_after = 0\n")).unwrap();
+    assert_eq!(off.solver.widen_after, 0);
+}
+
+#[test]
 fn scenes_survive_a_round_trip_through_toml() {
     for text in [GOOD_3D, DEFAULT_SCENE, &minimal_2d("")] {
         let scene = parse(text).unwrap();
@@ -295,6 +305,12 @@ fn impossible_values_are_named_with_their_line() {
     assert_error(
         &minimal_2d("[solver]\nrestart_after = -1\n"),
         "solver.restart_after",
+        8,
+        "at least 0",
+    );
+    assert_error(
+        &minimal_2d("[solver]\nwiden_after = -1\n"),
+        "solver.widen_after",
         8,
         "at least 0",
     );

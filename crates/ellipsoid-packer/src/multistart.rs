@@ -70,6 +70,10 @@ pub struct MultiStartSettings {
     /// chain's best packing by more than 1e-5 relative, the next round is one of fresh dense
     /// lattice starts and its best result begins a new chain (0: one chain, never restart).
     pub restart_after: usize,
+    /// With `from_best`: once this many starts in a row have not improved the current chain's
+    /// best packing (counted as for `restart_after`), its perturbations move twice as far,
+    /// until the chain gains or a new one begins (0: never).
+    pub widen_after: usize,
     /// Starts per round, run in parallel (one thread each).
     pub threads: usize,
     /// Stop after this many local minimisations (the first, from the given start, included).
@@ -129,6 +133,9 @@ impl Default for Shard {
 
 /// Starts without improvement after which a run begins a new chain, by default.
 pub const RESTART_AFTER: usize = 300;
+/// Starts without improvement after which a chain's perturbations move twice as far, by
+/// default.
+pub const WIDEN_AFTER: usize = 32;
 /// Dense lattice starts of a run by default: four rounds of every lattice orientation in 3D,
 /// eight in 2D.
 pub const LATTICE_STARTS: usize = 16;
@@ -147,6 +154,7 @@ impl MultiStartSettings {
             perturbation_levels: 3,
             fresh_lattice_every: 8,
             restart_after: RESTART_AFTER,
+            widen_after: WIDEN_AFTER,
             threads: 0,
             max_local_minimisations: usize::MAX,
             time_limit: Some(TIME_LIMIT),
@@ -166,6 +174,7 @@ impl MultiStartSettings {
             perturbation_levels: 1,
             fresh_lattice_every: 0,
             restart_after: 0,
+            widen_after: 0,
             threads: 1,
             max_local_minimisations: 100,
             time_limit: None,
@@ -183,6 +192,7 @@ auglag::with_setters!(MultiStartSettings:
     with_perturbation_levels => perturbation_levels: u32,
     with_fresh_lattice_every => fresh_lattice_every: usize,
     with_restart_after => restart_after: usize,
+    with_widen_after => widen_after: usize,
     with_threads => threads: usize,
     with_max_local_minimisations => max_local_minimisations: usize,
     with_time_limit => time_limit: Option<Duration>,
@@ -398,7 +408,7 @@ pub fn multistart<const N: usize>(
         }
     };
     let tightest = if uses_lattice_starts(settings) {
-        tightest_lattice_starts(&problem, TIGHTEST_CUTS)
+        tightest_lattice_starts(&problem, TIGHTEST_CUTS.max(settings.lattice_starts))
     } else {
         Vec::new()
     };
@@ -443,7 +453,7 @@ pub fn multistart<const N: usize>(
                             &current
                         },
                         problem.layout(),
-                        amplitude,
+                        amplitude * chain.widening(settings),
                         settings.seed,
                         shard.global(index) as u64,
                     ),
@@ -559,6 +569,17 @@ impl Chain {
         }
     }
 
+    /// The factor of the perturbations' amplitude: 2 once the chain has gone
+    /// [`MultiStartSettings::widen_after`] starts without a gain, else 1. A walk that returns
+    /// to its best packing start after start is in a basin wider than its perturbations.
+    fn widening(&self, settings: &MultiStartSettings) -> f64 {
+        if settings.from_best && settings.widen_after > 0 && self.stale >= settings.widen_after {
+            2.0
+        } else {
+            1.0
+        }
+    }
+
     /// A new chain from the best result of a restart round, even if worse than the old one.
     fn begin(&mut self, best: &LocalResult) {
         self.best = best.clone();
@@ -621,7 +642,8 @@ pub(crate) fn minimise_start<const N: usize>(
 }
 
 /// Lattice starts that are the tightest cuts ([`tightest_lattice_starts`]) before
-/// [`LatticeStart::sequence`] takes over.
+/// [`LatticeStart::sequence`] takes over, or all of [`MultiStartSettings::lattice_starts`]
+/// when there are more.
 const TIGHTEST_CUTS: usize = 16;
 
 /// Largest turn (radians) of every item's angles on a lattice start ([`turned`]), which breaks
@@ -680,6 +702,27 @@ mod tests {
             ..MultiStartSettings::paper(2, seed)
         };
         multistart(&axes, ContainerShape::Ellipsoid, &x0, &settings, &mut ()).unwrap()
+    }
+
+    #[test]
+    fn a_chain_without_gains_widens_its_perturbations() {
+        let axes = vec![[2.0, 1.0]; 6];
+        let x0 = paper_start(&axes, ContainerShape::Ellipsoid).unwrap();
+        let mut p = Model::<2>::new(axes, ContainerShape::Ellipsoid).unwrap();
+        let first = certified_start(&mut p, &x0).unwrap().unwrap();
+        let settings = MultiStartSettings::recommended(2, 0).with_widen_after(3);
+        let mut chain = Chain::new(&first);
+        for stale in 0..3 {
+            assert_eq!(chain.stale, stale);
+            assert_eq!(chain.widening(&settings), 1.0);
+            chain.record(&first);
+        }
+        assert_eq!(chain.widening(&settings), 2.0);
+        assert_eq!(chain.widening(&settings.clone().with_widen_after(0)), 1.0);
+        let mut denser = first.clone();
+        denser.density *= 1.001;
+        chain.record(&denser);
+        assert_eq!(chain.widening(&settings), 1.0);
     }
 
     #[test]
