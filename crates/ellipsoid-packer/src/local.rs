@@ -103,7 +103,7 @@ fn lagrangian<const N: usize>(
         if first.report.stop_reason == auglag::StopReason::Interrupted {
             break;
         }
-        let pairs = crate::merged::merged(&problem.certify(&first.x)?);
+        let pairs = crate::merged::few_merged(&problem.certify(&first.x)?, problem.len());
         if pairs.is_empty() {
             break;
         }
@@ -138,7 +138,8 @@ fn lagrangian<const N: usize>(
 /// perturbation of the best packing of 100 ellipsoids (1, 0.75, 0.5) in a ball at the paper's
 /// amplitude 0.1 this was every start tried, with 2 to 5 such pairs among points of density
 /// 0.61–0.68 before repair. Pulled apart ([`crate::merged::pulled_apart`]), they are ordinary
-/// overlaps for the next solve.
+/// overlaps for the next solve. Only a few merged pairs are pulled
+/// ([`crate::merged::few_merged`]).
 const PULLS_PER_MINIMISATION: usize = 3;
 
 /// [`local_minimisation`] in feasibility mode: the container stays as the start gives it, the
@@ -416,8 +417,11 @@ mod tests {
         let adapter = Adapter::new(&mut p, centre_bound::<3>(&start), None);
         let first = solve(&adapter, &start, settings.feasibility_tolerance).unwrap();
         drop(adapter);
-        let merged = crate::merged::merged(&p.certify(&first.x).unwrap());
-        assert!(!merged.is_empty(), "the first solve merged no pair");
+        let merged = crate::merged::few_merged(&p.certify(&first.x).unwrap(), p.len());
+        assert!(
+            !merged.is_empty(),
+            "the first solve merged no pair, or too many"
+        );
         let r = local_minimisation(&mut p, &start, &settings, &mut |_| false).unwrap();
         assert!(r.certificate.is_feasible());
         assert!(r.repair_factor < 1.001, "{}", r.repair_factor);
