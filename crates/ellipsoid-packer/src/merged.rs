@@ -19,6 +19,9 @@
 //! inner iterations and certified 30 inner iterations later; aimed at φ = 0.64, 1e5
 //! ellipsoids re-merged after each pull, and the step was given up after 2 100 inner
 //! iterations instead of running to its cap of 6 000.
+//!
+//! A local minimisation that stops with pairs merged is pulled apart and solved again
+//! likewise, when the merged pairs are few ([`few_merged`]).
 
 use implicit_packing::model::{Certificate, Model};
 use implicit_packing::periodic::{to_cartesian, to_fractional};
@@ -61,20 +64,24 @@ pub(crate) fn merged_pairs(
 }
 
 /// A local minimisation's merged pairs are pulled apart only when they are at most this
-/// fraction of the items (and at least one). From a perturbation of the best packing of 100
-/// ellipsoids (1, 0.75, 0.5) in a ball at 0.1, the solver stopped with 2 or 3 merged pairs,
-/// and pulled apart once or twice the start converged. From perturbations that moved further
-/// than the packing absorbs, it stopped with 39 merged pairs among 300 such ellipsoids (at
-/// 0.1) and 115 among 1 000 ellipses (2, 1) in a rectangle (at 0.025): three pulls left 16 and
-/// 45 of them, and the starts failed after 306 s and 245 s where the first solve had taken a
-/// third of that.
+/// fraction of the items, or [`FEW_MERGED`]. From perturbations of a packing of 100
+/// ellipsoids (1, 0.75, 0.5) in a ball at 0.1, the solver stopped with 2 to 5 merged pairs,
+/// and pulled apart once or twice, most starts converged. From perturbations that moved
+/// further than the packing absorbs, it stopped with 39 merged pairs among 300 such
+/// ellipsoids (at 0.1) and 115 among 1 000 ellipses (2, 1) in a rectangle (at 0.025): three
+/// pulls left 16 and 45 of them, and the starts failed after 306 s and 245 s, three times
+/// the work of failing at once.
 pub(crate) const FEW_MERGED_PER_ITEM: f64 = 0.05;
 
+/// Merged pairs pulled apart after a local minimisation in any case: on a few dozen items
+/// a solve costs little.
+pub(crate) const FEW_MERGED: f64 = 3.0;
+
 /// The merged pairs of `certificate` ([`merged`]) when they are few among `items`
-/// ([`FEW_MERGED_PER_ITEM`]); empty otherwise.
+/// ([`FEW_MERGED_PER_ITEM`], [`FEW_MERGED`]); empty otherwise.
 pub(crate) fn few_merged(certificate: &Certificate, items: usize) -> Vec<(usize, usize)> {
     let pairs = merged(certificate);
-    let few = (FEW_MERGED_PER_ITEM * items as f64).max(1.0);
+    let few = (FEW_MERGED_PER_ITEM * items as f64).max(FEW_MERGED);
     if pairs.len() as f64 > few {
         return Vec::new();
     }
@@ -189,11 +196,12 @@ mod tests {
 
     #[test]
     fn only_a_few_merged_pairs_are_pulled_after_a_local_minimisation() {
-        let c = certificate(&[0.2, 0.2, 0.2]);
-        assert_eq!(few_merged(&c, 60).len(), 3);
-        assert!(few_merged(&c, 59).is_empty());
-        // One merged pair is always few.
-        assert_eq!(few_merged(&certificate(&[0.2]), 2), vec![(0, 1)]);
+        let c = certificate(&[0.2; 4]);
+        assert_eq!(few_merged(&c, 80).len(), 4);
+        assert!(few_merged(&c, 79).is_empty());
+        // Three merged pairs are always few.
+        assert_eq!(few_merged(&certificate(&[0.2; 3]), 4).len(), 3);
+        assert!(few_merged(&c, 5).is_empty());
     }
 
     /// Two spheres of radius 1 in a periodic cube of edge 10, one near each face (nearest
