@@ -754,12 +754,17 @@ mod tests {
         multistart(&axes, ContainerShape::Ellipsoid, &x0, &settings, &mut ()).unwrap()
     }
 
-    #[test]
-    fn a_chain_without_gains_widens_its_perturbations() {
+    /// The paper's start of 6 ellipses in an ellipse, certified as it is.
+    fn six_ellipses() -> LocalResult {
         let axes = vec![[2.0, 1.0]; 6];
         let x0 = paper_start(&axes, ContainerShape::Ellipsoid).unwrap();
         let mut p = Model::<2>::new(axes, ContainerShape::Ellipsoid).unwrap();
-        let first = certified_start(&mut p, &x0).unwrap().unwrap();
+        certified_start(&mut p, &x0).unwrap().unwrap()
+    }
+
+    #[test]
+    fn a_chain_without_gains_widens_its_perturbations() {
+        let first = six_ellipses();
         let settings = MultiStartSettings::recommended(2, 0).with_widen_after(3);
         let mut chain = Chain::new(&first);
         for stale in 0..3 {
@@ -777,10 +782,7 @@ mod tests {
 
     #[test]
     fn a_chain_whose_perturbation_failed_perturbs_half_as_far() {
-        let axes = vec![[2.0, 1.0]; 6];
-        let x0 = paper_start(&axes, ContainerShape::Ellipsoid).unwrap();
-        let mut p = Model::<2>::new(axes, ContainerShape::Ellipsoid).unwrap();
-        let first = certified_start(&mut p, &x0).unwrap().unwrap();
+        let first = six_ellipses();
         let settings = MultiStartSettings::recommended(2, 0).with_widen_after(1);
         let mut chain = Chain::new(&first);
         assert_eq!(chain.amplitude(&settings), 1.0);
