@@ -822,7 +822,8 @@ fn markdown(rows: &[Row], curves: &[Curve], latest: &[LatestRun]) -> String {
          lattice, every item turned by up to 0.01 rad; then perturbations of the best packing at \
          amplitudes 1, 1/2 and 1/4 of the paper's, every {}th start a further lattice start, \
          perturbations twice as wide after {} starts without a relative gain of 1e-5, half as wide \
-         after each round with a failed perturbation (down to a quarter), and a new \
+         after each round with a failed perturbation that cost more than 4 times the evaluations of \
+         the median successful one (down to a quarter), and a new \
          chain from fresh lattice starts after {} such starts), every local minimisation \
          certified with PW85 and exact containment and repaired, for the wall time, with the local method and on the machine given in its row \
          (`lagrangian`: the paper's augmented Lagrangian with the container among the \

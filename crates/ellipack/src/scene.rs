@@ -73,7 +73,8 @@
 //!                                     # 10 % in 3D: the default follows the dimension)
 //! lattice_starts = 16                 # dense lattice starts before the perturbations
 //! from_best = true                    # perturb the best packing (false: the latest, as the paper);
-//!                                     # a failed perturbation halves the later ones (to 1/4)
+//!                                     # a failed perturbation dearer than 4 median
+//!                                     # successes halves the later ones (to 1/4)
 //! perturbation_levels = 3             # amplitudes perturbation, /2, /4 in turn (1: the paper's)
 //! fresh_lattice_every = 8             # every 8th later start a new lattice start (0: never)
 //! restart_after = 300                 # new chain from fresh lattice starts after 300 starts
@@ -388,8 +389,9 @@ pub struct SolverSettings {
     /// container aspects) tried after the first start and before any perturbation.
     pub lattice_starts: u64,
     /// Perturb the best packing so far (default) rather than, as the paper, the latest one.
-    /// With it, each round in which a perturbed start fails halves the chain's perturbations
-    /// from then on, down to a quarter.
+    /// With it, each round in which a perturbed start fails after more than 4 times the
+    /// evaluations of the median perturbed start that succeeded halves the chain's
+    /// perturbations from then on, down to a quarter.
     pub from_best: bool,
     /// Perturbations cycle through the amplitudes `perturbation / 2^k`, k < this (1: always
     /// the full amplitude, as the paper).
