@@ -473,12 +473,12 @@ pub fn multistart<const N: usize>(
             .collect();
         // The evaluations of each start: the cost of a start that fails, which has no report
         // of its own.
-        let work: Vec<AtomicUsize> = (0..round).map(|_| AtomicUsize::new(0)).collect();
+        let costs: Vec<AtomicUsize> = (0..round).map(|_| AtomicUsize::new(0)).collect();
         let numbered: Vec<(usize, Vec<f64>)> = starts.into_iter().enumerate().collect();
         let results = in_parallel(&numbered, threads, |(k, x)| {
             let counted = Counted {
                 inner: shared,
-                evaluations: &work[*k],
+                evaluations: &costs[*k],
                 solve_evaluations: AtomicUsize::new(0),
             };
             minimise_start(semi_axes, kind, x, &settings.local, &counted, || {
@@ -489,9 +489,9 @@ pub fn multistart<const N: usize>(
         if restart {
             chain.restarts += 1;
         }
-        let mut failed_work = Vec::new();
-        for ((result, (_, origin)), work) in results.into_iter().zip(origins).zip(&work) {
-            let work = work.load(Ordering::Relaxed);
+        let mut failed_costs = Vec::new();
+        for ((result, (_, origin)), cost) in results.into_iter().zip(origins).zip(&costs) {
+            let cost = cost.load(Ordering::Relaxed);
             // A start whose local minimisation ends at a point no repair can certify (an item
             // far outside the container) is a failed start, not a failed run: the
             // best packing so far stands.
@@ -503,7 +503,7 @@ pub fn multistart<const N: usize>(
                         (e, origin),
                         (Error::NotCertifiable { .. }, Start::Perturbed(_))
                     ) {
-                        failed_work.push(work);
+                        failed_costs.push(cost);
                     }
                     continue;
                 }
@@ -523,7 +523,7 @@ pub fn multistart<const N: usize>(
             done += 1;
             chain.record(&result);
             if matches!(origin, Start::Perturbed(_)) {
-                chain.succeeded_with(work);
+                chain.succeeded_with(cost);
             }
             if result.density > best.density {
                 best = result.clone();
@@ -542,7 +542,7 @@ pub fn multistart<const N: usize>(
                 round_best = Some(result);
             }
         }
-        if failed_work.iter().any(|&w| chain.is_dear(w)) {
+        if failed_costs.iter().any(|&c| chain.is_dear(c)) {
             chain.failed_round(settings);
         }
         if let Some(r) = round_best {
@@ -648,9 +648,8 @@ impl Chain {
     }
 
     /// A round in which a perturbed start ended at a point no repair certifies, and dearly
-    /// ([`Chain::is_dear`]): with
-    /// `from_best`, the chain's perturbations move half as far from now on, down to a quarter
-    /// ([`MAX_NARROWING`]). Such a start moved further than the packing absorbs and is the
+    /// ([`Chain::is_dear`]): with `from_best`, the chain's perturbations move half as far from
+    /// now on, down to a quarter ([`MAX_NARROWING`]). Such a start moved further than the packing absorbs and is the
     /// dearest of all: from a packing of 300 ellipsoids (1, 0.75, 0.5) in a ball (0.67249, one
     /// local minimisation from the paper's start), starts perturbed at 0.1 failed after 165 s
     /// and 171 s (306 s with three pulls of their merged pairs), where starts at 0.05
